@@ -1,0 +1,116 @@
+// Surface: a triangle mesh plus its lazily computed, cached, view-independent
+// geometry (normals, mixed Voronoi areas, principal curvatures and the
+// curvature-derivative tensor, feature size).
+//
+// Conventions (docs/conventions.md, ALGORITHMS.md §0–2):
+//  - normals point outward for an outward-oriented mesh (CCW faces);
+//  - shape operator S = D n (derivative of the outward normal): a sphere of
+//    radius R has k1 = k2 = +1/R (convex positive);
+//  - principal curvatures are ordered by absolute value, |k1| >= |k2|
+//    (as trimesh2/rtsc), e2 = n x e1;
+//  - curvature derivative (a, b, c, d) = C(e1,e1,e1), C(e1,e1,e2),
+//    C(e1,e2,e2), C(e2,e2,e2) in the principal frame of each vertex.
+//
+// Every accessor computes on first use and caches; the cache is thread-safe
+// (several threads may ask at once). Results are bit-identical at any
+// thread count. Vertices where a quantity is undefined (isolated vertices,
+// vertices whose faces are all degenerate) are marked invalid in `valid`
+// and hold zeros, never NaN.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "fabrica/core/mesh.hpp"
+#include "fabrica/core/topology.hpp"
+#include "fabrica/core/types.hpp"
+
+namespace fabrica {
+
+/// Weights for averaging face normals to vertex normals (ALGORITHMS.md §1).
+enum class NormalWeighting {
+  area,   ///< face area
+  angle,  ///< interior angle at the vertex (Thürmer & Wüthrich)
+  max,    ///< Max (1999): sin(angle) / (|e_a| |e_b|); the default, as trimesh2
+};
+
+struct SurfaceOptions {
+  NormalWeighting normal_weighting = NormalWeighting::max;
+  /// Passes of rtsc-style smoothing of the curvature tensor (0 = none),
+  /// ALGORITHMS.md §2.7.
+  int curvature_smoothing_passes = 0;
+  /// Gaussian width of that smoothing in multiples of the median edge length.
+  double curvature_smoothing_sigma = 1.0;
+  /// Passes of smoothing applied to the curvature-derivative tensor.
+  int derivative_smoothing_passes = 0;
+};
+
+/// Per-vertex principal curvatures and directions (structure of arrays).
+struct PrincipalCurvatures {
+  std::vector<double> k1, k2;   ///< |k1| >= |k2|, 1/mm
+  std::vector<Vec3> e1, e2;     ///< unit tangent directions, e2 = n x e1
+  std::vector<std::uint8_t> valid;
+  double mean(std::size_t v) const { return 0.5 * (k1[v] + k2[v]); }
+  double gaussian(std::size_t v) const { return k1[v] * k2[v]; }
+};
+
+/// Per-vertex curvature-derivative tensor in the principal frame, 1/mm².
+struct CurvatureDerivatives {
+  std::vector<double> a, b, c, d;
+  std::vector<std::uint8_t> valid;
+};
+
+class Surface {
+ public:
+  /// Takes the mesh as is (validate and repair it first if needed). Throws
+  /// InputError if indices are out of range or coordinates are not finite.
+  explicit Surface(TriangleMesh mesh, SurfaceOptions options = {});
+  ~Surface();
+  Surface(Surface&&) noexcept;
+  Surface& operator=(Surface&&) noexcept;
+  Surface(const Surface&) = delete;
+  Surface& operator=(const Surface&) = delete;
+
+  const TriangleMesh& mesh() const { return mesh_; }
+  const std::vector<Vec3>& positions() const { return mesh_.positions; }
+  const std::vector<Face>& faces() const { return mesh_.faces; }
+  std::size_t vertex_count() const { return mesh_.positions.size(); }
+  std::size_t face_count() const { return mesh_.faces.size(); }
+  const SurfaceOptions& options() const { return options_; }
+
+  const Topology& topology() const;
+
+  /// Unit face normals (zero for degenerate faces) and face areas.
+  const std::vector<Vec3>& face_normals() const;
+  const std::vector<double>& face_areas() const;
+  /// Unit vertex normals with options().normal_weighting; zero where invalid.
+  const std::vector<Vec3>& vertex_normals() const;
+  /// Per face, the mixed Voronoi area of each corner (sums to the face area).
+  const std::vector<Vec3>& corner_areas() const;
+  /// Per vertex, the mixed Voronoi area (sum of its corner areas).
+  const std::vector<double>& vertex_areas() const;
+  const PrincipalCurvatures& curvature() const;
+  const CurvatureDerivatives& curvature_derivatives() const;
+  /// rtsc's feature size (ALGORITHMS.md §2.6), deterministic.
+  double feature_size() const;
+  /// Median edge length (trimesh2's feature_size()).
+  double median_edge_length() const;
+  /// Mean edge length.
+  double mean_edge_length() const;
+  /// Bounding sphere (approximate, enclosing every vertex).
+  Vec3 bounding_sphere_center() const;
+  double bounding_sphere_radius() const;
+
+  /// Computes every cached quantity now (normals, areas, curvature,
+  /// curvature derivatives, feature size), in parallel.
+  void precompute() const;
+
+ private:
+  struct Cache;
+  TriangleMesh mesh_;
+  SurfaceOptions options_;
+  std::unique_ptr<Cache> cache_;
+};
+
+}  // namespace fabrica

@@ -1,0 +1,80 @@
+// Adjacency of an indexed triangle mesh, built once per Surface.
+//
+// Works on any triangle soup: open, multi-component, non-manifold. Every
+// list is in a deterministic order (by vertex index, then face index), so
+// results never depend on thread count.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "fabrica/core/types.hpp"
+
+namespace fabrica {
+
+struct TriangleMesh;
+
+class Topology {
+ public:
+  Topology() = default;
+  explicit Topology(const TriangleMesh& mesh);
+
+  std::size_t vertex_count() const { return vertex_face_offsets_.empty() ? 0 : vertex_face_offsets_.size() - 1; }
+  std::size_t face_count() const { return face_edges_.size(); }
+  std::size_t edge_count() const { return edges_.size(); }
+
+  /// Faces incident to vertex v, increasing face index.
+  std::span<const std::int32_t> vertex_faces(std::size_t v) const {
+    return {vertex_faces_.data() + vertex_face_offsets_[v],
+            vertex_faces_.data() + vertex_face_offsets_[v + 1]};
+  }
+  /// Corner index (0..2) of v in each face of vertex_faces(v), same order.
+  std::span<const std::uint8_t> vertex_face_corners(std::size_t v) const {
+    return {vertex_face_corners_.data() + vertex_face_offsets_[v],
+            vertex_face_corners_.data() + vertex_face_offsets_[v + 1]};
+  }
+  /// Vertices joined to v by an edge, increasing index.
+  std::span<const std::int32_t> vertex_neighbors(std::size_t v) const {
+    return {vertex_neighbors_.data() + vertex_neighbor_offsets_[v],
+            vertex_neighbors_.data() + vertex_neighbor_offsets_[v + 1]};
+  }
+  /// Edge index of each entry of vertex_neighbors(v), same order.
+  std::span<const std::int32_t> vertex_edges(std::size_t v) const {
+    return {vertex_edges_.data() + vertex_neighbor_offsets_[v],
+            vertex_edges_.data() + vertex_neighbor_offsets_[v + 1]};
+  }
+
+  /// Undirected edge e as (lower vertex, higher vertex). Edges are numbered in
+  /// lexicographic order of that pair.
+  const std::array<std::int32_t, 2>& edge(std::size_t e) const { return edges_[e]; }
+  /// Faces using edge e, increasing face index: 1 = boundary, 2 = interior,
+  /// more = non-manifold edge.
+  std::span<const std::int32_t> edge_faces(std::size_t e) const {
+    return {edge_faces_.data() + edge_face_offsets_[e],
+            edge_faces_.data() + edge_face_offsets_[e + 1]};
+  }
+  /// The edge of face f opposite corner k, i.e. joining corners (k+1)%3 and (k+2)%3.
+  std::int32_t face_edge(std::size_t f, int k) const { return face_edges_[f][k]; }
+  /// The face across the edge opposite corner k of f, or -1 at a boundary or
+  /// non-manifold edge.
+  std::int32_t face_neighbor(std::size_t f, int k) const;
+
+  bool is_boundary_edge(std::size_t e) const { return edge_faces(e).size() == 1; }
+  bool is_nonmanifold_edge(std::size_t e) const { return edge_faces(e).size() > 2; }
+  /// A vertex on a boundary edge.
+  bool is_boundary_vertex(std::size_t v) const { return boundary_vertex_[v] != 0; }
+  /// A vertex referenced by no face.
+  bool is_isolated_vertex(std::size_t v) const { return vertex_faces(v).empty(); }
+
+ private:
+  std::vector<std::int32_t> vertex_face_offsets_, vertex_faces_;
+  std::vector<std::uint8_t> vertex_face_corners_;
+  std::vector<std::int32_t> vertex_neighbor_offsets_, vertex_neighbors_, vertex_edges_;
+  std::vector<std::array<std::int32_t, 2>> edges_;
+  std::vector<std::int32_t> edge_face_offsets_, edge_faces_;
+  std::vector<std::array<std::int32_t, 3>> face_edges_;
+  std::vector<std::uint8_t> boundary_vertex_;
+};
+
+}  // namespace fabrica

@@ -1,0 +1,142 @@
+#include "fabrica/core/topology.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <numeric>
+
+#include "fabrica/core/mesh.hpp"
+
+namespace fabrica {
+
+namespace {
+
+// Exclusive prefix sum of counts into offsets (size n+1).
+std::vector<std::int32_t> offsets_from_counts(const std::vector<std::int32_t>& counts) {
+  std::vector<std::int32_t> offsets(counts.size() + 1, 0);
+  std::partial_sum(counts.begin(), counts.end(), offsets.begin() + 1);
+  return offsets;
+}
+
+constexpr std::size_t kGrain = 4096;
+
+}  // namespace
+
+Topology::Topology(const TriangleMesh& mesh) {
+  const std::size_t nv = mesh.positions.size();
+  const std::size_t nf = mesh.faces.size();
+
+  // Vertex -> faces, by counting sort (faces come out in increasing order).
+  std::vector<std::int32_t> counts(nv, 0);
+  for (const Face& f : mesh.faces)
+    for (int k = 0; k < 3; ++k) ++counts[f[k]];
+  vertex_face_offsets_ = offsets_from_counts(counts);
+  vertex_faces_.resize(vertex_face_offsets_.back());
+  vertex_face_corners_.resize(vertex_face_offsets_.back());
+  {
+    std::vector<std::int32_t> cursor(vertex_face_offsets_.begin(), vertex_face_offsets_.end() - 1);
+    for (std::size_t f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k) {
+        const auto v = mesh.faces[f][k];
+        vertex_faces_[cursor[v]] = static_cast<std::int32_t>(f);
+        vertex_face_corners_[cursor[v]] = static_cast<std::uint8_t>(k);
+        ++cursor[v];
+      }
+  }
+
+  // Vertex -> sorted unique neighbours. Two passes: count, then fill.
+  auto gather = [&](std::size_t v, std::vector<std::int32_t>& out) {
+    out.clear();
+    for (auto f : vertex_faces(v))
+      for (int k = 0; k < 3; ++k) {
+        const auto w = mesh.faces[f][k];
+        if (static_cast<std::size_t>(w) != v) out.push_back(w);
+      }
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+  };
+  std::vector<std::int32_t> neighbor_counts(nv), upper_counts(nv);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, kGrain), [&](const auto& r) {
+    std::vector<std::int32_t> scratch;
+    for (std::size_t v = r.begin(); v < r.end(); ++v) {
+      gather(v, scratch);
+      neighbor_counts[v] = static_cast<std::int32_t>(scratch.size());
+      upper_counts[v] = static_cast<std::int32_t>(
+          scratch.end() - std::upper_bound(scratch.begin(), scratch.end(), static_cast<std::int32_t>(v)));
+    }
+  });
+  vertex_neighbor_offsets_ = offsets_from_counts(neighbor_counts);
+  const std::vector<std::int32_t> edge_offsets = offsets_from_counts(upper_counts);
+  vertex_neighbors_.resize(vertex_neighbor_offsets_.back());
+  vertex_edges_.resize(vertex_neighbor_offsets_.back());
+  edges_.resize(edge_offsets.back());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, kGrain), [&](const auto& r) {
+    std::vector<std::int32_t> scratch;
+    for (std::size_t v = r.begin(); v < r.end(); ++v) {
+      gather(v, scratch);
+      std::copy(scratch.begin(), scratch.end(), vertex_neighbors_.begin() + vertex_neighbor_offsets_[v]);
+      const auto first_upper = std::upper_bound(scratch.begin(), scratch.end(), static_cast<std::int32_t>(v));
+      std::int32_t e = edge_offsets[v];
+      for (auto it = first_upper; it != scratch.end(); ++it, ++e)
+        edges_[e] = {static_cast<std::int32_t>(v), *it};
+    }
+  });
+  // Edge ids of the lower neighbours come from the lower vertex's list.
+  auto find_edge = [&](std::int32_t a, std::int32_t b) -> std::int32_t {
+    if (a == b) return -1;
+    if (a > b) std::swap(a, b);
+    const auto nb = vertex_neighbors(a);
+    const auto it = std::lower_bound(nb.begin(), nb.end(), b);
+    const auto first_upper = std::upper_bound(nb.begin(), nb.end(), a);
+    return edge_offsets[a] + static_cast<std::int32_t>(it - first_upper);
+  };
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, kGrain), [&](const auto& r) {
+    for (std::size_t v = r.begin(); v < r.end(); ++v) {
+      const auto begin = vertex_neighbor_offsets_[v];
+      const auto end = vertex_neighbor_offsets_[v + 1];
+      for (auto i = begin; i < end; ++i)
+        vertex_edges_[i] = find_edge(static_cast<std::int32_t>(v), vertex_neighbors_[i]);
+    }
+  });
+
+  // Face -> edges, edge -> faces.
+  face_edges_.resize(nf);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nf, kGrain), [&](const auto& r) {
+    for (std::size_t f = r.begin(); f < r.end(); ++f)
+      for (int k = 0; k < 3; ++k)
+        face_edges_[f][k] = find_edge(mesh.faces[f][(k + 1) % 3], mesh.faces[f][(k + 2) % 3]);
+  });
+  std::vector<std::int32_t> edge_counts(edges_.size(), 0);
+  for (const auto& fe : face_edges_)
+    for (int k = 0; k < 3; ++k)
+      if (fe[k] >= 0 && (k == 0 || fe[k] != fe[0]) && (k < 2 || fe[k] != fe[1])) ++edge_counts[fe[k]];
+  edge_face_offsets_ = offsets_from_counts(edge_counts);
+  edge_faces_.resize(edge_face_offsets_.back());
+  {
+    std::vector<std::int32_t> cursor(edge_face_offsets_.begin(), edge_face_offsets_.end() - 1);
+    for (std::size_t f = 0; f < nf; ++f) {
+      const auto& fe = face_edges_[f];
+      for (int k = 0; k < 3; ++k)
+        if (fe[k] >= 0 && (k == 0 || fe[k] != fe[0]) && (k < 2 || fe[k] != fe[1]))
+          edge_faces_[cursor[fe[k]]++] = static_cast<std::int32_t>(f);
+    }
+  }
+
+  boundary_vertex_.assign(nv, 0);
+  for (std::size_t e = 0; e < edges_.size(); ++e)
+    if (edge_counts[e] == 1) {
+      boundary_vertex_[edges_[e][0]] = 1;
+      boundary_vertex_[edges_[e][1]] = 1;
+    }
+}
+
+std::int32_t Topology::face_neighbor(std::size_t f, int k) const {
+  const auto e = face_edges_[f][k];
+  if (e < 0) return -1;
+  const auto faces = edge_faces(e);
+  if (faces.size() != 2) return -1;
+  return faces[0] == static_cast<std::int32_t>(f) ? faces[1] : faces[0];
+}
+
+}  // namespace fabrica
