@@ -120,10 +120,11 @@ Camera camera_from_json(const nlohmann::json& j, const std::string& what) {
     if (j.contains("up")) c.up = vec3_from_json(j, "up", what);
     if (j.contains("fov_deg")) c.fov_deg = j.at("fov_deg").get<double>();
     if (j.contains("projection")) {
+      // Reference .seg headers describe it in words: "perspective, square image, ...".
       const auto p = j.at("projection").get<std::string>();
-      if (p == "perspective")
+      if (p.rfind("perspective", 0) == 0)
         c.projection = Projection::perspective;
-      else if (p == "orthographic")
+      else if (p.rfind("orthographic", 0) == 0)
         c.projection = Projection::orthographic;
       else
         throw InputError(what + ": projection must be \"perspective\" or \"orthographic\" (got \"" + p + "\")");
