@@ -35,8 +35,22 @@ enum class NormalWeighting {
   max,    ///< Max (1999): sin(angle) / (|e_a| |e_b|); the default, as trimesh2
 };
 
+/// How a triangle's area is split among its corners (ALGORITHMS.md §1).
+enum class MixedAreaScheme {
+  /// trimesh2's variant (the default, so that curvature agrees with rtsc):
+  /// Voronoi cells clipped to the triangle. Acute triangles: exact Voronoi
+  /// areas from the circumcentre's barycentric weights; obtuse triangles:
+  /// each acute corner gets the right triangle cut off by the perpendicular
+  /// bisector of its edge to the obtuse corner, the obtuse corner the rest.
+  clipped,
+  /// Meyer et al. 2002: Voronoi areas for non-obtuse triangles, otherwise
+  /// A/2 to the obtuse corner and A/4 to the others.
+  meyer,
+};
+
 struct SurfaceOptions {
   NormalWeighting normal_weighting = NormalWeighting::max;
+  MixedAreaScheme mixed_areas = MixedAreaScheme::clipped;
   /// Passes of rtsc-style smoothing of the curvature tensor (0 = none),
   /// ALGORITHMS.md §2.7.
   int curvature_smoothing_passes = 0;
@@ -48,8 +62,8 @@ struct SurfaceOptions {
 
 /// Per-vertex principal curvatures and directions (structure of arrays).
 struct PrincipalCurvatures {
-  std::vector<double> k1, k2;   ///< |k1| >= |k2|, 1/mm
-  std::vector<Vec3> e1, e2;     ///< unit tangent directions, e2 = n x e1
+  std::vector<double> k1, k2;  ///< |k1| >= |k2|, 1/mm
+  std::vector<Vec3> e1, e2;    ///< unit tangent directions, e2 = n x e1
   std::vector<std::uint8_t> valid;
   double mean(std::size_t v) const { return 0.5 * (k1[v] + k2[v]); }
   double gaussian(std::size_t v) const { return k1[v] * k2[v]; }

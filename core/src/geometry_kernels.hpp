@@ -1,0 +1,128 @@
+// Private per-triangle kernels shared by the Surface cache and the public
+// free functions (geometry.cpp, curvature.cpp, laplacian.cpp). Not installed.
+//
+// Corner/edge convention used everywhere: corner k of a face is vertex
+// face[k]; edge k is the edge opposite corner k, as a vector
+// e[k] = p[(k+2)%3] - p[(k+1)%3] (counter-clockwise). At corner k the two
+// edges leaving the corner are e[(k+2)%3] (to corner k+1) and -e[(k+1)%3]
+// (to corner k+2).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+
+#include "fabrica/core/mesh.hpp"
+#include "fabrica/core/surface.hpp"
+#include "fabrica/core/types.hpp"
+
+namespace fabrica::detail {
+
+/// A face is degenerate when twice its area is below this fraction of its
+/// longest squared edge (the sine of its largest angle is ~1e-12 or less),
+/// or when it has a repeated vertex.
+constexpr double kDegenerateSine = 1e-12;
+
+/// Everything a per-face pass needs about one triangle's shape.
+struct TriangleShape {
+  Vec3 p[3];
+  Vec3 e[3];     ///< e[k] = p[k+2] - p[k+1]
+  double l2[3];  ///< |e[k]|^2
+  Vec3 cross;    ///< e[2] x (-e[1]) = (p1 - p0) x (p2 - p0); |cross| = 2A
+  double twice_area;
+  bool degenerate;
+};
+
+inline TriangleShape triangle_shape(const TriangleMesh& mesh, const Face& f) {
+  TriangleShape t;
+  for (int k = 0; k < 3; ++k) t.p[k] = mesh.positions[f[k]];
+  t.e[0] = t.p[2] - t.p[1];
+  t.e[1] = t.p[0] - t.p[2];
+  t.e[2] = t.p[1] - t.p[0];
+  for (int k = 0; k < 3; ++k) t.l2[k] = t.e[k].squaredNorm();
+  t.cross = t.e[2].cross(-t.e[1]);
+  t.twice_area = t.cross.norm();
+  const double lmax = std::max({t.l2[0], t.l2[1], t.l2[2]});
+  t.degenerate =
+      f[0] == f[1] || f[1] == f[2] || f[0] == f[2] || !(t.twice_area > kDegenerateSine * lmax);
+  return t;
+}
+
+/// Corner areas of a triangle (sum = area); see MixedAreaScheme. Degenerate
+/// triangles split their (tiny) area equally.
+inline Vec3 corner_areas(const TriangleShape& t, MixedAreaScheme scheme) {
+  const double area = 0.5 * t.twice_area;
+  if (t.degenerate) return Vec3::Constant(area / 3.0);
+  const double* l2 = t.l2;
+  // a . b at corner k, from the edge vectors (accurate also for slivers,
+  // unlike the law of cosines); < 0 iff corner k is obtuse.
+  double dot[3];
+  for (int k = 0; k < 3; ++k) dot[k] = -t.e[(k + 1) % 3].dot(t.e[(k + 2) % 3]);
+  for (int k = 0; k < 3; ++k) {
+    if (dot[k] >= 0.0) continue;
+    const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+    Vec3 c;
+    if (scheme == MixedAreaScheme::meyer) {
+      c[k] = 0.5 * area;
+      c[k1] = c[k2] = 0.25 * area;
+    } else {
+      // Right triangle cut off at corner k1 by the bisector of edge (k, k1),
+      // whose length^2 is l2[k2]: area = l^2 A / (4 a.b). Clamped so that
+      // rounding on slivers can never give negative or non-finite areas.
+      c[k1] = dot[k1] > 0.0 ? std::min(area, l2[k2] * area / (4.0 * dot[k1])) : 0.0;
+      c[k2] = dot[k2] > 0.0 ? std::min(area - c[k1], l2[k1] * area / (4.0 * dot[k2])) : 0.0;
+      c[k] = area - c[k1] - c[k2];
+    }
+    return c;
+  }
+  Vec3 c;
+  if (scheme == MixedAreaScheme::meyer) {
+    // cot at corner k = (a . b) / |a x b|.
+    double cot[3];
+    for (int k = 0; k < 3; ++k) cot[k] = dot[k] / t.twice_area;
+    for (int k = 0; k < 3; ++k) {
+      const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+      c[k] = 0.125 * (l2[k2] * cot[k2] + l2[k1] * cot[k1]);
+    }
+  } else {
+    // Circumcentre barycentric weights beta_k = l2[k] (l2[k+1] + l2[k+2] - l2[k])
+    // = 2 l2[k] (a . b)_k, all >= 0 here.
+    const double b0 = l2[0] * dot[0], b1 = l2[1] * dot[1], b2 = l2[2] * dot[2];
+    const double s = 0.5 * area / (b0 + b1 + b2);
+    c = Vec3(s * (b1 + b2), s * (b0 + b2), s * (b0 + b1));
+  }
+  return c;
+}
+
+/// Weight of the unit face normal in the vertex normal of each corner.
+inline Vec3 normal_corner_weights(const TriangleShape& t, NormalWeighting weighting) {
+  if (t.degenerate) return Vec3::Zero();
+  switch (weighting) {
+    case NormalWeighting::area:
+      return Vec3::Constant(0.5 * t.twice_area);
+    case NormalWeighting::angle: {
+      Vec3 w;
+      for (int k = 0; k < 3; ++k) {
+        const double d = -t.e[(k + 1) % 3].dot(t.e[(k + 2) % 3]);
+        w[k] = std::atan2(t.twice_area, d);
+      }
+      return w;
+    }
+    case NormalWeighting::max:
+      break;
+  }
+  // Max (1999): cross product / (|e_a|^2 |e_b|^2) per corner.
+  return Vec3(t.twice_area / (t.l2[1] * t.l2[2]), t.twice_area / (t.l2[2] * t.l2[0]),
+              t.twice_area / (t.l2[0] * t.l2[1]));
+}
+
+/// Minimal rotation (about from x to) of a vector x tangent to the plane with
+/// unit normal `from` into the plane with unit normal `to`. Exact for x
+/// perpendicular to `from`; when the normals are (nearly) opposite the
+/// rotation is undefined and x is projected onto the new plane instead.
+inline Vec3 rotate_tangent(const Vec3& x, const Vec3& from, const Vec3& to) {
+  const double c = from.dot(to);
+  if (c > -1.0 + 1e-12) return x - (to.dot(x) / (1.0 + c)) * (from + to);
+  return x - to.dot(x) * to;
+}
+
+}  // namespace fabrica::detail

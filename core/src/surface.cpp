@@ -1,0 +1,243 @@
+// Surface: the lazily filled geometry cache. Each item has its own
+// std::once_flag, so concurrent readers block only until that item exists;
+// all parallel work runs inside tbb::this_task_arena::isolate (see
+// detail::parallel_chunks) so a thread waiting inside call_once never
+// steals an outer task that could ask for the same item again.
+#include "fabrica/core/surface.hpp"
+
+#include <tbb/parallel_invoke.h>
+#include <tbb/task_arena.h>
+
+#include <mutex>
+
+#include "curvature_internal.hpp"
+#include "fabrica/core/curvature.hpp"
+#include "fabrica/core/geometry.hpp"
+#include "geometry_kernels.hpp"
+
+namespace fabrica {
+
+struct Surface::Cache {
+  std::once_flag topology_once;
+  Topology topology;
+
+  std::once_flag face_once;
+  std::vector<Vec3> face_normals;
+  std::vector<double> face_areas;
+  std::vector<Vec3> corner_areas;
+
+  std::once_flag vertex_once;
+  std::vector<Vec3> vertex_normals;
+  std::vector<std::uint8_t> normal_valid;
+  std::vector<double> vertex_areas;
+
+  std::once_flag curvature_once;
+  PrincipalCurvatures curvature;
+
+  std::once_flag derivative_once;
+  CurvatureDerivatives derivatives;
+
+  std::once_flag edge_once;
+  EdgeLengthStatistics edges;
+
+  std::once_flag sphere_once;
+  BoundingSphere sphere;
+
+  std::once_flag feature_once;
+  double feature_size = 0.0;
+};
+
+namespace {
+constexpr std::size_t kFaceGrain = 2048;
+constexpr std::size_t kVertexGrain = 2048;
+}  // namespace
+
+Surface::Surface(TriangleMesh mesh, SurfaceOptions options)
+    : mesh_(std::move(mesh)), options_(options), cache_(std::make_unique<Cache>()) {
+  check_mesh_indices_and_values(mesh_, "surface mesh");
+}
+
+Surface::~Surface() = default;
+Surface::Surface(Surface&&) noexcept = default;
+Surface& Surface::operator=(Surface&&) noexcept = default;
+
+const Topology& Surface::topology() const {
+  Cache& c = *cache_;
+  std::call_once(c.topology_once,
+                 [&] { tbb::this_task_arena::isolate([&] { c.topology = Topology(mesh_); }); });
+  return c.topology;
+}
+
+namespace {
+
+// One pass over faces (normals, areas, corner areas, normal weights), then
+// one gather per vertex (normals, areas).
+void compute_face_and_vertex(const TriangleMesh& mesh, const Topology& topo,
+                             const SurfaceOptions& opt, std::vector<Vec3>& face_normals,
+                             std::vector<double>& face_areas, std::vector<Vec3>& corner_areas,
+                             std::vector<Vec3>* vertex_normals,
+                             std::vector<std::uint8_t>* normal_valid,
+                             std::vector<double>* vertex_areas) {
+  const std::size_t nf = mesh.faces.size();
+  const std::size_t nv = mesh.positions.size();
+  face_normals.resize(nf);
+  face_areas.resize(nf);
+  corner_areas.resize(nf);
+  std::vector<Vec3> weights;
+  if (vertex_normals) weights.resize(nf);
+  detail::parallel_chunks(nf, kFaceGrain, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t f = begin; f < end; ++f) {
+      const auto t = detail::triangle_shape(mesh, mesh.faces[f]);
+      face_areas[f] = 0.5 * t.twice_area;
+      face_normals[f] = t.degenerate ? Vec3::Zero() : Vec3(t.cross / t.twice_area);
+      corner_areas[f] = detail::corner_areas(t, opt.mixed_areas);
+      if (vertex_normals) weights[f] = detail::normal_corner_weights(t, opt.normal_weighting);
+    }
+  });
+  if (!vertex_normals) return;
+  vertex_normals->assign(nv, Vec3::Zero());
+  normal_valid->assign(nv, 0);
+  vertex_areas->assign(nv, 0.0);
+  detail::parallel_chunks(nv, kVertexGrain, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t v = begin; v < end; ++v) {
+      const auto faces = topo.vertex_faces(v);
+      const auto corners = topo.vertex_face_corners(v);
+      Vec3 n = Vec3::Zero();
+      double wsum = 0.0, area = 0.0;
+      for (std::size_t i = 0; i < faces.size(); ++i) {
+        const auto f = static_cast<std::size_t>(faces[i]);
+        const int k = corners[i];
+        const double w = weights[f][k];
+        n += w * face_normals[f];
+        wsum += w;
+        area += corner_areas[f][k];
+      }
+      (*vertex_areas)[v] = area;
+      const double len = n.norm();
+      if (wsum > 0.0 && len > 1e-10 * wsum) {
+        (*vertex_normals)[v] = n / len;
+        (*normal_valid)[v] = 1;
+      }
+    }
+  });
+}
+
+}  // namespace
+
+const std::vector<Vec3>& Surface::face_normals() const {
+  Cache& c = *cache_;
+  std::call_once(c.face_once, [&] {
+    compute_face_and_vertex(mesh_, c.topology, options_, c.face_normals, c.face_areas,
+                            c.corner_areas, nullptr, nullptr, nullptr);
+  });
+  return c.face_normals;
+}
+
+const std::vector<double>& Surface::face_areas() const {
+  face_normals();
+  return cache_->face_areas;
+}
+
+const std::vector<Vec3>& Surface::corner_areas() const {
+  face_normals();
+  return cache_->corner_areas;
+}
+
+const std::vector<Vec3>& Surface::vertex_normals() const {
+  Cache& c = *cache_;
+  const Topology& topo = topology();
+  std::call_once(c.vertex_once, [&] {
+    // Recomputes the (cheap) face pass fused with the weights, unless the
+    // face quantities already exist, in which case only the gather runs.
+    std::vector<Vec3> fn, ca;
+    std::vector<double> fa;
+    compute_face_and_vertex(mesh_, topo, options_, fn, fa, ca, &c.vertex_normals, &c.normal_valid,
+                            &c.vertex_areas);
+    std::call_once(c.face_once, [&] {
+      c.face_normals = std::move(fn);
+      c.face_areas = std::move(fa);
+      c.corner_areas = std::move(ca);
+    });
+  });
+  return c.vertex_normals;
+}
+
+const std::vector<double>& Surface::vertex_areas() const {
+  vertex_normals();
+  return cache_->vertex_areas;
+}
+
+const PrincipalCurvatures& Surface::curvature() const {
+  Cache& c = *cache_;
+  vertex_normals();
+  std::call_once(c.curvature_once, [&] {
+    const detail::CurvatureInputs in{mesh_,          c.topology,       c.face_normals,
+                                     c.corner_areas, c.vertex_normals, c.normal_valid};
+    c.curvature = detail::estimate_curvature(in);
+    if (options_.curvature_smoothing_passes > 0)
+      smooth_curvature(*this, c.curvature,
+                       options_.curvature_smoothing_sigma * median_edge_length(),
+                       options_.curvature_smoothing_passes);
+  });
+  return c.curvature;
+}
+
+const CurvatureDerivatives& Surface::curvature_derivatives() const {
+  Cache& c = *cache_;
+  const PrincipalCurvatures& curv = curvature();
+  std::call_once(c.derivative_once, [&] {
+    const detail::CurvatureInputs in{mesh_,          c.topology,       c.face_normals,
+                                     c.corner_areas, c.vertex_normals, c.normal_valid};
+    c.derivatives = detail::estimate_curvature_derivatives(in, curv);
+    if (options_.derivative_smoothing_passes > 0)
+      smooth_curvature_derivatives(*this, curv, c.derivatives,
+                                   options_.curvature_smoothing_sigma * median_edge_length(),
+                                   options_.derivative_smoothing_passes);
+  });
+  return c.derivatives;
+}
+
+double Surface::median_edge_length() const {
+  Cache& c = *cache_;
+  const Topology& topo = topology();
+  std::call_once(c.edge_once, [&] { c.edges = edge_length_statistics(mesh_, topo); });
+  return c.edges.median;
+}
+
+double Surface::mean_edge_length() const {
+  median_edge_length();
+  return cache_->edges.mean;
+}
+
+Vec3 Surface::bounding_sphere_center() const {
+  Cache& c = *cache_;
+  std::call_once(c.sphere_once, [&] { c.sphere = bounding_sphere(mesh_.positions); });
+  return c.sphere.center;
+}
+
+double Surface::bounding_sphere_radius() const {
+  bounding_sphere_center();
+  return cache_->sphere.radius;
+}
+
+double Surface::feature_size() const {
+  Cache& c = *cache_;
+  const PrincipalCurvatures& curv = curvature();
+  const double radius = bounding_sphere_radius();
+  std::call_once(c.feature_once, [&] { c.feature_size = fabrica::feature_size(curv, radius); });
+  return c.feature_size;
+}
+
+void Surface::precompute() const {
+  topology();
+  tbb::this_task_arena::isolate([&] {
+    tbb::parallel_invoke([&] { curvature_derivatives(); },
+                         [&] {
+                           median_edge_length();
+                           bounding_sphere_center();
+                         });
+  });
+  feature_size();
+}
+
+}  // namespace fabrica
