@@ -1,0 +1,355 @@
+// Surfaces from label maps (discrete flying edges per label, on the label's
+// bounding box padded with one background voxel so every surface closes)
+// and iso-surfaces of scalar volumes (flying edges), smoothed with the
+// windowed-sinc filter and optionally decimated, then mapped voxel index ->
+// LPS patient mm and oriented outward.
+#include <tbb/parallel_for.h>
+#include <vtkCellArray.h>
+#include <vtkCellArrayIterator.h>
+#include <vtkDiscreteFlyingEdges3D.h>
+#include <vtkFloatArray.h>
+#include <vtkFlyingEdges3D.h>
+#include <vtkImageData.h>
+#include <vtkNew.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+#include <vtkQuadricDecimation.h>
+#include <vtkSmartPointer.h>
+#include <vtkUnsignedCharArray.h>
+#include <vtkWindowedSincPolyDataFilter.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <tuple>
+
+#include "fabrica/core/error.hpp"
+#include "fabrica/io/label_volume.hpp"
+
+namespace fabrica::io {
+namespace {
+
+struct LabelStats {
+  int value = 0;
+  int layer = 0;
+  std::size_t count = 0;
+  std::array<int, 3> lo{std::numeric_limits<int>::max(), std::numeric_limits<int>::max(),
+                        std::numeric_limits<int>::max()};
+  std::array<int, 3> hi{-1, -1, -1};
+};
+
+/// One pass over a label map: voxel count and index bounding box per label.
+std::map<int, LabelStats> label_stats(const LabelVolume& volume, int layer) {
+  std::map<int, LabelStats> stats;
+  const auto& dims = volume.geometry.dims;
+  const std::int32_t* v = volume.layers[static_cast<std::size_t>(layer)].data();
+  LabelStats* last = nullptr;
+  std::size_t index = 0;
+  for (int k = 0; k < dims[2]; ++k)
+    for (int j = 0; j < dims[1]; ++j)
+      for (int i = 0; i < dims[0]; ++i, ++index) {
+        const std::int32_t label = v[index];
+        if (label == 0) continue;
+        if (last == nullptr || last->value != label) {
+          last = &stats[label];
+          last->value = label;
+          last->layer = layer;
+        }
+        ++last->count;
+        last->lo[0] = std::min(last->lo[0], i);
+        last->hi[0] = std::max(last->hi[0], i);
+        last->lo[1] = std::min(last->lo[1], j);
+        last->hi[1] = std::max(last->hi[1], j);
+        last->lo[2] = std::min(last->lo[2], k);
+        last->hi[2] = std::max(last->hi[2], k);
+      }
+  return stats;
+}
+
+vtkSmartPointer<vtkPolyData> smooth_and_decimate(vtkSmartPointer<vtkPolyData> surface,
+                                                 int iterations, double passband, double decimate) {
+  if (iterations > 0 && surface->GetNumberOfPolys() > 0) {
+    vtkNew<vtkWindowedSincPolyDataFilter> smoother;
+    smoother->SetInputData(surface);
+    smoother->SetNumberOfIterations(iterations);
+    smoother->SetPassBand(passband);
+    smoother->NormalizeCoordinatesOn();
+    smoother->BoundarySmoothingOff();
+    smoother->FeatureEdgeSmoothingOff();
+    smoother->NonManifoldSmoothingOn();
+    smoother->Update();
+    surface = smoother->GetOutput();
+  }
+  if (decimate > 0.0 && surface->GetNumberOfPolys() > 0) {
+    vtkNew<vtkQuadricDecimation> decimator;
+    decimator->SetInputData(surface);
+    decimator->SetTargetReduction(decimate);
+    decimator->VolumePreservationOn();
+    decimator->Update();
+    surface = decimator->GetOutput();
+  }
+  return surface;
+}
+
+/// Maps the filter output (points in spacing-scaled index space) to LPS mm,
+/// drops degenerate triangles and unused points, orients faces outward.
+TriangleMesh to_patient_mesh(vtkPolyData* surface, const VolumeGeometry& g) {
+  TriangleMesh mesh;
+  mesh.space = Space::lps;
+  mesh.space_source = SpaceSource::file_tag;
+  vtkPoints* points = surface->GetPoints();
+  vtkCellArray* polys = surface->GetPolys();
+  if (points == nullptr || polys == nullptr) return mesh;
+  const vtkIdType n = points->GetNumberOfPoints();
+  std::vector<std::int32_t> remap(static_cast<std::size_t>(n), -1);
+  auto iter = vtk::TakeSmartPointer(polys->NewIterator());
+  for (iter->GoToFirstCell(); !iter->IsDoneWithTraversal(); iter->GoToNextCell()) {
+    vtkIdType count = 0;
+    const vtkIdType* ids = nullptr;
+    iter->GetCurrentCell(count, ids);
+    if (count != 3) continue;
+    if (ids[0] == ids[1] || ids[1] == ids[2] || ids[0] == ids[2]) continue;
+    Face f{};
+    for (int k = 0; k < 3; ++k) {
+      std::int32_t& r = remap[static_cast<std::size_t>(ids[k])];
+      if (r < 0) {
+        double q[3];
+        points->GetPoint(ids[k], q);
+        r = static_cast<std::int32_t>(mesh.positions.size());
+        mesh.positions.push_back(g.origin + g.direction * Vec3(q[0], q[1], q[2]));
+      }
+      f[k] = r;
+    }
+    mesh.faces.push_back(f);
+  }
+  // Outward: the enclosed (signed) volume must be positive. The mapping flips
+  // orientation when det(direction) < 0; the sum over all components keeps
+  // cavities (inner walls of hollow labels) facing into the cavity.
+  if (!mesh.faces.empty()) {
+    const Vec3 c = bounding_box(mesh.positions).center();
+    double volume6 = 0.0;
+    for (const Face& f : mesh.faces) {
+      const Vec3 a = mesh.positions[f[0]] - c, b = mesh.positions[f[1]] - c,
+                 d = mesh.positions[f[2]] - c;
+      volume6 += a.dot(b.cross(d));
+    }
+    if (volume6 < 0.0)
+      for (Face& f : mesh.faces) std::swap(f[1], f[2]);
+  }
+  return mesh;
+}
+
+TriangleMesh extract_label(const LabelVolume& volume, const LabelStats& s,
+                           const ExtractOptions& options, int iterations) {
+  const VolumeGeometry& g = volume.geometry;
+  const std::vector<std::int32_t>& labels = volume.layers[static_cast<std::size_t>(s.layer)];
+  // Crop to the bounding box plus one background voxel on every side.
+  std::array<int, 3> n{};
+  for (int a = 0; a < 3; ++a) n[a] = s.hi[a] - s.lo[a] + 3;
+  vtkNew<vtkImageData> image;
+  image->SetDimensions(n[0], n[1], n[2]);
+  image->SetSpacing(g.spacing[0], g.spacing[1], g.spacing[2]);
+  image->SetOrigin(g.spacing[0] * (s.lo[0] - 1), g.spacing[1] * (s.lo[1] - 1),
+                   g.spacing[2] * (s.lo[2] - 1));
+  image->AllocateScalars(VTK_UNSIGNED_CHAR, 1);
+  auto* mask = static_cast<unsigned char*>(image->GetScalarPointer());
+  std::fill(mask, mask + static_cast<std::size_t>(n[0]) * n[1] * n[2], 0);
+  const std::size_t row = static_cast<std::size_t>(g.dims[0]);
+  const std::size_t slice = row * static_cast<std::size_t>(g.dims[1]);
+  for (int k = s.lo[2]; k <= s.hi[2]; ++k)
+    for (int j = s.lo[1]; j <= s.hi[1]; ++j) {
+      const std::int32_t* src = labels.data() + k * slice + j * row;
+      unsigned char* dst =
+          mask + (static_cast<std::size_t>(k - s.lo[2] + 1) * n[1] + (j - s.lo[1] + 1)) * n[0] + 1;
+      for (int i = s.lo[0]; i <= s.hi[0]; ++i) dst[i - s.lo[0]] = src[i] == s.value ? 1 : 0;
+    }
+  vtkNew<vtkDiscreteFlyingEdges3D> contour;
+  contour->SetInputData(image);
+  contour->SetValue(0, 1.0);
+  contour->ComputeNormalsOff();
+  contour->ComputeGradientsOff();
+  contour->ComputeScalarsOff();
+  contour->Update();
+  vtkSmartPointer<vtkPolyData> surface = contour->GetOutput();
+  surface = smooth_and_decimate(surface, iterations, options.smoothing_passband, options.decimate);
+  return to_patient_mesh(surface, g);
+}
+
+TriangleMesh extract_iso(const LabelVolume& volume, double iso, const ExtractOptions& options,
+                         int iterations, std::string& problem) {
+  const VolumeGeometry& g = volume.geometry;
+  const std::size_t count = g.voxel_count();
+  auto value = [&](std::size_t index) -> float {
+    return volume.integer_labels ? static_cast<float>(volume.layers[0][index])
+                                 : volume.scalars[index];
+  };
+  float lo = std::numeric_limits<float>::max(), hi = std::numeric_limits<float>::lowest();
+  for (std::size_t v = 0; v < count; ++v) {
+    lo = std::min(lo, value(v));
+    hi = std::max(hi, value(v));
+  }
+  if (!(lo < iso && hi > iso)) {
+    problem = "no voxel crosses the iso value " + std::to_string(iso) + " (values range " +
+              std::to_string(lo) + " .. " + std::to_string(hi) + ")";
+    return {};
+  }
+  // The side of the iso value most border voxels are on is "outside"; pad
+  // the volume with one voxel of it so surfaces cut by the border close.
+  const auto& d = g.dims;
+  std::size_t above = 0, below = 0;
+  std::size_t index = 0;
+  for (int k = 0; k < d[2]; ++k)
+    for (int j = 0; j < d[1]; ++j)
+      for (int i = 0; i < d[0]; ++i, ++index) {
+        const bool border =
+            i == 0 || j == 0 || k == 0 || i == d[0] - 1 || j == d[1] - 1 || k == d[2] - 1;
+        if (!border) continue;
+        (value(index) > iso ? above : below) += 1;
+      }
+  const float pad = above > below ? std::max(hi, static_cast<float>(iso)) + 1.0f
+                                  : std::min(lo, static_cast<float>(iso)) - 1.0f;
+  std::array<int, 3> n{d[0] + 2, d[1] + 2, d[2] + 2};
+  vtkNew<vtkImageData> image;
+  image->SetDimensions(n[0], n[1], n[2]);
+  image->SetSpacing(g.spacing[0], g.spacing[1], g.spacing[2]);
+  image->SetOrigin(-g.spacing[0], -g.spacing[1], -g.spacing[2]);
+  image->AllocateScalars(VTK_FLOAT, 1);
+  auto* out = static_cast<float*>(image->GetScalarPointer());
+  std::fill(out, out + static_cast<std::size_t>(n[0]) * n[1] * n[2], pad);
+  index = 0;
+  for (int k = 0; k < d[2]; ++k)
+    for (int j = 0; j < d[1]; ++j) {
+      float* dst = out + (static_cast<std::size_t>(k + 1) * n[1] + (j + 1)) * n[0] + 1;
+      for (int i = 0; i < d[0]; ++i, ++index) dst[i] = value(index);
+    }
+  vtkNew<vtkFlyingEdges3D> contour;
+  contour->SetInputData(image);
+  contour->SetValue(0, iso);
+  contour->ComputeNormalsOff();
+  contour->ComputeGradientsOff();
+  contour->ComputeScalarsOff();
+  contour->InterpolateAttributesOff();
+  contour->Update();
+  vtkSmartPointer<vtkPolyData> surface = contour->GetOutput();
+  surface = smooth_and_decimate(surface, iterations, options.smoothing_passband, options.decimate);
+  TriangleMesh mesh = to_patient_mesh(surface, g);
+  if (mesh.faces.empty()) problem = "the iso-surface at " + std::to_string(iso) + " is empty";
+  return mesh;
+}
+
+void check_options(const ExtractOptions& options) {
+  if (options.smoothing_iterations &&
+      (*options.smoothing_iterations < 0 || *options.smoothing_iterations > 10000))
+    throw InputError("smoothing iterations must be between 0 and 10000, got " +
+                     std::to_string(*options.smoothing_iterations));
+  if (!(options.smoothing_passband > 0.0 && options.smoothing_passband < 2.0))
+    throw InputError("smoothing pass band must be in (0, 2), got " +
+                     std::to_string(options.smoothing_passband));
+  if (!(options.decimate >= 0.0 && options.decimate < 1.0))
+    throw InputError("decimation must be a fraction of faces to remove in [0, 1), got " +
+                     std::to_string(options.decimate));
+  if (options.iso_value && !std::isfinite(*options.iso_value))
+    throw InputError("iso value must be a finite number");
+}
+
+}  // namespace
+
+std::vector<std::map<int, std::size_t>> label_voxel_counts(const LabelVolume& volume) {
+  std::vector<std::map<int, std::size_t>> out;
+  if (!volume.integer_labels) return out;
+  for (std::size_t l = 0; l < volume.layers.size(); ++l) {
+    std::map<int, std::size_t>& counts = out.emplace_back();
+    for (const auto& [value, s] : label_stats(volume, static_cast<int>(l))) counts[value] = s.count;
+  }
+  return out;
+}
+
+std::vector<ExtractedSurface> extract_surfaces(const LabelVolume& volume,
+                                               const ExtractOptions& options) {
+  check_options(options);
+  const std::string what = "volume '" + volume.path + "'";
+  const std::size_t voxels = volume.geometry.voxel_count();
+  if (volume.integer_labels) {
+    if (volume.layers.empty()) throw InputError(what + ": holds no voxel data");
+    for (const auto& layer : volume.layers)
+      if (layer.size() != voxels)
+        throw InputError(what + ": label map size does not match its dimensions");
+  } else if (volume.scalars.size() != voxels) {
+    throw InputError(what + ": scalar data size does not match its dimensions");
+  }
+
+  if (options.iso_value) {
+    if (volume.integer_labels && volume.layers.size() > 1)
+      throw InputError(what +
+                       ": an iso-surface of a layered segmentation is not defined; "
+                       "extract labels instead");
+    ExtractedSurface result;
+    result.name = "isosurface";
+    result.mesh = extract_iso(volume, *options.iso_value, options,
+                              options.smoothing_iterations.value_or(0), result.problem);
+    return {std::move(result)};
+  }
+  if (!volume.integer_labels)
+    throw InputError(what +
+                     " holds non-integer values (a level set or an intensity image), "
+                     "not labels: give an iso value (--iso) to extract a surface");
+
+  // Which (layer, value) pairs to extract.
+  std::vector<std::map<int, LabelStats>> stats(volume.layers.size());
+  tbb::parallel_for(std::size_t{0}, volume.layers.size(),
+                    [&](std::size_t l) { stats[l] = label_stats(volume, static_cast<int>(l)); });
+  struct Target {
+    int layer;
+    int value;
+    const LabelStats* stats;
+  };
+  std::vector<Target> targets;
+  for (std::size_t l = 0; l < stats.size(); ++l)
+    for (const auto& [value, s] : stats[l])
+      if (options.labels.empty() ||
+          std::find(options.labels.begin(), options.labels.end(), value) != options.labels.end())
+        targets.push_back({static_cast<int>(l), value, &s});
+  for (int wanted : options.labels) {
+    const bool listed = std::any_of(targets.begin(), targets.end(),
+                                    [&](const Target& t) { return t.value == wanted; });
+    if (!listed) targets.push_back({0, wanted, nullptr});  // absent: reported, not extracted
+  }
+  std::sort(targets.begin(), targets.end(), [](const Target& a, const Target& b) {
+    return std::tie(a.layer, a.value) < std::tie(b.layer, b.value);
+  });
+
+  const bool layered = volume.layers.size() > 1;
+  const int iterations = options.smoothing_iterations.value_or(20);
+  std::vector<ExtractedSurface> results(targets.size());
+  tbb::parallel_for(std::size_t{0}, targets.size(), [&](std::size_t t) {
+    const Target& target = targets[t];
+    ExtractedSurface& r = results[t];
+    r.label = target.value;
+    r.layer = target.layer;
+    r.name = "label_" + std::to_string(target.value) +
+             (layered ? "_layer" + std::to_string(target.layer) : std::string());
+    for (const LabelInfo& info : volume.labels)
+      if (info.value == target.value && info.layer == target.layer) {
+        if (!info.name.empty()) r.name = info.name;
+        r.color = info.color;
+        break;
+      }
+    if (target.stats == nullptr) {
+      r.problem = "label " + std::to_string(target.value) + " has no voxels in this volume";
+      return;
+    }
+    r.voxel_count = target.stats->count;
+    try {
+      r.mesh = extract_label(volume, *target.stats, options, iterations);
+      if (r.mesh.faces.empty()) r.problem = "the label's surface is empty";
+    } catch (const std::exception& e) {
+      r.mesh = {};
+      r.problem = std::string("extraction failed: ") + e.what();
+    }
+  });
+  return results;
+}
+
+}  // namespace fabrica::io
