@@ -1,0 +1,56 @@
+// LinePrecompute: everything about a Surface that the line families need and
+// that does not depend on the view, computed once on first use and cached
+// (thread-safe): raw ridge, valley and demarcating segments (thresholds are
+// applied per request, back-face culling per view), |k1|, the per-vertex
+// gradient operator used by PELs and Laplacian lines, and the cotan
+// Laplacian of the normals ΔN (Zhang et al. 2009's shortcut: Δ(n·l) = ΔN·l).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "fabrica/core/surface.hpp"
+#include "fabrica/lines/segments.hpp"
+
+namespace fabrica {
+
+/// Sparse per-vertex gradient operator: ∇f_i = Σ_k coeff[k] f[column[k]],
+/// k in [offset[i], offset[i+1]). Each face gradient (ALGORITHMS.md §1) is
+/// rotated into the vertex tangent plane and averaged with corner-area
+/// weights. Coefficients are float (bandwidth), accumulation is double.
+struct GradientOperator {
+  std::vector<std::int32_t> offset, column;
+  std::vector<float> coeff;  ///< 3 floats per entry (x, y, z), 1/mm
+  /// out[i] = ∇f_i (parallel, deterministic). Sizes: f.size() == vertex count.
+  void apply(const std::vector<double>& f, std::vector<Vec3>& out) const;
+};
+
+class LinePrecompute {
+ public:
+  explicit LinePrecompute(const Surface& surface);
+  ~LinePrecompute();
+  LinePrecompute(const LinePrecompute&) = delete;
+  LinePrecompute& operator=(const LinePrecompute&) = delete;
+
+  const Surface& surface() const { return *surface_; }
+  /// |k1| per vertex.
+  const std::vector<double>& abs_k1() const;
+  /// Ridge (k1 > 0 at all corners) and valley (k1 < 0) segments with the
+  /// maximum test, without threshold or culling; SegmentEnd::strength holds
+  /// the interpolated |k1| (1/mm).
+  const std::vector<LineSegment>& raw_ridges() const;
+  const std::vector<LineSegment>& raw_valleys() const;
+  /// Demarcating curves without threshold; strength holds C(g,g,g) (1/mm²).
+  const std::vector<LineSegment>& raw_demarcating() const;
+  const GradientOperator& gradient_operator() const;
+  /// Cotan Laplacian of each normal component (1/mm²), per vertex.
+  const std::vector<Vec3>& normal_laplacian() const;
+
+ private:
+  struct Cache;
+  const Surface* surface_;
+  std::unique_ptr<Cache> cache_;
+};
+
+}  // namespace fabrica

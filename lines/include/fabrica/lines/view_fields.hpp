@@ -1,0 +1,73 @@
+// ViewFields: the per-view, per-vertex scalars and vectors every
+// view-dependent line family is extracted from, recomputed for each camera
+// in parallel (TBB, deterministic). Nothing view-independent lives here: it
+// stays cached in the Surface (curvature) or in LinePrecompute (ridges,
+// demarcating curves, the gradient operator, the Laplacian of the normals).
+//
+// Definitions (ALGORITHMS.md §0, §4, §6; DeCarlo et al. 2003/2004; Judd et
+// al. 2007), with v the unit view vector at the vertex (towards the eye for
+// perspective, as rtsc), n the vertex normal, (e1, e2, k1, k2) the principal
+// frame (|k1| >= |k2|, convex positive), (a, b, c, d) the curvature
+// derivative tensor, u = v·e1, w = v·e2 (u² + w² = sin²θ):
+//   ndotv          n·v = cos θ                                   (unitless)
+//   kr             K_r = k1 u² + k2 w² = κ_r sin²θ               (1/mm)
+//   sc_num         N = C_w - 2 (n·v) τ_r², C_w = (a u³ + 3b u²w + 3c u w² + d w³)/sin²θ,
+//                  τ_r = (k2 - k1) u w / sin²θ; N/(n·v) = tan θ D_ŵ κ_r  (1/mm²)
+//   q1             largest eigenvalue of QᵀQ, Q = S P⁻¹ (rtsc stores q1², 1/mm²)
+//   t1             its unit eigenvector in principal coordinates
+//   t1_world       t1[0] e1 + t1[1] e2 (unit tangent vector)
+//   dt1q1          D_t1 q1 by Judd's one-sided finite differences (§6.2), 1/mm³
+//   light          f = n·l (headlight l = v, or a fixed direction), unclamped
+//   light_gradient ∇f at the vertex (1/mm); light_laplacian Δf (1/mm²)
+// Vertices where the Surface marks curvature invalid get zeros.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "fabrica/core/camera.hpp"
+#include "fabrica/core/surface.hpp"
+#include "fabrica/core/types.hpp"
+
+namespace fabrica {
+
+class LinePrecompute;
+
+/// Which groups of fields to compute (the rest stay empty).
+struct ViewFieldsRequest {
+  bool radial = true;    ///< ndotv, kr (contours, suggestive contours, highlights)
+  bool sc_test = true;   ///< sc_num (suggestive contours and highlights)
+  bool apparent = true;  ///< q1, t1, t1_world, dt1q1
+  bool light = false;    ///< light, light_gradient, light_laplacian (PELs, Laplacian lines)
+  bool pel = false;      ///< pel_h, pel_s (PELs): D_w|∇f| and D_w D_w|∇f|
+  /// Light direction (towards the light) for PELs / Laplacian lines;
+  /// nullopt = headlight (v at each vertex).
+  std::optional<Vec3> light_direction;
+};
+
+struct ViewFields {
+  Camera camera;
+  std::vector<double> ndotv, kr, sc_num;
+  std::vector<double> q1, dt1q1;
+  std::vector<Vec2> t1;
+  std::vector<Vec3> t1_world;
+  std::vector<double> light, light_laplacian;
+  std::vector<Vec3> light_gradient;
+  std::vector<double> pel_g, pel_h, pel_s;  ///< |∇f|, D_w|∇f|, D_w D_w|∇f|
+};
+
+/// Computes the requested fields for `camera` (validated first; InputError
+/// on a bad camera). `precompute` is needed only for `light`/`pel` (it holds
+/// the gradient operator and ΔN); pass nullptr otherwise.
+ViewFields compute_view_fields(const Surface& surface, const Camera& camera,
+                               const ViewFieldsRequest& request = {},
+                               const LinePrecompute* precompute = nullptr);
+
+/// Recomputes into an existing ViewFields (reuses its buffers: no allocation
+/// per frame once sized).
+void update_view_fields(ViewFields& fields, const Surface& surface, const Camera& camera,
+                        const ViewFieldsRequest& request = {},
+                        const LinePrecompute* precompute = nullptr);
+
+}  // namespace fabrica

@@ -1,0 +1,152 @@
+// Contours, boundaries, creases, suggestive contours and suggestive
+// highlights (ALGORITHMS.md §3, §4, §8).
+#include <cmath>
+
+#include "fabrica/core/error.hpp"
+#include "fabrica/lines/extract.hpp"
+#include "fabrica/lines/zero_crossing.hpp"
+#include "parallel.hpp"
+
+namespace fabrica {
+
+namespace {
+
+void require_field(const std::vector<double>& v, std::size_t n, const char* what) {
+  if (v.size() != n)
+    throw Error(ErrorKind::internal, std::string("line extraction: view field '") + what +
+                                         "' was not computed for this surface");
+}
+
+SegmentEnd vertex_end(const Surface& s, std::size_t face, std::int32_t v) {
+  const Face& f = s.faces()[face];
+  SegmentEnd e;
+  e.anchor.face = static_cast<std::int32_t>(face);
+  e.anchor.bary = Vec3::Zero();
+  for (int k = 0; k < 3; ++k)
+    if (f[k] == v) e.anchor.bary[k] = 1.0;
+  e.position = s.positions()[static_cast<std::size_t>(v)];
+  e.element = v;
+  e.kind = EndKind::vertex;
+  return e;
+}
+
+LineSegment edge_segment(const Surface& s, std::size_t edge) {
+  const Topology& topo = s.topology();
+  const auto ev = topo.edge(edge);
+  const auto face = static_cast<std::size_t>(topo.edge_faces(edge)[0]);
+  LineSegment seg;
+  seg.face = static_cast<std::int32_t>(face);
+  seg.end[0] = vertex_end(s, face, ev[0]);
+  seg.end[1] = vertex_end(s, face, ev[1]);
+  return seg;
+}
+
+template <class Pred>
+SegmentSoup edge_soup(const Surface& s, LineFamily family, Pred&& keep) {
+  SegmentSoup soup;
+  soup.family = family;
+  const Topology& topo = s.topology();
+  detail::parallel_chunks<LineSegment>(
+      topo.edge_count(),
+      [&](std::size_t b, std::size_t e, std::vector<LineSegment>& out) {
+        for (std::size_t i = b; i < e; ++i)
+          if (keep(i)) out.push_back(edge_segment(s, i));
+      },
+      soup.segments);
+  return soup;
+}
+
+}  // namespace
+
+SegmentSoup extract_contours(const Surface& surface, const ViewFields& fields,
+                             const ContourOptions& options) {
+  const std::size_t nv = surface.vertex_count();
+  if (options.mesh_edges) {
+    const auto& fn = surface.face_normals();
+    const Topology& topo = surface.topology();
+    const auto& pos = surface.positions();
+    return edge_soup(surface, LineFamily::contour, [&](std::size_t e) {
+      const auto fs = topo.edge_faces(e);
+      if (fs.size() != 2) return false;
+      const auto ev = topo.edge(e);
+      const Vec3 v = fields.camera.view_vector(pos[static_cast<std::size_t>(ev[0])]);
+      const double a = fn[static_cast<std::size_t>(fs[0])].dot(v);
+      const double b = fn[static_cast<std::size_t>(fs[1])].dot(v);
+      return (a > 0.0) != (b > 0.0);
+    });
+  }
+  require_field(fields.ndotv, nv, "ndotv");
+  SegmentSoup soup;
+  soup.family = LineFamily::contour;
+  ScalarCrossingOptions o;
+  if (options.trim_concave) {
+    require_field(fields.kr, nv, "kr");
+    o.test_num = fields.kr;
+  }
+  scalar_zero_crossings(surface, fields.ndotv, o, soup.segments);
+  return soup;
+}
+
+SegmentSoup extract_boundaries(const Surface& surface) {
+  const Topology& topo = surface.topology();
+  return edge_soup(surface, LineFamily::boundary,
+                   [&](std::size_t e) { return topo.is_boundary_edge(e); });
+}
+
+SegmentSoup extract_creases(const Surface& surface, const CreaseOptions& options) {
+  if (!(options.angle_deg > 0.0 && options.angle_deg < 180.0))
+    throw InputError("crease angle must be between 0 and 180 degrees");
+  const double c = std::cos(options.angle_deg * M_PI / 180.0);
+  const Topology& topo = surface.topology();
+  const auto& fn = surface.face_normals();
+  return edge_soup(surface, LineFamily::crease, [&](std::size_t e) {
+    const auto fs = topo.edge_faces(e);
+    if (fs.size() > 2) return true;  // non-manifold edges are drawn as creases
+    if (fs.size() != 2) return false;
+    const Vec3& a = fn[static_cast<std::size_t>(fs[0])];
+    const Vec3& b = fn[static_cast<std::size_t>(fs[1])];
+    if (a.squaredNorm() == 0.0 || b.squaredNorm() == 0.0) return false;
+    return a.dot(b) < c;
+  });
+}
+
+namespace {
+
+SegmentSoup suggestive_like(const Surface& surface, const ViewFields& fields, double fs,
+                            double threshold, double fade, bool cull, bool highlight) {
+  const std::size_t nv = surface.vertex_count();
+  require_field(fields.kr, nv, "kr");
+  require_field(fields.sc_num, nv, "sc_num");
+  if (!(fs > 0.0)) throw InputError("feature size must be positive");
+  const double t = threshold / (fs * fs);
+  std::vector<double> num(nv);
+  detail::parallel_range(nv, [&](std::size_t i) {
+    const double n = highlight ? -fields.sc_num[i] : fields.sc_num[i];
+    num[i] = n - t * fields.ndotv[i];
+  });
+  SegmentSoup soup;
+  soup.family = highlight ? LineFamily::highlight : LineFamily::suggestive;
+  ScalarCrossingOptions o;
+  o.test_num = num;
+  o.test_den = fields.ndotv;
+  if (cull) o.cull = fields.ndotv;
+  o.fade = fade / (fs * fs);
+  scalar_zero_crossings(surface, fields.kr, o, soup.segments);
+  return soup;
+}
+
+}  // namespace
+
+SegmentSoup extract_suggestive_contours(const Surface& surface, const ViewFields& fields,
+                                        double feature_size, const SuggestiveOptions& options) {
+  return suggestive_like(surface, fields, feature_size, options.threshold, options.fade,
+                         options.cull_backfaces, false);
+}
+
+SegmentSoup extract_suggestive_highlights(const Surface& surface, const ViewFields& fields,
+                                          double feature_size, const HighlightOptions& options) {
+  return suggestive_like(surface, fields, feature_size, options.threshold, options.fade,
+                         options.cull_backfaces, true);
+}
+
+}  // namespace fabrica

@@ -1,0 +1,86 @@
+// Ridges, valleys and demarcating curves (view-independent: precomputed once,
+// culled and thresholded per view) and apparent ridges (ALGORITHMS.md §5, §6, §8).
+#include <cmath>
+
+#include "fabrica/core/error.hpp"
+#include "fabrica/lines/extract.hpp"
+#include "fabrica/lines/zero_crossing.hpp"
+#include "parallel.hpp"
+
+namespace fabrica {
+
+namespace {
+
+// Keeps raw segments (strength = magnitude) whose face is not back-facing
+// and whose magnitude exceeds `t` at either end; strength becomes the fade
+// (m - t)/m (rtsc's k/(k + t) with k = m - t).
+SegmentSoup threshold_raw(const Surface& surface, const std::vector<LineSegment>& raw,
+                          LineFamily family, const ViewFields& fields, double t, bool cull) {
+  SegmentSoup soup;
+  soup.family = family;
+  const auto& faces = surface.faces();
+  const bool do_cull = cull && fields.ndotv.size() == surface.vertex_count();
+  detail::parallel_chunks<LineSegment>(
+      raw.size(),
+      [&](std::size_t b, std::size_t e, std::vector<LineSegment>& out) {
+        for (std::size_t i = b; i < e; ++i) {
+          const LineSegment& s = raw[i];
+          if (do_cull) {
+            const Face& f = faces[static_cast<std::size_t>(s.face)];
+            if (fields.ndotv[f[0]] <= 0.0 && fields.ndotv[f[1]] <= 0.0 && fields.ndotv[f[2]] <= 0.0)
+              continue;
+          }
+          const double k0 = std::max(double(s.end[0].strength) - t, 0.0);
+          const double k1 = std::max(double(s.end[1].strength) - t, 0.0);
+          if (k0 == 0.0 && k1 == 0.0) continue;
+          LineSegment c = s;
+          c.end[0].strength = t > 0.0 ? static_cast<float>(k0 / (k0 + t)) : 1.0f;
+          c.end[1].strength = t > 0.0 ? static_cast<float>(k1 / (k1 + t)) : 1.0f;
+          out.push_back(c);
+        }
+      },
+      soup.segments, 16384);
+  return soup;
+}
+
+}  // namespace
+
+SegmentSoup extract_ridges(const LinePrecompute& pre, const ViewFields& fields, double feature_size,
+                           const RidgeOptions& options) {
+  if (!(feature_size > 0.0)) throw InputError("feature size must be positive");
+  return threshold_raw(pre.surface(), pre.raw_ridges(), LineFamily::ridge, fields,
+                       options.threshold / feature_size, options.cull_backfaces);
+}
+
+SegmentSoup extract_valleys(const LinePrecompute& pre, const ViewFields& fields,
+                            double feature_size, const RidgeOptions& options) {
+  if (!(feature_size > 0.0)) throw InputError("feature size must be positive");
+  return threshold_raw(pre.surface(), pre.raw_valleys(), LineFamily::valley, fields,
+                       options.threshold / feature_size, options.cull_backfaces);
+}
+
+SegmentSoup extract_demarcating_curves(const LinePrecompute& pre, const ViewFields& fields,
+                                       double feature_size, const DemarcatingOptions& options) {
+  if (!(feature_size > 0.0)) throw InputError("feature size must be positive");
+  return threshold_raw(pre.surface(), pre.raw_demarcating(), LineFamily::demarcating, fields,
+                       options.threshold / (feature_size * feature_size), options.cull_backfaces);
+}
+
+SegmentSoup extract_apparent_ridges(const Surface& surface, const ViewFields& fields,
+                                    double feature_size, const ApparentOptions& options) {
+  if (!(feature_size > 0.0)) throw InputError("feature size must be positive");
+  const std::size_t nv = surface.vertex_count();
+  if (fields.q1.size() != nv || fields.dt1q1.size() != nv || fields.t1_world.size() != nv)
+    throw Error(ErrorKind::internal, "apparent ridges: view fields lack q1/t1/Dt1q1");
+  SegmentSoup soup;
+  soup.family = LineFamily::apparent;
+  VectorCrossingOptions o;
+  o.test = options.maximum_test ? ExtremumTest::perpendicular : ExtremumTest::none;
+  o.threshold = options.threshold / (feature_size * feature_size);
+  // No back-face culling: contour-like apparent ridges come from barely
+  // back-facing faces (§6.3).
+  vector_zero_crossings(surface, fields.dt1q1, fields.t1_world, fields.q1, o, soup.segments);
+  return soup;
+}
+
+}  // namespace fabrica

@@ -1,0 +1,250 @@
+#include "fabrica/lines/precompute.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <mutex>
+
+#include "fabrica/lines/zero_crossing.hpp"
+#include "parallel.hpp"
+
+namespace fabrica {
+
+struct LinePrecompute::Cache {
+  std::once_flag k1_once, ridge_once, demarcating_once, gradient_once, laplacian_once;
+  std::vector<double> abs_k1;
+  std::vector<LineSegment> ridges, valleys, demarcating;
+  GradientOperator gradient;
+  std::vector<Vec3> normal_laplacian;
+};
+
+LinePrecompute::LinePrecompute(const Surface& surface)
+    : surface_(&surface), cache_(std::make_unique<Cache>()) {}
+LinePrecompute::~LinePrecompute() = default;
+
+const std::vector<double>& LinePrecompute::abs_k1() const {
+  std::call_once(cache_->k1_once, [&] {
+    const auto& curv = surface_->curvature();
+    cache_->abs_k1.resize(curv.k1.size());
+    for (std::size_t i = 0; i < curv.k1.size(); ++i) cache_->abs_k1[i] = std::abs(curv.k1[i]);
+  });
+  return cache_->abs_k1;
+}
+
+namespace {
+
+void compute_ridges(const Surface& surface, const std::vector<double>& abs_k1, bool ridge,
+                    std::vector<LineSegment>& out) {
+  const auto& curv = surface.curvature();
+  const auto& dcurv = surface.curvature_derivatives();
+  const std::size_t nv = surface.vertex_count();
+  std::vector<double> delta(nv);
+  std::vector<std::uint8_t> mask(nv);
+  const double sign = ridge ? 1.0 : -1.0;
+  for (std::size_t i = 0; i < nv; ++i) {
+    const bool ok = curv.valid[i] && dcurv.valid[i];
+    delta[i] = ok ? sign * dcurv.a[i] : 0.0;
+    mask[i] = ok && (ridge ? curv.k1[i] > 0.0 : curv.k1[i] < 0.0);
+  }
+  VectorCrossingOptions o;
+  o.vertex_mask = mask;
+  o.test = ExtremumTest::edge;
+  o.threshold = 0.0;
+  o.keep_raw_magnitude = true;
+  vector_zero_crossings(surface, delta, curv.e1, abs_k1, o, out);
+}
+
+// Minimal rotation taking a vector tangent to the plane with normal `from`
+// into the plane with normal `to` (Rodrigues about from x to).
+inline Vec3 rotate_tangent(const Vec3& x, const Vec3& from, const Vec3& to) {
+  const double c = from.dot(to);
+  if (c <= -1.0 + 1e-12) return x - to * to.dot(x);
+  const Vec3 axis = from.cross(to);
+  // R x = c x + axis × x + axis (axis·x) / (1 + c)
+  return c * x + axis.cross(x) + axis * (axis.dot(x) / (1.0 + c));
+}
+
+}  // namespace
+
+const std::vector<LineSegment>& LinePrecompute::raw_ridges() const {
+  std::call_once(cache_->ridge_once, [&] {
+    compute_ridges(*surface_, abs_k1(), true, cache_->ridges);
+    compute_ridges(*surface_, abs_k1(), false, cache_->valleys);
+  });
+  return cache_->ridges;
+}
+
+const std::vector<LineSegment>& LinePrecompute::raw_valleys() const {
+  (void)raw_ridges();
+  return cache_->valleys;
+}
+
+const std::vector<LineSegment>& LinePrecompute::raw_demarcating() const {
+  std::call_once(cache_->demarcating_once, [&] {
+    // Direction of maximal normal-curvature variation g = argmax C(u,u,u)
+    // (Kolomenkin et al. 2008), by sampling 72 angles with parabolic
+    // refinement; the scalar is the normal curvature along g.
+    const Surface& s = *surface_;
+    const auto& curv = s.curvature();
+    const auto& dcurv = s.curvature_derivatives();
+    const std::size_t nv = s.vertex_count();
+    std::vector<double> kappa_g(nv, 0.0), cggg(nv, 0.0);
+    std::vector<Vec3> g(nv, Vec3::Zero());
+    constexpr int kSamples = 72;
+    detail::parallel_range(nv, [&](std::size_t i) {
+      if (!curv.valid[i] || !dcurv.valid[i]) return;
+      const double a = dcurv.a[i], b = dcurv.b[i], c = dcurv.c[i], d = dcurv.d[i];
+      auto C = [&](double th) {
+        const double u1 = std::cos(th), u2 = std::sin(th);
+        return u1 * u1 * (a * u1 + 3.0 * b * u2) + u2 * u2 * (3.0 * c * u1 + d * u2);
+      };
+      const double step = 2.0 * M_PI / kSamples;
+      int best = 0;
+      double best_v = -1e300;
+      for (int k = 0; k < kSamples; ++k) {
+        const double v = C(k * step);
+        if (v > best_v) best_v = v, best = k;
+      }
+      const double ym = C((best - 1) * step), y0 = best_v, yp = C((best + 1) * step);
+      const double den = ym - 2.0 * y0 + yp;
+      double th = best * step;
+      if (den < 0.0) th += step * std::clamp(0.5 * (ym - yp) / den, -0.5, 0.5);
+      const double cth = std::cos(th), sth = std::sin(th);
+      kappa_g[i] = curv.k1[i] * cth * cth + curv.k2[i] * sth * sth;
+      cggg[i] = std::max(C(th), 0.0);
+      g[i] = cth * curv.e1[i] + sth * curv.e2[i];
+    });
+    ScalarCrossingOptions o;
+    std::vector<LineSegment> raw;
+    scalar_zero_crossings(s, kappa_g, o, raw);
+    // Face filter (Kolomenkin et al., as SynDraw): directions of g must agree
+    // within 45 degrees at the three corners. Strength: interpolated C(g,g,g).
+    const double cos45 = std::sqrt(0.5);
+    auto& out = cache_->demarcating;
+    out.reserve(raw.size());
+    for (auto& seg : raw) {
+      const Face& f = s.faces()[static_cast<std::size_t>(seg.face)];
+      if (std::abs(g[f[0]].dot(g[f[1]])) < cos45 || std::abs(g[f[1]].dot(g[f[2]])) < cos45 ||
+          std::abs(g[f[2]].dot(g[f[0]])) < cos45)
+        continue;
+      for (auto& e : seg.end) {
+        const Vec3& bc = e.anchor.bary;
+        e.strength =
+            static_cast<float>(bc[0] * cggg[f[0]] + bc[1] * cggg[f[1]] + bc[2] * cggg[f[2]]);
+      }
+      out.push_back(seg);
+    }
+  });
+  return cache_->demarcating;
+}
+
+const GradientOperator& LinePrecompute::gradient_operator() const {
+  std::call_once(cache_->gradient_once, [&] {
+    const Surface& s = *surface_;
+    const Topology& topo = s.topology();
+    const auto& pos = s.positions();
+    const auto& faces = s.faces();
+    const auto& fn = s.face_normals();
+    const auto& vn = s.vertex_normals();
+    const auto& corner = s.corner_areas();
+    const std::size_t nv = s.vertex_count();
+    GradientOperator& G = cache_->gradient;
+    G.offset.assign(nv + 1, 0);
+    for (std::size_t i = 0; i < nv; ++i)
+      G.offset[i + 1] =
+          G.offset[i] + 1 + static_cast<std::int32_t>(topo.vertex_neighbors(i).size());
+    G.column.resize(static_cast<std::size_t>(G.offset[nv]));
+    G.coeff.resize(3 * G.column.size());
+    detail::parallel_range(nv, [&](std::size_t i) {
+      const auto nb = topo.vertex_neighbors(i);
+      const std::size_t base = static_cast<std::size_t>(G.offset[i]);
+      std::vector<Vec3> acc(nb.size() + 1, Vec3::Zero());
+      G.column[base] = static_cast<std::int32_t>(i);
+      for (std::size_t j = 0; j < nb.size(); ++j) G.column[base + 1 + j] = nb[j];
+      auto slot = [&](std::int32_t v) -> std::size_t {
+        if (v == static_cast<std::int32_t>(i)) return 0;
+        return 1 + static_cast<std::size_t>(std::lower_bound(nb.begin(), nb.end(), v) - nb.begin());
+      };
+      double wsum = 0.0;
+      const auto fs = topo.vertex_faces(i);
+      const auto cs = topo.vertex_face_corners(i);
+      for (std::size_t j = 0; j < fs.size(); ++j) {
+        const auto t = static_cast<std::size_t>(fs[j]);
+        const Face& f = faces[t];
+        const Vec3& nt = fn[t];
+        const double twice_area = (pos[f[1]] - pos[f[0]]).cross(pos[f[2]] - pos[f[0]]).norm();
+        if (nt.squaredNorm() == 0.0 || !(twice_area > 0.0)) continue;
+        const double w = corner[t][cs[j]];
+        if (!(w > 0.0)) continue;
+        wsum += w;
+        for (int k = 0; k < 3; ++k) {
+          const Vec3 e = pos[f[(k + 2) % 3]] - pos[f[(k + 1) % 3]];
+          Vec3 basis = nt.cross(e) / twice_area;
+          if (vn[i].squaredNorm() > 0.0) basis = rotate_tangent(basis, nt, vn[i]);
+          acc[slot(f[k])] += w * basis;
+        }
+      }
+      const double inv = wsum > 0.0 ? 1.0 / wsum : 0.0;
+      for (std::size_t j = 0; j < acc.size(); ++j)
+        for (int c = 0; c < 3; ++c)
+          G.coeff[3 * (base + j) + c] = static_cast<float>(acc[j][c] * inv);
+    });
+  });
+  return cache_->gradient;
+}
+
+void GradientOperator::apply(const std::vector<double>& f, std::vector<Vec3>& out) const {
+  const std::size_t nv = offset.empty() ? 0 : offset.size() - 1;
+  out.resize(nv);
+  detail::parallel_range(
+      nv,
+      [&](std::size_t i) {
+        double x = 0.0, y = 0.0, z = 0.0;
+        for (auto k = static_cast<std::size_t>(offset[i]);
+             k < static_cast<std::size_t>(offset[i + 1]); ++k) {
+          const double v = f[static_cast<std::size_t>(column[k])];
+          x += coeff[3 * k] * v;
+          y += coeff[3 * k + 1] * v;
+          z += coeff[3 * k + 2] * v;
+        }
+        out[i] = Vec3(x, y, z);
+      },
+      4096);
+}
+
+const std::vector<Vec3>& LinePrecompute::normal_laplacian() const {
+  std::call_once(cache_->laplacian_once, [&] {
+    // (ΔN)_i = 1/A_i Σ_j w_ij (n_j - n_i), w_ij = (cot α + cot β)/2 (§1, §7).
+    const Surface& s = *surface_;
+    const Topology& topo = s.topology();
+    const auto& pos = s.positions();
+    const auto& faces = s.faces();
+    const auto& vn = s.vertex_normals();
+    const auto& area = s.vertex_areas();
+    const std::size_t nv = s.vertex_count();
+    auto& out = cache_->normal_laplacian;
+    out.assign(nv, Vec3::Zero());
+    detail::parallel_range(nv, [&](std::size_t i) {
+      Vec3 acc = Vec3::Zero();
+      const auto fs = topo.vertex_faces(i);
+      const auto cs = topo.vertex_face_corners(i);
+      for (std::size_t j = 0; j < fs.size(); ++j) {
+        const Face& f = faces[static_cast<std::size_t>(fs[j])];
+        const int c = cs[j];
+        const int a = f[(c + 1) % 3], b = f[(c + 2) % 3];
+        // Edge i-a is opposite corner b; edge i-b opposite corner a.
+        auto cot_at = [&](int apex, int p, int q) {
+          const Vec3 u = pos[p] - pos[apex], v = pos[q] - pos[apex];
+          const double cr = u.cross(v).norm();
+          return cr > 0.0 ? u.dot(v) / cr : 0.0;
+        };
+        const double cot_b = cot_at(b, static_cast<int>(i), a);
+        const double cot_a = cot_at(a, static_cast<int>(i), b);
+        acc += 0.5 * cot_b * (vn[a] - vn[i]) + 0.5 * cot_a * (vn[b] - vn[i]);
+      }
+      out[i] = area[i] > 0.0 ? Vec3(acc / area[i]) : Vec3::Zero();
+    });
+  });
+  return cache_->normal_laplacian;
+}
+
+}  // namespace fabrica

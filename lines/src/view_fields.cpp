@@ -1,0 +1,212 @@
+#include "fabrica/lines/view_fields.hpp"
+
+#include <cmath>
+
+#include "fabrica/core/error.hpp"
+#include "fabrica/lines/precompute.hpp"
+#include "parallel.hpp"
+
+namespace fabrica {
+
+namespace {
+
+template <class T>
+void resize_or_clear(std::vector<T>& v, bool on, std::size_t n) {
+  if (on)
+    v.resize(n);
+  else
+    v.clear();
+}
+
+// Largest eigenvalue of QᵀQ and its eigenvector, Q = S P⁻¹ in principal
+// coordinates (Judd et al. 2007; ALGORITHMS.md §6.1). u2, uv, w2 are the
+// components of ŵ (the unit projected view direction) squared/multiplied.
+inline void view_dependent_curvature(double k1, double k2, double ndotv, double u2, double uv,
+                                     double w2, double& q1, Vec2& t1) {
+  const double an = std::abs(ndotv);
+  const double sec_minus_1 = an > 0.0 ? 1.0 / an - 1.0 : 0.0;
+  const double Q11 = k1 * (1.0 + sec_minus_1 * u2);
+  const double Q12 = k1 * (sec_minus_1 * uv);
+  const double Q21 = k2 * (sec_minus_1 * uv);
+  const double Q22 = k2 * (1.0 + sec_minus_1 * w2);
+  const double m11 = Q11 * Q11 + Q21 * Q21;
+  const double m12 = Q11 * Q12 + Q21 * Q22;
+  const double m22 = Q12 * Q12 + Q22 * Q22;
+  const double mean = 0.5 * (m11 + m22);
+  const double lambda = mean + std::sqrt(m12 * m12 + 0.25 * (m22 - m11) * (m22 - m11));
+  q1 = lambda;
+  // Eigenvector: (m22 - λ, -m12) or equivalently (m12, λ - m11); take the
+  // better conditioned one.
+  Vec2 a(m22 - lambda, -m12), b(m12, lambda - m11);
+  const Vec2& e = a.squaredNorm() >= b.squaredNorm() ? a : b;
+  const double len = e.norm();
+  t1 = len > 0.0 ? Vec2(e / len) : Vec2(1.0, 0.0);
+}
+
+}  // namespace
+
+void update_view_fields(ViewFields& fields, const Surface& surface, const Camera& camera,
+                        const ViewFieldsRequest& request, const LinePrecompute* precompute) {
+  validate_camera(camera);
+  const std::size_t nv = surface.vertex_count();
+  fields.camera = camera;
+  const bool radial = request.radial || request.sc_test || request.apparent;
+  resize_or_clear(fields.ndotv, radial || request.light || request.pel, nv);
+  resize_or_clear(fields.kr, radial, nv);
+  resize_or_clear(fields.sc_num, request.sc_test, nv);
+  resize_or_clear(fields.q1, request.apparent, nv);
+  resize_or_clear(fields.t1, request.apparent, nv);
+  resize_or_clear(fields.t1_world, request.apparent, nv);
+  resize_or_clear(fields.dt1q1, request.apparent, nv);
+
+  const auto& pos = surface.positions();
+  const auto& normals = surface.vertex_normals();
+  if (radial) {
+    const auto& curv = surface.curvature();
+    const auto& dcurv = surface.curvature_derivatives();
+    const bool want_sc = request.sc_test;
+    const bool want_app = request.apparent;
+    detail::parallel_range(nv, [&](std::size_t i) {
+      const Vec3 v = camera.view_vector(pos[i]);
+      const double ndotv = v.dot(normals[i]);
+      fields.ndotv[i] = ndotv;
+      if (!curv.valid[i]) {
+        fields.kr[i] = 0.0;
+        if (want_sc) fields.sc_num[i] = 0.0;
+        if (want_app) {
+          fields.q1[i] = 0.0;
+          fields.t1[i] = Vec2(1.0, 0.0);
+          fields.t1_world[i] = Vec3::Zero();
+        }
+        return;
+      }
+      const double k1 = curv.k1[i], k2 = curv.k2[i];
+      const double u = v.dot(curv.e1[i]), w = v.dot(curv.e2[i]);
+      const double u2 = u * u, w2 = w * w;
+      fields.kr[i] = k1 * u2 + k2 * w2;
+      const double sin2 = u2 + w2;
+      const double csc2 = sin2 > 1e-300 ? 1.0 / sin2 : 0.0;
+      if (want_sc) {
+        if (dcurv.valid[i] && csc2 > 0.0) {
+          double num = u2 * (u * dcurv.a[i] + 3.0 * w * dcurv.b[i]) +
+                       w2 * (3.0 * u * dcurv.c[i] + w * dcurv.d[i]);
+          num *= csc2;
+          const double tr = (k2 - k1) * u * w * csc2;
+          num -= 2.0 * ndotv * tr * tr;
+          fields.sc_num[i] = num;
+        } else {
+          fields.sc_num[i] = 0.0;
+        }
+      }
+      if (want_app) {
+        double hu2 = 1.0, huv = 0.0, hw2 = 0.0;
+        if (csc2 > 0.0) {
+          hu2 = u2 * csc2;
+          huv = u * w * csc2;
+          hw2 = w2 * csc2;
+        }
+        Vec2 t1;
+        view_dependent_curvature(k1, k2, ndotv, hu2, huv, hw2, fields.q1[i], t1);
+        fields.t1[i] = t1;
+        fields.t1_world[i] = t1[0] * curv.e1[i] + t1[1] * curv.e2[i];
+      }
+    });
+    if (want_app) {
+      // D_t1 q1 by Judd's finite differences (ALGORITHMS.md §6.2): along the
+      // line through p_i in direction t1, find the crossing with the
+      // opposite edge of each incident face, and average the (at most two)
+      // one-sided differences, measured in projected (screen) distance.
+      const Topology& topo = surface.topology();
+      const auto& faces = surface.faces();
+      detail::parallel_range(nv, [&](std::size_t i) {
+        double result = 0.0;
+        const Vec3& t1w = fields.t1_world[i];
+        if (t1w.squaredNorm() == 0.0) {
+          fields.dt1q1[i] = 0.0;
+          return;
+        }
+        const Vec3& p0 = pos[i];
+        const Vec3 t2w = normals[i].cross(t1w);
+        const double p0_t2 = p0.dot(t2w);
+        const double q0 = fields.q1[i];
+        const double an = std::abs(fields.ndotv[i]);
+        const auto fs = topo.vertex_faces(i);
+        const auto cs = topo.vertex_face_corners(i);
+        int n = 0;
+        for (std::size_t j = 0; j < fs.size(); ++j) {
+          const Face& f = faces[static_cast<std::size_t>(fs[j])];
+          const int c = cs[j];
+          const int i1 = f[(c + 1) % 3], i2 = f[(c + 2) % 3];
+          const Vec3& p1 = pos[i1];
+          const Vec3& p2 = pos[i2];
+          const double p1_t2 = p1.dot(t2w), p2_t2 = p2.dot(t2w);
+          const double w1 = (p2_t2 - p0_t2) / (p2_t2 - p1_t2);
+          if (!(w1 >= 0.0 && w1 < 1.0)) continue;
+          const double w2 = 1.0 - w1;
+          const Vec3 p = w1 * p1 + w2 * p2;
+          const double q = w1 * fields.q1[i1] + w2 * fields.q1[i2];
+          const double dist = (p - p0).dot(t1w) * an;
+          if (dist == 0.0) continue;
+          result += (q - q0) / dist;
+          if (++n == 2) {
+            result *= 0.5;
+            break;
+          }
+        }
+        fields.dt1q1[i] = std::isfinite(result) ? result : 0.0;
+      });
+    }
+  }
+
+  // Illumination f = n·l and its derivatives (PELs, Laplacian lines).
+  const bool light = request.light || request.pel;
+  resize_or_clear(fields.light, light, nv);
+  resize_or_clear(fields.light_gradient, light, nv);
+  resize_or_clear(fields.light_laplacian, light, nv);
+  resize_or_clear(fields.pel_g, request.pel, nv);
+  resize_or_clear(fields.pel_h, request.pel, nv);
+  resize_or_clear(fields.pel_s, request.pel, nv);
+  if (light) {
+    if (!precompute)
+      throw Error(ErrorKind::internal, "view fields: light fields need a LinePrecompute");
+    const auto& lap_n = precompute->normal_laplacian();
+    const auto& grad = precompute->gradient_operator();
+    Vec3 fixed = Vec3::Zero();
+    if (request.light_direction) {
+      if (!(request.light_direction->norm() > 0.0) || !request.light_direction->allFinite())
+        throw InputError("light direction must be a non-zero finite vector");
+      fixed = request.light_direction->normalized();
+    }
+    const bool headlight = !request.light_direction.has_value();
+    detail::parallel_range(nv, [&](std::size_t i) {
+      const Vec3 l = headlight ? camera.view_vector(pos[i]) : fixed;
+      const double f = normals[i].dot(l);
+      fields.light[i] = f;
+      if (fields.ndotv.size() == nv && !radial)
+        fields.ndotv[i] = camera.view_vector(pos[i]).dot(normals[i]);
+      fields.light_laplacian[i] = lap_n[i].dot(l);
+    });
+    grad.apply(fields.light, fields.light_gradient);
+    if (request.pel) {
+      std::vector<Vec3> w(nv), gg(nv);
+      detail::parallel_range(nv, [&](std::size_t i) {
+        const double g = fields.light_gradient[i].norm();
+        fields.pel_g[i] = g;
+        w[i] = g > 0.0 ? Vec3(fields.light_gradient[i] / g) : Vec3::Zero();
+      });
+      grad.apply(fields.pel_g, gg);
+      detail::parallel_range(nv, [&](std::size_t i) { fields.pel_h[i] = gg[i].dot(w[i]); });
+      grad.apply(fields.pel_h, gg);
+      detail::parallel_range(nv, [&](std::size_t i) { fields.pel_s[i] = gg[i].dot(w[i]); });
+    }
+  }
+}
+
+ViewFields compute_view_fields(const Surface& surface, const Camera& camera,
+                               const ViewFieldsRequest& request, const LinePrecompute* precompute) {
+  ViewFields fields;
+  update_view_fields(fields, surface, camera, request, precompute);
+  return fields;
+}
+
+}  // namespace fabrica
