@@ -1,0 +1,223 @@
+// Intensity-ridge detection (Singh & Schaefer 2010, §4); see the header.
+#include "fabrica/hatching/intensity_ridges.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <array>
+#include <cmath>
+#include <limits>
+
+namespace fabrica::hatching {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+/// Unit tangent basis (t1, t2) of the plane with unit normal n.
+void tangent_basis(const Vec3& n, Vec3& t1, Vec3& t2) {
+  const Vec3 a = std::abs(n.x()) < 0.6 ? Vec3::UnitX() : Vec3::UnitY();
+  t1 = (a - a.dot(n) * n).normalized();
+  t2 = n.cross(t1);
+}
+
+/// Angle of the dominant eigenvector of the symmetric 2×2 matrix [a b; b c].
+double dominant_angle(double a, double b, double c) {
+  return 0.5 * std::atan2(2.0 * b, a - c);
+}
+
+/// Dominant eigenvector of u uᵀ + w wᵀ (3×3) through the 2×2 Gram matrix;
+/// zero when both vectors vanish.
+Vec3 dominant_direction(const Vec3& u, const Vec3& w) {
+  const double theta = dominant_angle(u.dot(u), u.dot(w), w.dot(w));
+  const Vec3 e = std::cos(theta) * u + std::sin(theta) * w;
+  const double len = e.norm();
+  return len > 0.0 ? Vec3(e / len) : Vec3::Zero();
+}
+
+struct EdgeHit {
+  Vec3 point, gradient;
+};
+
+}  // namespace
+
+std::vector<Vec3> intensity_vertex_gradients(const Surface& surface, const IntensityField& field) {
+  const auto& positions = surface.positions();
+  const auto& faces = surface.faces();
+  const auto& normals = surface.vertex_normals();
+  const Topology& topology = surface.topology();
+  const std::size_t nv = positions.size();
+  std::vector<Vec3> result(nv, Vec3::Zero());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& r) {
+    for (std::size_t v = r.begin(); v != r.end(); ++v) {
+      const Vec3& n = normals[v];
+      if (!(n.squaredNorm() > 0.0)) continue;
+      Vec3 t1, t2;
+      tangent_basis(n, t1, t2);
+      const auto vf = topology.vertex_faces(v);
+      const auto vc = topology.vertex_face_corners(v);
+      Vec3 mean = Vec3::Zero();
+      double weight_sum = 0.0, cxx = 0.0, cxy = 0.0, cyy = 0.0;
+      for (std::size_t k = 0; k < vf.size(); ++k) {
+        const std::size_t f = static_cast<std::size_t>(vf[k]);
+        const int c = vc[k];
+        const Face& t = faces[f];
+        const Vec3 a = positions[static_cast<std::size_t>(t[(c + 1) % 3])] - positions[v];
+        const Vec3 b = positions[static_cast<std::size_t>(t[(c + 2) % 3])] - positions[v];
+        const double w = std::atan2(a.cross(b).norm(), a.dot(b));  // angle at the vertex
+        if (!(w > 0.0)) continue;
+        const Vec3& g = field.face_gradient[f];
+        mean += w * g;
+        weight_sum += w;
+        const double gx = g.dot(t1), gy = g.dot(t2);
+        cxx += w * gx * gx;
+        cxy += w * gx * gy;
+        cyy += w * gy * gy;
+      }
+      if (!(weight_sum > 0.0)) continue;
+      mean /= weight_sum;
+      const double theta = dominant_angle(cxx, cxy, cyy);
+      const Vec3 e = std::cos(theta) * t1 + std::sin(theta) * t2;
+      result[v] = mean.dot(e) * e;
+    }
+  });
+  return result;
+}
+
+IntensityRidges detect_intensity_ridges(const Surface& surface, const IntensityField& field,
+                                        const RidgeOptions& options) {
+  IntensityRidges ridges;
+  ridges.vertex_gradient = intensity_vertex_gradients(surface, field);
+  const auto& grad = ridges.vertex_gradient;
+  const auto& positions = surface.positions();
+  const auto& faces = surface.faces();
+  const auto& normals = surface.vertex_normals();
+  const auto& face_normals = surface.face_normals();
+  const Topology& topology = surface.topology();
+  const std::size_t ne = topology.edge_count();
+  const double cos_min = std::cos(options.min_angle_deg * kPi / 180.0);
+
+  // Per edge: the parameter t of the ridge point from edge(e)[0], or -1.
+  std::vector<double> edge_t(ne, -1.0);
+
+  // From p_r (parameter t on edge (v1, v2)) step along `dir` projected into
+  // `face`, away from the edge, to the face's opposite side.
+  auto step_into = [&](std::size_t face, std::int32_t v1, std::int32_t v2, double t,
+                       const Vec3& dir, EdgeHit& hit) -> bool {
+    const Face& tri = faces[face];
+    int c1 = -1, c2 = -1;
+    for (int k = 0; k < 3; ++k) {
+      if (tri[k] == v1) c1 = k;
+      if (tri[k] == v2) c2 = k;
+    }
+    if (c1 < 0 || c2 < 0) return false;
+    const int c0 = 3 - c1 - c2;
+    const Vec3& n = face_normals[face];
+    Vec3 d = dir - dir.dot(n) * n;
+    Vec3 db;
+    for (int k = 0; k < 3; ++k) db[k] = barycentric_gradient(surface, face, k).dot(d);
+    // Parallel to the edge (or degenerate face): no step into this face.
+    if (!(std::abs(db[c0]) > 1e-9 * (std::abs(db[c1]) + std::abs(db[c2])))) return false;
+    if (db[c0] < 0.0) db = -db;
+    Vec3 b = Vec3::Zero();
+    b[c1] = 1.0 - t;
+    b[c2] = t;
+    double step = std::numeric_limits<double>::infinity();
+    int exit = -1;
+    for (int k : {c1, c2}) {
+      if (db[k] < 0.0) {
+        const double s = -b[k] / db[k];
+        if (s < step) {
+          step = s;
+          exit = k;
+        }
+      }
+    }
+    if (exit < 0 || !std::isfinite(step)) return false;
+    Vec3 bh = b + step * db;
+    bh[exit] = 0.0;
+    for (int k = 0; k < 3; ++k) bh[k] = std::max(bh[k], 0.0);
+    const double sum = bh.sum();
+    if (!(sum > 0.0)) return false;
+    bh /= sum;
+    hit.point = Vec3::Zero();
+    hit.gradient = Vec3::Zero();
+    for (int k = 0; k < 3; ++k) {
+      hit.point += bh[k] * positions[static_cast<std::size_t>(tri[k])];
+      hit.gradient += bh[k] * grad[static_cast<std::size_t>(tri[k])];
+    }
+    return true;
+  };
+
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, ne), [&](const auto& r) {
+    for (std::size_t e = r.begin(); e != r.end(); ++e) {
+      const auto ef = topology.edge_faces(e);
+      if (ef.size() != 2) continue;
+      const std::int32_t v1 = topology.edge(e)[0], v2 = topology.edge(e)[1];
+      const Vec3& g1 = grad[static_cast<std::size_t>(v1)];
+      const Vec3& g2 = grad[static_cast<std::size_t>(v2)];
+      const double m1 = g1.norm(), m2 = g2.norm();
+      if (!(m1 > 0.0 && m2 > 0.0)) continue;
+      if (g1.dot(g2) > cos_min * m1 * m2) continue;  // nearly parallel: weak
+      const double t = m1 / (m1 + m2);
+      const Vec3 pr = (1.0 - t) * positions[static_cast<std::size_t>(v1)] +
+                      t * positions[static_cast<std::size_t>(v2)];
+      const Vec3 directions[2] = {
+          dominant_direction(g1, g2),
+          dominant_direction(normals[static_cast<std::size_t>(v1)].cross(g1),
+                             normals[static_cast<std::size_t>(v2)].cross(g2))};
+      bool ridge = false;
+      for (const Vec3& dir : directions) {
+        if (!(dir.squaredNorm() > 0.0)) continue;
+        EdgeHit f, b;
+        if (!step_into(static_cast<std::size_t>(ef[0]), v1, v2, t, dir, f)) continue;
+        if (!step_into(static_cast<std::size_t>(ef[1]), v1, v2, t, dir, b)) continue;
+        const double df = f.gradient.dot(f.point - pr);
+        const double dback = b.gradient.dot(pr - b.point);
+        const double span = (f.point - pr).norm() + (pr - b.point).norm();
+        if (!(span > 0.0)) continue;
+        if ((df - dback) / span < 0.0 && df * dback < 0.0) {
+          ridge = true;
+          break;
+        }
+      }
+      if (ridge) edge_t[e] = t;
+    }
+  });
+
+  // Join the ridge points of each face.
+  const std::size_t nf = faces.size();
+  for (std::size_t f = 0; f < nf; ++f) {
+    std::array<SurfacePoint, 3> points;
+    std::array<Vec3, 3> where;
+    int count = 0;
+    for (int k = 0; k < 3; ++k) {
+      const std::size_t e = static_cast<std::size_t>(topology.face_edge(f, k));
+      const double t = edge_t[e];
+      if (t < 0.0) continue;
+      const std::int32_t v1 = topology.edge(e)[0];
+      // Corners (k+1)%3 and (k+2)%3 hold the edge; put (1-t) on v1's corner.
+      const int ca = (k + 1) % 3, cb = (k + 2) % 3;
+      const int c1 = faces[f][ca] == v1 ? ca : cb, c2 = c1 == ca ? cb : ca;
+      SurfacePoint sp;
+      sp.face = static_cast<std::int32_t>(f);
+      sp.bary = Vec3::Zero();
+      sp.bary[c1] = 1.0 - t;
+      sp.bary[c2] = t;
+      points[count] = sp;
+      where[count] = sp.position(surface.mesh());
+      ++count;
+    }
+    if (count == 2) {
+      ridges.segments.push_back({points[0], points[1], where[0], where[1]});
+    } else if (count == 3) {
+      SurfacePoint centroid;
+      centroid.face = static_cast<std::int32_t>(f);
+      centroid.bary = Vec3::Constant(1.0 / 3.0);
+      const Vec3 pc = centroid.position(surface.mesh());
+      for (int k = 0; k < 3; ++k) ridges.segments.push_back({points[k], centroid, where[k], pc});
+    }
+  }
+  return ridges;
+}
+
+}  // namespace fabrica::hatching
