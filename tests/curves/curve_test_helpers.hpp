@@ -6,8 +6,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <functional>
 #include <numbers>
+#include <sstream>
+#include <string>
 #include <vector>
 
 #include "fabrica/core/mesh.hpp"
@@ -133,6 +137,34 @@ inline TriangleMesh make_fan(int count, const Vec3& apex, const std::function<do
     m.faces.push_back({0, a, b});
     m.faces.push_back({a, a + count, b + count});
     m.faces.push_back({a, b + count, b});
+  }
+  return m;
+}
+
+/// Minimal ASCII OFF reader for triangle meshes (comment lines start with '#').
+inline TriangleMesh read_off_triangles(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  std::string line;
+  std::vector<std::string> tokens;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream ls(line);
+    std::string tok;
+    while (ls >> tok) tokens.push_back(tok);
+  }
+  TriangleMesh m;
+  if (tokens.size() < 4 || tokens[0] != "OFF") return m;
+  const std::size_t nv = std::stoul(tokens[1]), nf = std::stoul(tokens[2]);
+  std::size_t k = 4;
+  for (std::size_t v = 0; v < nv; ++v, k += 3)
+    m.positions.emplace_back(std::stod(tokens[k]), std::stod(tokens[k + 1]),
+                             std::stod(tokens[k + 2]));
+  for (std::size_t f = 0; f < nf; ++f) {
+    const int count = std::stoi(tokens[k]);
+    if (count == 3)
+      m.faces.push_back(
+          {std::stoi(tokens[k + 1]), std::stoi(tokens[k + 2]), std::stoi(tokens[k + 3])});
+    k += 1 + static_cast<std::size_t>(count);
   }
   return m;
 }
