@@ -1,0 +1,48 @@
+// RenderMesh: a triangle mesh as flat float arrays ready for upload, with
+// optional per-vertex curvature for the hybrid apparent ridges (principal
+// curvatures k1, k2 in 1/mm with |k1| >= |k2|, convex positive; unit
+// principal directions e1, e2), and the scales the renderer needs (bounding
+// sphere, mean edge length, feature size; all in mm).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "fabrica/core/mesh.hpp"
+#include "fabrica/core/types.hpp"
+
+namespace fabrica {
+class Surface;
+}
+
+namespace fabrica::render {
+
+struct RenderMesh {
+  std::vector<float> positions;        ///< 3 per vertex
+  std::vector<float> normals;          ///< 3 per vertex, unit
+  std::vector<std::uint32_t> indices;  ///< 3 per triangle
+  std::vector<float> k1, k2;           ///< optional: 1 per vertex
+  std::vector<float> e1, e2;           ///< optional: 3 per vertex
+  Vec3 center = Vec3::Zero();          ///< bounding sphere
+  double radius = 0.0;
+  double mean_edge_length = 0.0;
+  double feature_size = 0.0;  ///< rtsc feature size (0 = unknown)
+
+  std::size_t vertex_count() const { return positions.size() / 3; }
+  std::size_t triangle_count() const { return indices.size() / 3; }
+  bool has_curvature() const { return k1.size() == vertex_count() && vertex_count() > 0; }
+};
+
+/// From a mesh and unit vertex normals (one per vertex). Throws InputError if
+/// the sizes disagree or the mesh is empty.
+RenderMesh make_render_mesh(const TriangleMesh& mesh, const std::vector<Vec3>& vertex_normals);
+
+/// From a Surface: its vertex normals and, if `with_curvature`, its principal
+/// curvatures and directions and feature size.
+RenderMesh make_render_mesh(const Surface& surface, bool with_curvature);
+
+/// Sets the curvature arrays (sizes must match the vertex count).
+void set_curvature(RenderMesh& mesh, const std::vector<double>& k1, const std::vector<double>& k2,
+                   const std::vector<Vec3>& e1, const std::vector<Vec3>& e2);
+
+}  // namespace fabrica::render

@@ -1,0 +1,82 @@
+// Renderer: draws a Scene for a Camera into an Image (headless export, golden
+// tests, the viewer's screenshots share this path). Per tile: opaque
+// structures (depth A), ghosted structures by weighted blended OIT, a depth
+// of every surface (depth B), hybrid apparent ridges, then lines as quads
+// depth-tested against A (lines of opaque structures) or B (of ghosted
+// ones). Images larger than the GL limit (or max_tile_size) are rendered in
+// tiles with a 2-pixel overlap, so tiled and untiled output agree.
+#pragma once
+
+#include <memory>
+#include <optional>
+
+#include "fabrica/core/camera.hpp"
+#include "fabrica/render/context.hpp"
+#include "fabrica/render/image.hpp"
+#include "fabrica/render/scene.hpp"
+
+namespace fabrica::render {
+
+/// Hybrid apparent ridges (seed 000; ALGORITHMS.md §6.4). The defaults are the
+/// seed's method; per_fragment, sign_free and float_target are the thesis'
+/// future-work improvements.
+struct HybridOptions {
+  /// q = 2^tau q1; empty = default_tau(feature size).
+  std::optional<double> tau;
+  double lambda = 1.5;        ///< direction weight of the filter (0 = Laplacian)
+  double threshold = 0.2;     ///< the seed's clamp: lines where the filter response exceeds it
+  bool fade = true;           ///< grey 1 - v; false: black above the threshold
+  bool per_fragment = false;  ///< evaluate q1, t1 per fragment ("Phong-like")
+  bool sign_free = false;     ///< store t1 as the double angle
+  bool float_target = false;  ///< RGBA32F instead of 8-bit channels
+  double saturation = 1.0;    ///< q is clamped to [0, saturation] (1 = the seed's colour range)
+  Color color{0.0f, 0.0f, 0.0f, 1.0f};
+};
+
+/// tau = log2(k s_f^2) with k = 0.25, since q1 has units of 1/length^2
+/// (ALGORITHMS.md §6.4 suggestion); 0 when the feature size is unknown.
+double default_tau(double feature_size);
+
+struct RenderOptions {
+  bool transparent_background = false;
+  /// Line widths are given for an image whose larger side is this many pixels.
+  double line_reference_size = 1024.0;
+  bool scale_lines_with_image = true;
+  /// Largest tile side in pixels (0 = the backend's limit, at most 4096).
+  int max_tile_size = 0;
+  /// Hidden-line depth tolerance in mm (0 = automatic from the meshes).
+  double depth_tolerance = 0.0;
+  HybridOptions hybrid;
+};
+
+class Renderer {
+ public:
+  /// Takes ownership of a context (headless or window).
+  explicit Renderer(std::unique_ptr<GlContext> context);
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  GlContext& context();
+
+  /// Renders at camera.width x camera.height. Throws InputError for an empty
+  /// scene or a structure without mesh, Error(unavailable) if GL runs out of
+  /// memory, Error(internal) on shader failures.
+  Image render(const Scene& scene, const Camera& camera, const RenderOptions& options = {});
+
+  /// The hybrid method alone on one mesh (stage 1, stage 2, readback), black
+  /// lines on white (or transparent). `bare` runs the same passes with
+  /// trivial shaders (the benchmark's baseline).
+  Image render_hybrid(const std::shared_ptr<const RenderMesh>& mesh, const Camera& camera,
+                      const HybridOptions& options, bool transparent = false, bool bare = false);
+
+  /// Stage 1 only: the packed (q, t1) buffer as an image (for figures and tests).
+  Image render_hybrid_buffer(const std::shared_ptr<const RenderMesh>& mesh, const Camera& camera,
+                             const HybridOptions& options);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace fabrica::render

@@ -1,0 +1,113 @@
+// Scene: structures (a mesh each) with a role and a style, for
+// focus-and-context illustration. Focus structures are shaded and carry the
+// chosen line families; context structures are subdued: ghosted
+// (transparent), silhouettes only, faded lines, so the focus reads first.
+// SceneSpec is the JSON description (mesh paths instead of geometry).
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <nlohmann/json_fwd.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "fabrica/core/camera.hpp"
+#include "fabrica/lines/line_set.hpp"
+#include "fabrica/render/render_mesh.hpp"
+
+namespace fabrica::render {
+
+/// Linear RGBA in [0,1].
+struct Color {
+  float r = 0.0f, g = 0.0f, b = 0.0f, a = 1.0f;
+};
+
+enum class Role { focus, context };
+/// none: not drawn but still hides lines behind it; flat: constant colour;
+/// lambert: headlight diffuse; toon: headlight diffuse in bands.
+enum class Shading { none, flat, lambert, toon };
+/// What happens to the hidden parts of lines.
+enum class HiddenLines { omit, dashed, show };
+
+struct LineStyle {
+  Color color{0.0f, 0.0f, 0.0f, 1.0f};
+  /// Full width in pixels of an image whose larger side is
+  /// RenderOptions::line_reference_size (1024 by default); scaled with the image.
+  double width = 2.0;
+  double contour_width_factor = 1.5;  ///< contours and boundaries are drawn wider
+  double taper = 0.15;           ///< fraction of each open polyline's length tapered at both ends
+  bool fade_by_strength = true;  ///< opacity multiplied by the vertex strength
+  bool width_by_strength = false;
+  HiddenLines hidden = HiddenLines::omit;
+  double hidden_opacity = 0.35;  ///< for dashed/shown hidden lines
+  double dash = 6.0;             ///< dash length in (reference) pixels
+};
+
+struct StructureStyle {
+  Shading shading = Shading::lambert;
+  Color color{0.93f, 0.87f, 0.80f, 1.0f};
+  double opacity = 1.0;  ///< < 1: ghosted, order-independent transparency
+  double ambient = 0.2;
+  int toon_levels = 3;
+  /// Line families drawn from Structure::lines (empty: all it holds).
+  std::vector<LineFamily> families;
+  LineStyle lines;
+  bool hybrid_apparent_ridges = false;  ///< image-space apparent ridges (needs curvature)
+};
+
+/// Defaults: focus = Lambert, opaque, contours + apparent ridges; context =
+/// pale, opacity 0.25, contours only at half opacity and thinner.
+StructureStyle default_style(Role role);
+
+struct Structure {
+  std::string name;
+  Role role = Role::focus;
+  StructureStyle style;
+  std::shared_ptr<const RenderMesh> mesh;
+  LineSet lines;  ///< already extracted (fabrica::lines), in the mesh's coordinates
+};
+
+struct Scene {
+  std::vector<Structure> structures;
+  Color background{1.0f, 1.0f, 1.0f, 1.0f};
+};
+
+// ------------------------------------------------------------ JSON ----
+
+struct StructureSpec {
+  std::string name;
+  std::filesystem::path mesh;  ///< absolute, or relative to the scene file
+  Role role = Role::focus;
+  StructureStyle style;
+  std::optional<Space> space;  ///< override of the file's coordinate tag
+};
+
+struct SceneSpec {
+  std::vector<StructureSpec> structures;
+  std::optional<Camera> camera;
+  std::optional<AnatomicalView> view;
+  Color background{1.0f, 1.0f, 1.0f, 1.0f};
+  bool transparent = false;
+};
+
+const char* to_string(Role role);
+const char* to_string(Shading shading);
+const char* to_string(HiddenLines hidden);
+std::optional<Role> parse_role(std::string_view s);
+std::optional<Shading> parse_shading(std::string_view s);
+std::optional<HiddenLines> parse_hidden_lines(std::string_view s);
+
+/// Keys (all optional except structures[].mesh): background [r,g,b(,a)],
+/// transparent, camera {...} (camera JSON), view "anterior"|..., structures:
+/// [{name, mesh, role, space, shading, color, opacity, ambient, toon_levels,
+/// lines: [families], line_color, line_width, taper, fade, hidden, hybrid}].
+/// Missing style keys take default_style(role). Relative mesh paths are
+/// resolved against `base_dir`. Throws InputError naming `what`.
+SceneSpec scene_spec_from_json(const nlohmann::json& j, const std::filesystem::path& base_dir,
+                               const std::string& what = "scene");
+nlohmann::json scene_spec_to_json(const SceneSpec& spec);
+SceneSpec read_scene_spec(const std::filesystem::path& path);
+void write_scene_spec(const SceneSpec& spec, const std::filesystem::path& path);
+
+}  // namespace fabrica::render

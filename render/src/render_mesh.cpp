@@ -1,0 +1,92 @@
+#include "fabrica/render/render_mesh.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "fabrica/core/error.hpp"
+
+namespace fabrica::render {
+
+namespace {
+
+void bounding_sphere(RenderMesh& m) {
+  const std::size_t n = m.vertex_count();
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3 p(m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]);
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  m.center = 0.5 * (lo + hi);
+  double r2 = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3 p(m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]);
+    r2 = std::max(r2, (p - m.center).squaredNorm());
+  }
+  m.radius = std::sqrt(r2);
+  double sum = 0.0;
+  const std::size_t t = m.triangle_count();
+  for (std::size_t f = 0; f < t; ++f) {
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t a = m.indices[3 * f + k], b = m.indices[3 * f + (k + 1) % 3];
+      const Vec3 pa(m.positions[3 * a], m.positions[3 * a + 1], m.positions[3 * a + 2]);
+      const Vec3 pb(m.positions[3 * b], m.positions[3 * b + 1], m.positions[3 * b + 2]);
+      sum += (pa - pb).norm();
+    }
+  }
+  m.mean_edge_length = t ? sum / double(3 * t) : 0.0;
+}
+
+}  // namespace
+
+RenderMesh make_render_mesh(const TriangleMesh& mesh, const std::vector<Vec3>& normals) {
+  if (mesh.positions.empty() || mesh.faces.empty())
+    throw InputError("cannot draw an empty mesh (no vertices or no faces)");
+  if (normals.size() != mesh.positions.size())
+    throw InputError("render mesh: " + std::to_string(normals.size()) + " normals for " +
+                     std::to_string(mesh.positions.size()) + " vertices");
+  RenderMesh m;
+  const std::size_t n = mesh.positions.size();
+  m.positions.resize(3 * n);
+  m.normals.resize(3 * n);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int c = 0; c < 3; ++c) {
+      m.positions[3 * i + c] = static_cast<float>(mesh.positions[i][c]);
+      m.normals[3 * i + c] = static_cast<float>(normals[i][c]);
+    }
+  }
+  m.indices.reserve(3 * mesh.faces.size());
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
+    for (int k = 0; k < 3; ++k) {
+      const auto v = mesh.faces[f][k];
+      if (v < 0 || static_cast<std::size_t>(v) >= n)
+        throw InputError("render mesh: face " + std::to_string(f) + " refers to vertex " +
+                         std::to_string(v) + " of " + std::to_string(n));
+      m.indices.push_back(static_cast<std::uint32_t>(v));
+    }
+  }
+  bounding_sphere(m);
+  return m;
+}
+
+void set_curvature(RenderMesh& m, const std::vector<double>& k1, const std::vector<double>& k2,
+                   const std::vector<Vec3>& e1, const std::vector<Vec3>& e2) {
+  const std::size_t n = m.vertex_count();
+  if (k1.size() != n || k2.size() != n || e1.size() != n || e2.size() != n)
+    throw InputError("render mesh: curvature arrays do not match the vertex count");
+  m.k1.resize(n);
+  m.k2.resize(n);
+  m.e1.resize(3 * n);
+  m.e2.resize(3 * n);
+  for (std::size_t i = 0; i < n; ++i) {
+    m.k1[i] = static_cast<float>(k1[i]);
+    m.k2[i] = static_cast<float>(k2[i]);
+    for (int c = 0; c < 3; ++c) {
+      m.e1[3 * i + c] = static_cast<float>(e1[i][c]);
+      m.e2[3 * i + c] = static_cast<float>(e2[i][c]);
+    }
+  }
+}
+
+}  // namespace fabrica::render

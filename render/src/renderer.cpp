@@ -1,0 +1,843 @@
+#include "fabrica/render/renderer.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <functional>
+#include <map>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "fabrica/core/error.hpp"
+#include "fabrica/render/shader.hpp"
+
+namespace fabrica::render {
+
+double default_tau(double feature_size) {
+  if (!(feature_size > 0.0) || !std::isfinite(feature_size)) return 0.0;
+  return std::log2(0.25 * feature_size * feature_size);
+}
+
+namespace {
+
+constexpr int kTileMargin = 2;  // pixels rendered around each tile (3x3 filters, AA)
+constexpr int kMaxImageSide = 32768;
+
+struct GpuMesh {
+  std::weak_ptr<const RenderMesh> source;
+  GLuint vao = 0, vbo = 0, ebo = 0;
+  GLsizei index_count = 0;
+  bool curvature = false;
+};
+
+struct Matrices {
+  std::array<float, 16> model_view{}, projection{};
+  std::array<float, 9> normal{};
+  float near_plane = 0.0f, far_plane = 1.0f;
+  bool orthographic = false;
+  double px_per_mm = 1.0;
+};
+
+Matrices camera_matrices(const Camera& camera, const Vec3& center, double radius) {
+  Matrices m;
+  const auto [n, f] = clip_planes(camera, center, std::max(radius, 1e-9));
+  const Eigen::Matrix4f view = view_matrix(camera).cast<float>();
+  const Eigen::Matrix4f proj = projection_matrix(camera, n, f).cast<float>();
+  std::copy(view.data(), view.data() + 16, m.model_view.begin());
+  std::copy(proj.data(), proj.data() + 16, m.projection.begin());
+  const Eigen::Matrix3f normal = view.topLeftCorner<3, 3>();
+  std::copy(normal.data(), normal.data() + 9, m.normal.begin());
+  m.near_plane = static_cast<float>(n);
+  m.far_plane = static_cast<float>(f);
+  m.orthographic = camera.projection == Projection::orthographic;
+  const double half_h = (camera.center - camera.eye).norm() *
+                        std::tan(0.5 * camera.fov_deg * std::numbers::pi / 180.0);
+  m.px_per_mm = camera.height / (2.0 * half_h);
+  return m;
+}
+
+// Tile geometry: the region of the image (GL pixel coordinates, origin at
+// the bottom left) and the uniform mapping whole-image clip space to it.
+struct Tile {
+  int x = 0, y = 0, w = 0, h = 0;  // inner region
+  int render_w = 0, render_h = 0;  // with margins
+  std::array<float, 4> transform{};
+};
+
+std::vector<Tile> make_tiles(int width, int height, int inner) {
+  std::vector<Tile> tiles;
+  for (int y = 0; y < height; y += inner) {
+    for (int x = 0; x < width; x += inner) {
+      Tile t;
+      t.x = x;
+      t.y = y;
+      t.w = std::min(inner, width - x);
+      t.h = std::min(inner, height - y);
+      t.render_w = t.w + 2 * kTileMargin;
+      t.render_h = t.h + 2 * kTileMargin;
+      const double ox = x - kTileMargin, oy = y - kTileMargin;
+      t.transform = {float(double(width) / t.render_w), float(double(height) / t.render_h),
+                     float((width - 2.0 * ox) / t.render_w - 1.0),
+                     float((height - 2.0 * oy) / t.render_h - 1.0)};
+      tiles.push_back(t);
+    }
+  }
+  return tiles;
+}
+
+struct LineBatch {
+  std::size_t structure = 0;
+  bool wide = false;
+  GLsizei first = 0, count = 0;  // in indices
+};
+
+bool is_wide_family(LineFamily f) {
+  return f == LineFamily::contour || f == LineFamily::boundary;
+}
+
+}  // namespace
+
+struct Renderer::Impl {
+  std::unique_ptr<GlContext> ctx;
+  std::map<const RenderMesh*, GpuMesh> meshes;
+  std::map<std::string, ShaderProgram, std::less<>> programs;
+  GLuint empty_vao = 0;
+  GLuint line_vao = 0, line_vbo = 0, line_ebo = 0;
+
+  // Render targets, (re)allocated for the largest tile.
+  int target_w = 0, target_h = 0;
+  GLuint main_fbo = 0, main_color = 0, depth_a = 0;
+  GLuint overlay_fbo = 0;  // main_color without depth: overlays may sample depth A
+  GLuint oit_fbo = 0, accum = 0, reveal = 0;
+  GLuint depthb_fbo = 0, depth_b = 0;
+  GLuint ar_fbo = 0, ar_color = 0, ar_depth = 0;
+  bool ar_float = false;
+
+  explicit Impl(std::unique_ptr<GlContext> c) : ctx(std::move(c)) {
+    ctx->make_current();
+    const GlFunctions& gl = ctx->gl();
+    gl.GenVertexArrays(1, &empty_vao);
+    gl.GenVertexArrays(1, &line_vao);
+    gl.GenBuffers(1, &line_vbo);
+    gl.GenBuffers(1, &line_ebo);
+  }
+
+  ~Impl() {
+    try {
+      ctx->make_current();
+    } catch (...) {
+      return;  // no context: the driver frees everything with it
+    }
+    const GlFunctions& gl = ctx->gl();
+    for (auto& [key, m] : meshes) release_mesh(m);
+    programs.clear();
+    release_targets();
+    gl.DeleteVertexArrays(1, &empty_vao);
+    gl.DeleteVertexArrays(1, &line_vao);
+    gl.DeleteBuffers(1, &line_vbo);
+    gl.DeleteBuffers(1, &line_ebo);
+  }
+
+  const GlFunctions& gl() const { return ctx->gl(); }
+
+  // ------------------------------------------------------------ programs
+  const ShaderProgram& program(const std::string& key) {
+    auto it = programs.find(key);
+    if (it != programs.end()) return it->second;
+    auto vs = [](std::vector<std::string> files, std::vector<std::string> defines = {}) {
+      files.insert(files.begin(), "common.glsl");
+      return ShaderStage::from_files(GL_VERTEX_SHADER, files, defines);
+    };
+    auto fs = [](std::vector<std::string> files, std::vector<std::string> defines = {}) {
+      return ShaderStage::from_files(GL_FRAGMENT_SHADER, files, defines);
+    };
+    std::vector<ShaderStage> stages;
+    if (key == "mesh")
+      stages = {vs({"mesh.vert"}), fs({"shading.glsl", "mesh.frag"})};
+    else if (key == "mesh_oit")
+      stages = {vs({"mesh.vert"}), fs({"shading.glsl", "mesh_oit.frag"})};
+    else if (key == "depth")
+      stages = {vs({"mesh.vert"}), fs({"depth.frag"})};
+    else if (key == "oit_composite")
+      stages = {vs({"fullscreen.vert"}), fs({"oit_composite.frag"})};
+    else if (key == "lines")
+      stages = {vs({"lines.vert"}), fs({"lines.frag"})};
+    else if (key == "ar1")
+      stages = {vs({"apparent_ridges.glsl", "ar_stage1.vert"}),
+                fs({"apparent_ridges.glsl", "ar_stage1.frag"})};
+    else if (key == "ar1_per_fragment")
+      stages = {vs({"apparent_ridges.glsl", "ar_stage1.vert"}, {"PER_FRAGMENT"}),
+                fs({"apparent_ridges.glsl", "ar_stage1.frag"}, {"PER_FRAGMENT"})};
+    else if (key == "ar2")
+      stages = {vs({"fullscreen.vert"}), fs({"ar_stage2.frag"})};
+    else if (key == "ar_bare1")
+      stages = {vs({"ar_bare.vert"}), fs({"ar_bare_stage1.frag"})};
+    else if (key == "ar_bare2")
+      stages = {vs({"fullscreen.vert"}), fs({"ar_bare_stage2.frag"})};
+    else
+      throw Error(ErrorKind::internal, "unknown program " + key);
+    return programs.emplace(key, ShaderProgram(gl(), key, stages)).first->second;
+  }
+
+  // -------------------------------------------------------------- meshes
+  void release_mesh(GpuMesh& m) {
+    gl().DeleteVertexArrays(1, &m.vao);
+    gl().DeleteBuffers(1, &m.vbo);
+    gl().DeleteBuffers(1, &m.ebo);
+    m = GpuMesh{};
+  }
+
+  const GpuMesh& gpu_mesh(const std::shared_ptr<const RenderMesh>& mesh) {
+    for (auto it = meshes.begin(); it != meshes.end();) {
+      if (it->second.source.expired()) {
+        release_mesh(it->second);
+        it = meshes.erase(it);
+      } else {
+        ++it;
+      }
+    }
+    auto it = meshes.find(mesh.get());
+    if (it != meshes.end() && !it->second.source.owner_before(mesh) &&
+        !mesh.owner_before(it->second.source))
+      return it->second;
+    if (it != meshes.end()) {
+      release_mesh(it->second);
+      meshes.erase(it);
+    }
+    const RenderMesh& m = *mesh;
+    const GlFunctions& g = gl();
+    GpuMesh gm;
+    gm.source = mesh;
+    gm.curvature = m.has_curvature();
+    const std::size_t n = m.vertex_count();
+    const std::size_t floats = gm.curvature ? 14 * n : 6 * n;
+    g.GenVertexArrays(1, &gm.vao);
+    g.GenBuffers(1, &gm.vbo);
+    g.GenBuffers(1, &gm.ebo);
+    g.BindVertexArray(gm.vao);
+    g.BindBuffer(GL_ARRAY_BUFFER, gm.vbo);
+    std::vector<float> data;
+    data.reserve(floats);
+    data.insert(data.end(), m.positions.begin(), m.positions.end());
+    data.insert(data.end(), m.normals.begin(), m.normals.end());
+    if (gm.curvature) {
+      for (std::size_t i = 0; i < n; ++i) {
+        data.push_back(m.k1[i]);
+        data.push_back(m.k2[i]);
+      }
+      data.insert(data.end(), m.e1.begin(), m.e1.end());
+      data.insert(data.end(), m.e2.begin(), m.e2.end());
+    }
+    g.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(data.size() * sizeof(float)), data.data(),
+                 GL_STATIC_DRAW);
+    auto attrib = [&](GLuint loc, int size, std::size_t offset_floats) {
+      g.EnableVertexAttribArray(loc);
+      g.VertexAttribPointer(loc, size, GL_FLOAT, GL_FALSE, 0,
+                            reinterpret_cast<const void*>(offset_floats * sizeof(float)));
+    };
+    attrib(0, 3, 0);
+    attrib(1, 3, 3 * n);
+    if (gm.curvature) {
+      attrib(2, 2, 6 * n);
+      attrib(3, 3, 8 * n);
+      attrib(4, 3, 11 * n);
+    }
+    g.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, gm.ebo);
+    g.BufferData(GL_ELEMENT_ARRAY_BUFFER,
+                 static_cast<GLsizeiptr>(m.indices.size() * sizeof(std::uint32_t)),
+                 m.indices.data(), GL_STATIC_DRAW);
+    gm.index_count = static_cast<GLsizei>(m.indices.size());
+    g.BindVertexArray(0);
+    check_gl_error(g, "uploading a mesh");
+    return meshes.emplace(mesh.get(), gm).first->second;
+  }
+
+  void draw_mesh(const GpuMesh& m) {
+    gl().BindVertexArray(m.vao);
+    gl().DrawElements(GL_TRIANGLES, m.index_count, GL_UNSIGNED_INT, nullptr);
+  }
+
+  // ------------------------------------------------------------- targets
+  GLuint make_texture(GLint internal, GLenum format, GLenum type, int w, int h) {
+    const GlFunctions& g = gl();
+    GLuint t = 0;
+    g.GenTextures(1, &t);
+    g.BindTexture(GL_TEXTURE_2D, t);
+    g.TexImage2D(GL_TEXTURE_2D, 0, internal, w, h, 0, format, type, nullptr);
+    g.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    g.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    g.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    g.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    return t;
+  }
+
+  void check_fbo(const char* what) {
+    const GLenum status = gl().CheckFramebufferStatus(GL_FRAMEBUFFER);
+    check_gl_error(gl(), what);
+    if (status != GL_FRAMEBUFFER_COMPLETE)
+      throw Error(ErrorKind::unavailable, std::string("the OpenGL driver cannot create the ") +
+                                              what + " (framebuffer status " +
+                                              std::to_string(status) + ")");
+  }
+
+  void release_targets() {
+    const GlFunctions& g = gl();
+    GLuint fbos[] = {main_fbo, overlay_fbo, oit_fbo, depthb_fbo, ar_fbo};
+    g.DeleteFramebuffers(5, fbos);
+    GLuint textures[] = {main_color, depth_a, accum, reveal, depth_b, ar_color};
+    g.DeleteTextures(6, textures);
+    g.DeleteRenderbuffers(1, &ar_depth);
+    main_fbo = overlay_fbo = oit_fbo = depthb_fbo = ar_fbo = 0;
+    main_color = depth_a = accum = reveal = depth_b = ar_color = ar_depth = 0;
+    target_w = target_h = 0;
+  }
+
+  void ensure_main(int w, int h) {
+    if (w <= target_w && h <= target_h && main_fbo != 0) return;
+    release_targets();
+    const GlFunctions& g = gl();
+    target_w = w;
+    target_h = h;
+    main_color = make_texture(GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, w, h);
+    depth_a = make_texture(GL_DEPTH_COMPONENT24, GL_DEPTH_COMPONENT, GL_UNSIGNED_INT, w, h);
+    check_gl_error(g, "allocating the colour and depth targets");
+    g.GenFramebuffers(1, &main_fbo);
+    g.BindFramebuffer(GL_FRAMEBUFFER, main_fbo);
+    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, main_color, 0);
+    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, depth_a, 0);
+    check_fbo("colour/depth framebuffer");
+    g.GenFramebuffers(1, &overlay_fbo);
+    g.BindFramebuffer(GL_FRAMEBUFFER, overlay_fbo);
+    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, main_color, 0);
+    check_fbo("overlay framebuffer");
+  }
+
+  void ensure_oit() {
+    if (oit_fbo != 0) return;
+    const GlFunctions& g = gl();
+    accum = make_texture(GL_RGBA16F, GL_RGBA, GL_FLOAT, target_w, target_h);
+    reveal = make_texture(GL_R16F, GL_RED, GL_FLOAT, target_w, target_h);
+    g.GenFramebuffers(1, &oit_fbo);
+    g.BindFramebuffer(GL_FRAMEBUFFER, oit_fbo);
+    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, accum, 0);
+    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, reveal, 0);
+    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, depth_a, 0);
+    const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+    g.DrawBuffers(2, bufs);
+    check_fbo("transparency framebuffer");
+  }
+
+  void ensure_depth_b() {
+    if (depthb_fbo != 0) return;
+    const GlFunctions& g = gl();
+    depth_b =
+        make_texture(GL_DEPTH_COMPONENT24, GL_DEPTH_COMPONENT, GL_UNSIGNED_INT, target_w, target_h);
+    g.GenFramebuffers(1, &depthb_fbo);
+    g.BindFramebuffer(GL_FRAMEBUFFER, depthb_fbo);
+    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, depth_b, 0);
+    const GLenum none = GL_NONE;
+    g.DrawBuffers(1, &none);
+    g.ReadBuffer(GL_NONE);
+    check_fbo("depth framebuffer");
+  }
+
+  void ensure_ar(bool float_target) {
+    if (ar_fbo != 0 && ar_float == float_target) return;
+    const GlFunctions& g = gl();
+    if (ar_fbo != 0) {
+      g.DeleteFramebuffers(1, &ar_fbo);
+      g.DeleteTextures(1, &ar_color);
+      g.DeleteRenderbuffers(1, &ar_depth);
+    }
+    ar_float = float_target;
+    ar_color = float_target ? make_texture(GL_RGBA32F, GL_RGBA, GL_FLOAT, target_w, target_h)
+                            : make_texture(GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, target_w, target_h);
+    g.GenRenderbuffers(1, &ar_depth);
+    g.BindRenderbuffer(GL_RENDERBUFFER, ar_depth);
+    g.RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, target_w, target_h);
+    g.GenFramebuffers(1, &ar_fbo);
+    g.BindFramebuffer(GL_FRAMEBUFFER, ar_fbo);
+    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, ar_color, 0);
+    g.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, ar_depth);
+    check_fbo("apparent-ridge framebuffer");
+  }
+
+  // ------------------------------------------------------------- helpers
+  int tile_inner_size(int requested) const {
+    int limit = std::min(ctx->max_framebuffer_size(), 4096);
+    if (requested > 0) limit = std::min(limit, requested);
+    return std::max(16, limit - 2 * kTileMargin);
+  }
+
+  void set_common(const ShaderProgram& p, const Matrices& m, const Tile& t) {
+    p.set_mat4("u_model_view", m.model_view.data());
+    p.set_mat4("u_projection", m.projection.data());
+    p.set_mat3("u_normal_matrix", m.normal.data());
+    p.set("u_tile", t.transform[0], t.transform[1], t.transform[2], t.transform[3]);
+    p.set("u_orthographic", m.orthographic ? 1 : 0);
+  }
+
+  void draw_fullscreen() {
+    gl().BindVertexArray(empty_vao);
+    gl().DrawArrays(GL_TRIANGLES, 0, 3);
+  }
+
+  void read_tile(GLuint fbo, const Tile& t, int image_h, Image& image, bool unpremultiply) {
+    const GlFunctions& g = gl();
+    g.BindFramebuffer(GL_FRAMEBUFFER, fbo);
+    g.ReadBuffer(GL_COLOR_ATTACHMENT0);
+    g.PixelStorei(GL_PACK_ALIGNMENT, 1);
+    std::vector<std::uint8_t> buffer(static_cast<std::size_t>(t.w) * t.h * 4);
+    g.ReadPixels(kTileMargin, kTileMargin, t.w, t.h, GL_RGBA, GL_UNSIGNED_BYTE, buffer.data());
+    check_gl_error(g, "reading the image back");
+    for (int j = 0; j < t.h; ++j) {
+      const int row = image_h - 1 - (t.y + j);
+      std::uint8_t* dst = image.pixel(t.x, row);
+      const std::uint8_t* src = buffer.data() + static_cast<std::size_t>(j) * t.w * 4;
+      std::copy(src, src + static_cast<std::size_t>(t.w) * 4, dst);
+      if (!unpremultiply) continue;
+      for (int i = 0; i < t.w; ++i) {
+        std::uint8_t* p = dst + 4 * i;
+        const int a = p[3];
+        if (a == 0 || a == 255) continue;
+        for (int c = 0; c < 3; ++c)
+          p[c] = static_cast<std::uint8_t>(std::min(255, (p[c] * 255 + a / 2) / a));
+      }
+    }
+  }
+
+  void set_state_opaque() {
+    const GlFunctions& g = gl();
+    g.Enable(GL_DEPTH_TEST);
+    g.DepthFunc(GL_LESS);
+    g.DepthMask(GL_TRUE);
+    g.Disable(GL_BLEND);
+    g.Disable(GL_CULL_FACE);
+    g.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  }
+
+  void set_state_overlay() {
+    const GlFunctions& g = gl();
+    g.Disable(GL_DEPTH_TEST);
+    g.DepthMask(GL_FALSE);
+    g.Enable(GL_BLEND);
+    g.BlendFunc(GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
+  }
+
+  // Hybrid stage 1 into ar_fbo: hybrid meshes with their scale, occluders with q = 0.
+  struct HybridDraw {
+    const GpuMesh* mesh;
+    float scale;
+    bool occluder;
+  };
+  void hybrid_stage1(const std::vector<HybridDraw>& draws, const HybridOptions& o,
+                     const Matrices& m, const Tile& t, bool bare) {
+    const GlFunctions& g = gl();
+    ensure_ar(o.float_target);
+    g.BindFramebuffer(GL_FRAMEBUFFER, ar_fbo);
+    g.Viewport(0, 0, t.render_w, t.render_h);
+    set_state_opaque();  // depth writes on, or Clear leaves the depth alone
+    g.ClearColor(0.0f, 0.5f, 0.5f, 0.0f);
+    g.ClearDepth(1.0);
+    g.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    const ShaderProgram& p =
+        program(bare ? "ar_bare1" : (o.per_fragment ? "ar1_per_fragment" : "ar1"));
+    p.use();
+    set_common(p, m, t);
+    p.set("u_q_max", static_cast<float>(o.saturation));
+    p.set("u_sign_free", o.sign_free ? 1 : 0);
+    for (const auto& d : draws) {
+      p.set("u_scale", d.scale);
+      p.set("u_occluder", d.occluder ? 1 : 0);
+      draw_mesh(*d.mesh);
+    }
+  }
+
+  void hybrid_stage2(const HybridOptions& o, const Tile& t, bool bare) {
+    const GlFunctions& g = gl();
+    g.Viewport(0, 0, t.render_w, t.render_h);
+    set_state_overlay();
+    const ShaderProgram& p = program(bare ? "ar_bare2" : "ar2");
+    p.use();
+    g.ActiveTexture(GL_TEXTURE0);
+    g.BindTexture(GL_TEXTURE_2D, ar_color);
+    p.set("u_data", 0);
+    p.set("u_lambda", static_cast<float>(o.lambda));
+    p.set("u_threshold", static_cast<float>(o.threshold));
+    p.set("u_fade", o.fade ? 1 : 0);
+    p.set("u_sign_free", o.sign_free ? 1 : 0);
+    p.set("u_line_color", o.color.r, o.color.g, o.color.b, o.color.a);
+    draw_fullscreen();
+  }
+};
+
+Renderer::Renderer(std::unique_ptr<GlContext> context) {
+  if (!context) throw Error(ErrorKind::internal, "Renderer needs a GL context");
+  impl_ = std::make_unique<Impl>(std::move(context));
+}
+
+Renderer::~Renderer() = default;
+
+GlContext& Renderer::context() {
+  return *impl_->ctx;
+}
+
+namespace {
+
+void check_size(const Camera& camera) {
+  validate_camera(camera, "camera");
+  if (camera.width > kMaxImageSide || camera.height > kMaxImageSide)
+    throw InputError("image size " + std::to_string(camera.width) + "x" +
+                     std::to_string(camera.height) + " is too large (at most " +
+                     std::to_string(kMaxImageSide) + " pixels a side)");
+}
+
+float hybrid_scale(const RenderMesh& mesh, const HybridOptions& o) {
+  double tau = 0.0;
+  if (o.tau) {
+    tau = *o.tau;
+  } else {
+    const double fs = mesh.feature_size > 0.0 ? mesh.feature_size : mesh.mean_edge_length;
+    tau = default_tau(fs);
+  }
+  if (!std::isfinite(tau)) throw InputError("hybrid apparent ridges: tau must be finite");
+  return static_cast<float>(std::exp2(tau));
+}
+
+}  // namespace
+
+Image Renderer::render(const Scene& scene, const Camera& camera, const RenderOptions& options) {
+  check_size(camera);
+  if (scene.structures.empty()) throw InputError("the scene has no structures to draw");
+  for (const auto& s : scene.structures)
+    if (!s.mesh || s.mesh->vertex_count() == 0 || s.mesh->triangle_count() == 0)
+      throw InputError("structure '" + s.name + "' has no mesh to draw");
+  Impl& I = *impl_;
+  I.ctx->make_current();
+  const GlFunctions& g = I.gl();
+
+  // Scene bounding sphere (enclosing every structure's sphere).
+  Vec3 center = scene.structures.front().mesh->center;
+  double radius = scene.structures.front().mesh->radius;
+  for (const auto& s : scene.structures) {
+    const Vec3 d = s.mesh->center - center;
+    const double dist = d.norm();
+    if (dist + s.mesh->radius <= radius) continue;
+    if (dist + radius <= s.mesh->radius) {
+      center = s.mesh->center;
+      radius = s.mesh->radius;
+      continue;
+    }
+    const double new_r = 0.5 * (dist + radius + s.mesh->radius);
+    center += d / dist * (new_r - radius);
+    radius = new_r;
+  }
+  const Matrices M = camera_matrices(camera, center, radius);
+
+  double tolerance = options.depth_tolerance;
+  if (!(tolerance > 0.0)) {
+    double edge = 0.0;
+    for (const auto& s : scene.structures) edge = std::max(edge, s.mesh->mean_edge_length);
+    tolerance = edge + 0.002 * radius;
+  }
+  const double line_scale =
+      options.scale_lines_with_image
+          ? std::max(camera.width, camera.height) / std::max(1.0, options.line_reference_size)
+          : 1.0;
+
+  // Upload meshes; classify structures.
+  std::vector<const GpuMesh*> gpu;
+  bool any_transparent = false, any_hybrid = false;
+  for (const auto& s : scene.structures) {
+    gpu.push_back(&I.gpu_mesh(s.mesh));
+    if (s.style.opacity < 0.999) any_transparent = true;
+    if (s.style.hybrid_apparent_ridges) {
+      if (!s.mesh->has_curvature())
+        throw InputError("structure '" + s.name +
+                         "': hybrid apparent ridges need per-vertex curvature");
+      any_hybrid = true;
+    }
+  }
+  auto opaque = [&](const Structure& s) { return s.style.opacity >= 0.999; };
+
+  // Line geometry: one strip per polyline, batched per structure and width class.
+  std::vector<float> line_vertices;
+  std::vector<std::uint32_t> line_indices;
+  std::vector<LineBatch> batches;
+  for (std::size_t si = 0; si < scene.structures.size(); ++si) {
+    const Structure& s = scene.structures[si];
+    for (int wide = 0; wide < 2; ++wide) {
+      LineBatch batch{si, wide == 1, static_cast<GLsizei>(line_indices.size()), 0};
+      for (const Polyline& pl : s.lines.polylines) {
+        if (is_wide_family(pl.family) != (wide == 1)) continue;
+        if (!s.style.families.empty() && std::find(s.style.families.begin(), s.style.families.end(),
+                                                   pl.family) == s.style.families.end())
+          continue;
+        const std::size_t n = pl.vertices.size();
+        if (n < 2) continue;
+        const bool closed = pl.closed && n >= 3;
+        std::vector<double> arc(n, 0.0);
+        for (std::size_t i = 1; i < n; ++i)
+          arc[i] = arc[i - 1] + (pl.vertices[i].position - pl.vertices[i - 1].position).norm();
+        const double total = closed ? 0.0 : arc.back();
+        const auto base = static_cast<std::uint32_t>(line_vertices.size() / 13);
+        for (std::size_t i = 0; i < n; ++i) {
+          const Vec3& p = pl.vertices[i].position;
+          const Vec3& prev =
+              i > 0 ? pl.vertices[i - 1].position : (closed ? pl.vertices[n - 1].position : p);
+          const Vec3& next =
+              i + 1 < n ? pl.vertices[i + 1].position : (closed ? pl.vertices[0].position : p);
+          for (float side : {-1.0f, 1.0f}) {
+            for (const Vec3* v : {&p, &prev, &next})
+              for (int c = 0; c < 3; ++c) line_vertices.push_back(static_cast<float>((*v)[c]));
+            line_vertices.push_back(side);
+            line_vertices.push_back(pl.vertices[i].strength);
+            line_vertices.push_back(static_cast<float>(arc[i]));
+            line_vertices.push_back(static_cast<float>(total));
+          }
+        }
+        auto segment = [&](std::uint32_t a, std::uint32_t b) {
+          const std::uint32_t a0 = base + 2 * a, a1 = a0 + 1, b0 = base + 2 * b, b1 = b0 + 1;
+          line_indices.insert(line_indices.end(), {a0, a1, b0, a1, b1, b0});
+        };
+        for (std::size_t i = 0; i + 1 < n; ++i)
+          segment(static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(i + 1));
+        if (closed) segment(static_cast<std::uint32_t>(n - 1), 0);
+      }
+      batch.count = static_cast<GLsizei>(line_indices.size()) - batch.first;
+      if (batch.count > 0) batches.push_back(batch);
+    }
+  }
+  bool lines_need_depth_b = false;
+  for (const auto& b : batches)
+    if (!opaque(scene.structures[b.structure])) lines_need_depth_b = true;
+  if (!batches.empty()) {
+    g.BindVertexArray(I.line_vao);
+    g.BindBuffer(GL_ARRAY_BUFFER, I.line_vbo);
+    g.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(line_vertices.size() * sizeof(float)),
+                 line_vertices.data(), GL_DYNAMIC_DRAW);
+    const GLsizei stride = 13 * sizeof(float);
+    for (GLuint loc = 0; loc < 4; ++loc) {
+      g.EnableVertexAttribArray(loc);
+      g.VertexAttribPointer(loc, loc == 3 ? 4 : 3, GL_FLOAT, GL_FALSE, stride,
+                            reinterpret_cast<const void*>(std::size_t(loc) * 3 * sizeof(float)));
+    }
+    g.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, I.line_ebo);
+    g.BufferData(GL_ELEMENT_ARRAY_BUFFER,
+                 static_cast<GLsizeiptr>(line_indices.size() * sizeof(std::uint32_t)),
+                 line_indices.data(), GL_DYNAMIC_DRAW);
+    g.BindVertexArray(0);
+  }
+
+  const int inner = I.tile_inner_size(options.max_tile_size);
+  const auto tiles = make_tiles(camera.width, camera.height, inner);
+  int max_w = 0, max_h = 0;
+  for (const auto& t : tiles) {
+    max_w = std::max(max_w, t.render_w);
+    max_h = std::max(max_h, t.render_h);
+  }
+  I.ensure_main(max_w, max_h);
+
+  const float bg_alpha = options.transparent_background ? 0.0f : scene.background.a;
+  Image image(camera.width, camera.height);
+  for (const Tile& t : tiles) {
+    // 1. Opaque structures.
+    g.BindFramebuffer(GL_FRAMEBUFFER, I.main_fbo);
+    const GLenum color0 = GL_COLOR_ATTACHMENT0;
+    g.DrawBuffers(1, &color0);
+    g.Viewport(0, 0, t.render_w, t.render_h);
+    g.ClearColor(scene.background.r * bg_alpha, scene.background.g * bg_alpha,
+                 scene.background.b * bg_alpha, bg_alpha);
+    I.set_state_opaque();  // depth writes on, or Clear leaves the depth alone
+    g.ClearDepth(1.0);
+    g.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    {
+      const ShaderProgram& p = I.program("mesh");
+      p.use();
+      I.set_common(p, M, t);
+      for (std::size_t i = 0; i < scene.structures.size(); ++i) {
+        const Structure& s = scene.structures[i];
+        if (!opaque(s)) continue;
+        const bool fill = s.style.shading != Shading::none;
+        g.ColorMask(fill, fill, fill, fill);
+        p.set("u_shading", s.style.shading == Shading::lambert ? 1
+                           : s.style.shading == Shading::toon  ? 2
+                                                               : 0);
+        p.set("u_color", s.style.color.r, s.style.color.g, s.style.color.b, 1.0f);
+        p.set("u_ambient", static_cast<float>(s.style.ambient));
+        p.set("u_toon_levels", s.style.toon_levels);
+        I.draw_mesh(*gpu[i]);
+      }
+      g.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    }
+    // 2. Ghosted structures: weighted blended OIT, then composite.
+    if (any_transparent) {
+      I.ensure_oit();
+      g.BindFramebuffer(GL_FRAMEBUFFER, I.oit_fbo);
+      const float zero[4] = {0, 0, 0, 0};
+      g.ClearBufferfv(GL_COLOR, 0, zero);
+      g.ClearBufferfv(GL_COLOR, 1, zero);
+      g.Enable(GL_DEPTH_TEST);
+      g.DepthMask(GL_FALSE);
+      g.Enable(GL_BLEND);
+      g.BlendFunc(GL_ONE, GL_ONE);
+      const ShaderProgram& p = I.program("mesh_oit");
+      p.use();
+      I.set_common(p, M, t);
+      for (std::size_t i = 0; i < scene.structures.size(); ++i) {
+        const Structure& s = scene.structures[i];
+        if (opaque(s) || s.style.shading == Shading::none || s.style.opacity <= 0.0) continue;
+        p.set("u_shading", s.style.shading == Shading::lambert ? 1
+                           : s.style.shading == Shading::toon  ? 2
+                                                               : 0);
+        p.set("u_color", s.style.color.r, s.style.color.g, s.style.color.b,
+              static_cast<float>(s.style.opacity));
+        p.set("u_ambient", static_cast<float>(s.style.ambient));
+        p.set("u_toon_levels", s.style.toon_levels);
+        I.draw_mesh(*gpu[i]);
+      }
+      g.BindFramebuffer(GL_FRAMEBUFFER, I.overlay_fbo);
+      I.set_state_overlay();
+      const ShaderProgram& c = I.program("oit_composite");
+      c.use();
+      g.ActiveTexture(GL_TEXTURE0);
+      g.BindTexture(GL_TEXTURE_2D, I.accum);
+      g.ActiveTexture(GL_TEXTURE1);
+      g.BindTexture(GL_TEXTURE_2D, I.reveal);
+      c.set("u_accum", 0);
+      c.set("u_reveal", 1);
+      I.draw_fullscreen();
+      g.ActiveTexture(GL_TEXTURE0);
+    }
+    // 3. Depth of every surface, for lines of ghosted structures.
+    if (lines_need_depth_b) {
+      I.ensure_depth_b();
+      g.BindFramebuffer(GL_READ_FRAMEBUFFER, I.main_fbo);
+      g.BindFramebuffer(GL_DRAW_FRAMEBUFFER, I.depthb_fbo);
+      g.BlitFramebuffer(0, 0, t.render_w, t.render_h, 0, 0, t.render_w, t.render_h,
+                        GL_DEPTH_BUFFER_BIT, GL_NEAREST);
+      g.BindFramebuffer(GL_FRAMEBUFFER, I.depthb_fbo);
+      I.set_state_opaque();
+      const ShaderProgram& p = I.program("depth");
+      p.use();
+      I.set_common(p, M, t);
+      for (std::size_t i = 0; i < scene.structures.size(); ++i)
+        if (!opaque(scene.structures[i])) I.draw_mesh(*gpu[i]);
+    }
+    // 4. Hybrid apparent ridges.
+    if (any_hybrid) {
+      std::vector<Impl::HybridDraw> draws;
+      for (std::size_t i = 0; i < scene.structures.size(); ++i) {
+        const Structure& s = scene.structures[i];
+        if (s.style.hybrid_apparent_ridges)
+          draws.push_back({gpu[i], hybrid_scale(*s.mesh, options.hybrid), false});
+        else if (opaque(s))
+          draws.push_back({gpu[i], 1.0f, true});
+      }
+      I.hybrid_stage1(draws, options.hybrid, M, t, false);
+      g.BindFramebuffer(GL_FRAMEBUFFER, I.overlay_fbo);
+      I.hybrid_stage2(options.hybrid, t, false);
+    }
+    // 5. Lines.
+    if (!batches.empty()) {
+      g.BindFramebuffer(GL_FRAMEBUFFER, I.overlay_fbo);  // depth A is sampled, not attached
+      g.Viewport(0, 0, t.render_w, t.render_h);
+      I.set_state_overlay();
+      const ShaderProgram& p = I.program("lines");
+      p.use();
+      I.set_common(p, M, t);
+      p.set("u_image_size", static_cast<float>(camera.width), static_cast<float>(camera.height));
+      p.set("u_px_per_mm", static_cast<float>(M.px_per_mm));
+      p.set("u_near_far", M.near_plane, M.far_plane);
+      p.set("u_depth_tolerance", static_cast<float>(tolerance));
+      p.set("u_depth", 0);
+      g.ActiveTexture(GL_TEXTURE0);
+      g.BindVertexArray(I.line_vao);
+      for (const auto& b : batches) {
+        const Structure& s = scene.structures[b.structure];
+        const LineStyle& ls = s.style.lines;
+        g.BindTexture(GL_TEXTURE_2D, opaque(s) ? I.depth_a : I.depth_b);
+        const double w = ls.width * (b.wide ? ls.contour_width_factor : 1.0) * line_scale;
+        p.set("u_width", static_cast<float>(w));
+        p.set("u_taper", static_cast<float>(ls.taper));
+        p.set("u_width_by_strength", ls.width_by_strength ? 1 : 0);
+        p.set("u_line_color", ls.color.r, ls.color.g, ls.color.b, ls.color.a);
+        p.set("u_fade_by_strength", ls.fade_by_strength ? 1 : 0);
+        p.set("u_hidden_mode", static_cast<int>(ls.hidden));
+        p.set("u_hidden_opacity", static_cast<float>(ls.hidden_opacity));
+        p.set("u_dash_px", static_cast<float>(ls.dash * line_scale));
+        g.DrawElements(GL_TRIANGLES, b.count, GL_UNSIGNED_INT,
+                       reinterpret_cast<const void*>(std::size_t(b.first) * sizeof(std::uint32_t)));
+      }
+    }
+    check_gl_error(g, "drawing the scene");
+    I.read_tile(I.main_fbo, t, camera.height, image, true);
+  }
+  g.BindVertexArray(0);
+  g.BindFramebuffer(GL_FRAMEBUFFER, 0);
+  return image;
+}
+
+Image Renderer::render_hybrid(const std::shared_ptr<const RenderMesh>& mesh, const Camera& camera,
+                              const HybridOptions& options, bool transparent, bool bare) {
+  check_size(camera);
+  if (!mesh || !mesh->has_curvature())
+    throw InputError("hybrid apparent ridges need a mesh with per-vertex curvature");
+  Impl& I = *impl_;
+  I.ctx->make_current();
+  const GlFunctions& g = I.gl();
+  const Matrices M = camera_matrices(camera, mesh->center, mesh->radius);
+  const GpuMesh& gm = I.gpu_mesh(mesh);
+  const float scale = hybrid_scale(*mesh, options);
+  const auto tiles = make_tiles(camera.width, camera.height, I.tile_inner_size(0));
+  int max_w = 0, max_h = 0;
+  for (const auto& t : tiles) {
+    max_w = std::max(max_w, t.render_w);
+    max_h = std::max(max_h, t.render_h);
+  }
+  I.ensure_main(max_w, max_h);
+  Image image(camera.width, camera.height);
+  for (const Tile& t : tiles) {
+    I.hybrid_stage1({{&gm, scale, false}}, options, M, t, bare);
+    g.BindFramebuffer(GL_FRAMEBUFFER, I.main_fbo);
+    const GLenum color0 = GL_COLOR_ATTACHMENT0;
+    g.DrawBuffers(1, &color0);
+    g.Viewport(0, 0, t.render_w, t.render_h);
+    const float a = transparent ? 0.0f : 1.0f;
+    g.ClearColor(a, a, a, a);
+    g.Clear(GL_COLOR_BUFFER_BIT);
+    I.hybrid_stage2(options, t, bare);
+    I.read_tile(I.main_fbo, t, camera.height, image, true);
+  }
+  g.BindVertexArray(0);
+  g.BindFramebuffer(GL_FRAMEBUFFER, 0);
+  return image;
+}
+
+Image Renderer::render_hybrid_buffer(const std::shared_ptr<const RenderMesh>& mesh,
+                                     const Camera& camera, const HybridOptions& options) {
+  check_size(camera);
+  if (!mesh || !mesh->has_curvature())
+    throw InputError("hybrid apparent ridges need a mesh with per-vertex curvature");
+  Impl& I = *impl_;
+  I.ctx->make_current();
+  const Matrices M = camera_matrices(camera, mesh->center, mesh->radius);
+  const GpuMesh& gm = I.gpu_mesh(mesh);
+  const auto tiles = make_tiles(camera.width, camera.height, I.tile_inner_size(0));
+  int max_w = 0, max_h = 0;
+  for (const auto& t : tiles) {
+    max_w = std::max(max_w, t.render_w);
+    max_h = std::max(max_h, t.render_h);
+  }
+  I.ensure_main(max_w, max_h);
+  Image image(camera.width, camera.height);
+  for (const Tile& t : tiles) {
+    I.hybrid_stage1({{&gm, hybrid_scale(*mesh, options), false}}, options, M, t, false);
+    I.read_tile(I.ar_fbo, t, camera.height, image, false);
+  }
+  I.gl().BindFramebuffer(GL_FRAMEBUFFER, 0);
+  return image;
+}
+
+}  // namespace fabrica::render

@@ -1,0 +1,53 @@
+// Hybrid apparent ridges, image-space stage (seed 000, listing A.2, as
+// reconstructed in ALGORITHMS.md §6.4): the direction-adaptive Laplacian-like
+// filter v = (8 + 8 lambda) q4 - sum_n w_n q_n with
+// w_n = 1 + 2 lambda cos^2(phi_n - theta), theta = t1 quantised to 0, 45, 90
+// or 135 degrees; a line where v > threshold, grey 1 - v (fade) or black.
+// Neighbours s0..s8 row by row from the top (+y) row, s4 the centre.
+uniform sampler2D u_data;
+uniform float u_lambda;
+uniform float u_threshold;
+uniform int u_fade;
+uniform int u_sign_free;
+uniform vec4 u_line_color;
+layout(location = 0) out vec4 o_color;
+void main() {
+  const ivec2 offsets[9] = ivec2[9](ivec2(-1, 1), ivec2(0, 1), ivec2(1, 1), ivec2(-1, 0),
+                                    ivec2(0, 0), ivec2(1, 0), ivec2(-1, -1), ivec2(0, -1),
+                                    ivec2(1, -1));
+  ivec2 p = ivec2(gl_FragCoord.xy);
+  ivec2 last = textureSize(u_data, 0) - 1;
+  vec4 centre = texelFetch(u_data, p, 0);
+  if (centre.a < 0.5) discard;  // background or occluder
+  vec2 t1 = 2.0 * (centre.gb - 0.5);
+  if (t1 == vec2(0.0)) discard;  // seed: undefined direction = background
+  if (u_sign_free == 1) {
+    float phi = 0.5 * atan(t1.y, t1.x);
+    t1 = vec2(cos(phi), sin(phi));
+  }
+  const float b = 0.92387953251080;  // cos(pi/8)
+  const float a = 0.70710678118655;
+  ivec2 d;
+  if (abs(dot(t1, vec2(1.0, 0.0))) > b)
+    d = ivec2(1, 0);
+  else if (abs(dot(t1, vec2(a, a))) > b)
+    d = ivec2(1, 1);
+  else if (abs(dot(t1, vec2(0.0, 1.0))) > b)
+    d = ivec2(0, 1);
+  else
+    d = ivec2(-1, 1);
+  float v = (8.0 + 8.0 * u_lambda) * centre.r;
+  for (int i = 0; i < 9; ++i) {
+    if (i == 4) continue;
+    ivec2 o = offsets[i];
+    float q = texelFetch(u_data, clamp(p + o, ivec2(0), last), 0).r;
+    // cos^2 of the angle between o and d, exact for these integer vectors
+    float c = float(o.x * d.x + o.y * d.y);
+    float cos2 = c * c / float((o.x * o.x + o.y * o.y) * (d.x * d.x + d.y * d.y));
+    v -= (1.0 + 2.0 * u_lambda * cos2) * q;
+  }
+  if (v <= u_threshold) discard;
+  float ink = u_fade == 1 ? min(v, 1.0) : 1.0;
+  float alpha = ink * u_line_color.a;
+  o_color = vec4(u_line_color.rgb * alpha, alpha);
+}

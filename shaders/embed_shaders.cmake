@@ -1,0 +1,18 @@
+# Generates a C++ source holding every GLSL file as a raw string literal
+# (cmake -DOUTPUT=file.cpp -DINPUTS=a.glsl|b.vert|... -P embed_shaders.cmake).
+string(REPLACE "|" ";" inputs "${INPUTS}")
+set(body "// Generated from shaders/ by shaders/embed_shaders.cmake: do not edit.\n#include <string_view>\n\nnamespace fabrica::render::detail {\n\nstd::string_view embedded_shader(std::string_view name) {\n")
+foreach(file IN LISTS inputs)
+  get_filename_component(name "${file}" NAME)
+  file(READ "${file}" source)
+  string(FIND "${source}" ")fabrica_glsl\"" clash)
+  if(NOT clash EQUAL -1)
+    message(FATAL_ERROR "${file} contains the raw-string delimiter")
+  endif()
+  string(APPEND body "  if (name == \"${name}\")\n    return R\"fabrica_glsl(${source})fabrica_glsl\";\n")
+endforeach()
+string(APPEND body "  return {};\n}\n\n}  // namespace fabrica::render::detail\n")
+set(tmp "${OUTPUT}.tmp")
+file(WRITE "${tmp}" "${body}")
+file(COPY_FILE "${tmp}" "${OUTPUT}" ONLY_IF_DIFFERENT)
+file(REMOVE "${tmp}")

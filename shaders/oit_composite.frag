@@ -1,0 +1,13 @@
+// Resolves weighted blended OIT into a premultiplied colour to blend
+// (ONE, ONE_MINUS_SRC_ALPHA) over the opaque image.
+uniform sampler2D u_accum;
+uniform sampler2D u_reveal;
+layout(location = 0) out vec4 o_color;
+void main() {
+  ivec2 p = ivec2(gl_FragCoord.xy);
+  vec4 acc = texelFetch(u_accum, p, 0);
+  float coverage = 1.0 - exp(-texelFetch(u_reveal, p, 0).r);
+  if (coverage <= 1.0e-4) discard;
+  vec3 average = acc.rgb / max(acc.a, 1.0e-6);
+  o_color = vec4(average * coverage, coverage);
+}
