@@ -1,0 +1,85 @@
+// Mesh repair: the hygiene steps of ALGORITHMS.md §1 that keep the file's
+// vertex numbering.
+//
+// Vertex order promise: vertex i before repair is vertex i after repair.
+// Welding maps a vertex to its first occurrence and leaves the later copy in
+// place, unreferenced; splitting a non-manifold vertex APPENDS one vertex per
+// extra fan. Faces keep their relative order; removed faces are dropped
+// (RepairReport::face_origin maps new face -> old face), flipped faces become
+// (a, c, b) so corner 0 keeps its vertex.
+//
+// Steps, in order (each can be switched off in RepairOptions):
+//  1. weld vertices at identical positions (or within weld_tolerance);
+//  2. remove degenerate faces (repeated vertex, or zero area relative to the
+//     mean edge length^2, as in validate.hpp);
+//  3. remove duplicate faces (same vertex set as an earlier face);
+//  4. split non-manifold vertices: each fan after the first gets a new vertex;
+//     cutting non-manifold edges does the same with fans joined only through
+//     two-face edges, so every sheet meeting at such an edge gets its own copy
+//     of the edge (it becomes boundary);
+//  5. orient consistently: breadth-first over faces through edges with exactly
+//     two faces, flipping neighbours that disagree; an open piece keeps the
+//     orientation of the majority of its faces;
+//  6. outward: every closed edge-connected piece with negative signed volume is
+//     reversed.
+// With split_nonmanifold_edges off, non-manifold edges stay (the orientation
+// walk does not cross them) and validate_mesh keeps reporting them.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "fabrica/core/mesh.hpp"
+
+namespace fabrica::io {
+
+struct RepairOptions {
+  bool weld = true;
+  /// 0: weld only bit-identical positions. > 0: weld points closer than this
+  /// (mesh units) to an earlier kept point.
+  double weld_tolerance = 0.0;
+  bool remove_degenerate = true;
+  bool remove_duplicates = true;
+  bool orient = true;
+  bool outward = true;  ///< only with orient
+  bool split_nonmanifold_vertices = true;
+  /// Cut the sheets meeting at an edge with three or more faces apart
+  /// (appends vertices; the cut edges become boundary edges).
+  bool split_nonmanifold_edges = true;
+};
+
+struct RepairReport {
+  std::size_t welded_vertices = 0;  ///< referenced vertices merged into an earlier one
+  std::size_t removed_degenerate_faces = 0;
+  std::size_t removed_duplicate_faces = 0;
+  std::size_t flipped_faces = 0;        ///< faces whose orientation changed (net)
+  std::size_t components_reversed = 0;  ///< closed pieces turned outward
+  std::size_t split_nonmanifold_vertices =
+      0;                                  ///< vertices appended by splitting (vertices and edges)
+  std::size_t cut_nonmanifold_edges = 0;  ///< non-manifold edges that were cut apart
+  std::size_t nonorientable_pieces = 0;   ///< pieces where no consistent orientation exists
+  /// For each face of the repaired mesh, the index of the face it came from.
+  std::vector<std::int32_t> face_origin;
+  /// Human-readable one-liners; empty when nothing changed.
+  std::vector<std::string> changes;
+
+  bool changed() const { return !changes.empty(); }
+};
+
+/// Repairs `mesh` in place (see the steps above). Deterministic, O(V + F log F).
+/// Throws InputError when a face index is out of range or a coordinate is not
+/// finite.
+RepairReport repair_mesh(TriangleMesh& mesh, const RepairOptions& options = {});
+
+/// What the line engine needs by default: weld exact duplicates, orient
+/// consistently and outward per closed piece. Removes no face and adds no
+/// vertex, so face f stays face f and vertex i stays vertex i.
+RepairReport prepare_for_lines(TriangleMesh& mesh);
+
+/// The report as a JSON object (without face_origin).
+nlohmann::json to_json(const RepairReport& report);
+
+}  // namespace fabrica::io

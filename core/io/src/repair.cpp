@@ -1,0 +1,343 @@
+#include "fabrica/io/repair.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <optional>
+#include <string>
+
+#include "fabrica/core/error.hpp"
+#include "validate_detail.hpp"
+
+namespace fabrica::io {
+
+namespace {
+
+std::string plural(std::size_t n, const char* one, const char* many) {
+  return std::to_string(n) + " " + (n == 1 ? one : many);
+}
+
+// Representative (first occurrence) of every vertex: bit-equal positions.
+std::vector<std::int32_t> exact_representatives(const std::vector<Vec3>& pos) {
+  std::vector<std::int32_t> order(pos.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](std::int32_t a, std::int32_t b) {
+    const Vec3& p = pos[a];
+    const Vec3& q = pos[b];
+    if (p.x() != q.x()) return p.x() < q.x();
+    if (p.y() != q.y()) return p.y() < q.y();
+    if (p.z() != q.z()) return p.z() < q.z();
+    return a < b;
+  });
+  std::vector<std::int32_t> rep(pos.size());
+  for (std::size_t i = 0; i < order.size();) {
+    std::size_t j = i;
+    while (j < order.size() && pos[order[j]] == pos[order[i]]) rep[order[j++]] = order[i];
+    i = j;
+  }
+  return rep;
+}
+
+// Representative within `tolerance` of an earlier kept point (lowest index).
+std::vector<std::int32_t> tolerance_representatives(const std::vector<Vec3>& pos,
+                                                    double tolerance) {
+  const BoundingBox box = bounding_box(pos);
+  const double extent = (box.max - box.min).cwiseAbs().maxCoeff();
+  if (!(tolerance > 0.0) || !std::isfinite(tolerance) || extent / tolerance > 1e15)
+    throw InputError("weld tolerance " + std::to_string(tolerance) +
+                     " is not a positive number large enough for a mesh of extent " +
+                     std::to_string(extent));
+  using Cell = std::array<std::int64_t, 3>;
+  auto cell_of = [&](const Vec3& p) {
+    return Cell{static_cast<std::int64_t>(std::floor((p.x() - box.min.x()) / tolerance)),
+                static_cast<std::int64_t>(std::floor((p.y() - box.min.y()) / tolerance)),
+                static_cast<std::int64_t>(std::floor((p.z() - box.min.z()) / tolerance))};
+  };
+  std::map<Cell, std::vector<std::int32_t>> grid;  // ordered: deterministic, no hash tuning
+  std::vector<std::int32_t> rep(pos.size());
+  for (std::size_t i = 0; i < pos.size(); ++i) {
+    const Cell c = cell_of(pos[i]);
+    std::int32_t best = -1;
+    for (std::int64_t dx = -1; dx <= 1; ++dx)
+      for (std::int64_t dy = -1; dy <= 1; ++dy)
+        for (std::int64_t dz = -1; dz <= 1; ++dz) {
+          const auto it = grid.find(Cell{c[0] + dx, c[1] + dy, c[2] + dz});
+          if (it == grid.end()) continue;
+          for (auto j : it->second)
+            if ((pos[j] - pos[i]).norm() <= tolerance && (best < 0 || j < best)) best = j;
+        }
+    if (best < 0) {
+      best = static_cast<std::int32_t>(i);
+      grid[c].push_back(best);
+    }
+    rep[i] = best;
+  }
+  return rep;
+}
+
+std::size_t weld(TriangleMesh& mesh, double tolerance) {
+  const auto rep = tolerance > 0.0 ? tolerance_representatives(mesh.positions, tolerance)
+                                   : exact_representatives(mesh.positions);
+  std::vector<std::uint8_t> moved(mesh.positions.size(), 0);
+  for (Face& f : mesh.faces)
+    for (int k = 0; k < 3; ++k)
+      if (rep[f[k]] != f[k]) {
+        moved[f[k]] = 1;
+        f[k] = rep[f[k]];
+      }
+  return static_cast<std::size_t>(std::count(moved.begin(), moved.end(), 1));
+}
+
+bool same_vertex_set(Face a, Face b) {
+  std::sort(a.begin(), a.end());
+  std::sort(b.begin(), b.end());
+  return a == b;
+}
+
+// Removes degenerate and/or duplicate faces, keeping the order of the rest.
+// Returns whether any face was removed.
+bool remove_faces(TriangleMesh& mesh, const detail::ProperTopology& proper, const RepairOptions& o,
+                  RepairReport& report) {
+  const Topology& topo = proper.topology();
+  const auto& faces = proper.faces();
+  const auto& pos = mesh.positions;
+  const double mean = detail::mean_edge_length(topo, pos);
+  const double zero_area = detail::kDegenerateAreaFraction * mean * mean;
+
+  std::vector<std::uint8_t> remove(mesh.faces.size(), 0);
+  if (o.remove_degenerate) {
+    for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
+      const Face& t = mesh.faces[f];
+      if (detail::has_repeated_index(t) ||
+          0.5 * (pos[t[1]] - pos[t[0]]).cross(pos[t[2]] - pos[t[0]]).norm() <= zero_area) {
+        remove[f] = 1;
+        ++report.removed_degenerate_faces;
+      }
+    }
+  }
+  if (o.remove_duplicates) {
+    for (std::size_t f = 0; f < faces.size(); ++f) {
+      if (remove[proper.original_face(f)]) continue;
+      for (auto g : topo.edge_faces(topo.face_edge(f, 0))) {
+        if (static_cast<std::size_t>(g) >= f) break;
+        if (!remove[proper.original_face(g)] && same_vertex_set(faces[f], faces[g])) {
+          remove[proper.original_face(f)] = 1;
+          ++report.removed_duplicate_faces;
+          break;
+        }
+      }
+    }
+  }
+  if (report.removed_degenerate_faces + report.removed_duplicate_faces == 0) return false;
+  std::size_t out = 0;
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f)
+    if (!remove[f]) {
+      mesh.faces[out] = mesh.faces[f];
+      report.face_origin[out] = report.face_origin[f];
+      ++out;
+    }
+  mesh.faces.resize(out);
+  report.face_origin.resize(out);
+  return true;
+}
+
+// Every fan of a vertex after the first (by lowest face) gets a new vertex.
+// With cut_edges, fans are joined only through two-face edges, which also
+// separates the sheets meeting at a non-manifold edge.
+std::size_t split_vertices(TriangleMesh& mesh, const detail::ProperTopology& proper,
+                           bool split_pinches, bool cut_edges, RepairReport& report) {
+  const Topology& topo = proper.topology();
+  const std::size_t nv = mesh.positions.size();
+  std::vector<std::uint8_t> on_nonmanifold_edge(nv, 0);
+  for (std::size_t e = 0; cut_edges && e < topo.edge_count(); ++e)
+    if (topo.is_nonmanifold_edge(e)) {
+      ++report.cut_nonmanifold_edges;
+      on_nonmanifold_edge[topo.edge(e)[0]] = on_nonmanifold_edge[topo.edge(e)[1]] = 1;
+    }
+  std::vector<int> fan_of_entry;
+  std::size_t split_vertices = 0;
+  for (std::size_t v = 0; v < nv; ++v) {
+    const auto vf = topo.vertex_faces(v);
+    if (vf.size() < 2) continue;
+    const bool by_manifold_edges = cut_edges && on_nonmanifold_edge[v];
+    if (!split_pinches && !by_manifold_edges) continue;
+    const int fans = detail::vertex_fans(topo, v, fan_of_entry, by_manifold_edges);
+    if (fans < 2) continue;
+    ++split_vertices;
+    const auto corners = topo.vertex_face_corners(v);
+    const Vec3 p = mesh.positions[v];
+    for (int fan = 1; fan < fans; ++fan) {
+      const auto added = static_cast<std::int32_t>(mesh.positions.size());
+      mesh.positions.push_back(p);
+      for (std::size_t i = 0; i < vf.size(); ++i)
+        if (fan_of_entry[i] == fan) mesh.faces[proper.original_face(vf[i])][corners[i]] = added;
+    }
+  }
+  report.split_nonmanifold_vertices = mesh.positions.size() - nv;
+  return split_vertices;
+}
+
+// Consistent orientation by breadth-first search through two-face edges;
+// outward (positive volume) per closed piece, majority orientation otherwise.
+void orient(TriangleMesh& mesh, const detail::ProperTopology& proper, bool outward,
+            RepairReport& report) {
+  const Topology& topo = proper.topology();
+  const auto& faces = proper.faces();
+  const std::size_t nf = faces.size();
+  const Vec3 origin = bounding_box(mesh.positions).center();
+
+  std::vector<std::int32_t> piece(nf, -1);
+  std::vector<std::uint8_t> flip(nf, 0);
+  std::vector<std::int32_t> queue;
+  queue.reserve(nf);
+  std::int32_t piece_count = 0;
+  for (std::size_t seed = 0; seed < nf; ++seed) {
+    if (piece[seed] >= 0) continue;
+    const std::int32_t id = piece_count++;
+    queue.clear();
+    queue.push_back(static_cast<std::int32_t>(seed));
+    piece[seed] = id;
+    bool conflict = false, open = false;
+    for (std::size_t head = 0; head < queue.size(); ++head) {
+      const auto f = queue[head];
+      for (int k = 0; k < 3; ++k) {
+        const auto e = topo.face_edge(f, k);
+        const auto ef = topo.edge_faces(e);
+        if (ef.size() != 2) {
+          open = true;
+          continue;
+        }
+        const auto g = ef[0] == f ? ef[1] : ef[0];
+        const int kg = detail::corner_opposite(topo, g, e);
+        const bool same = detail::edge_start(faces[f], k) == detail::edge_start(faces[g], kg);
+        const std::uint8_t want = flip[f] ^ static_cast<std::uint8_t>(same);
+        if (piece[g] < 0) {
+          piece[g] = id;
+          flip[g] = want;
+          queue.push_back(g);
+        } else if (flip[g] != want) {
+          conflict = true;
+        }
+      }
+    }
+    if (conflict) ++report.nonorientable_pieces;
+    std::size_t flipped = 0;
+    double volume6 = 0.0;
+    for (auto f : queue) {
+      flipped += flip[f];
+      const double v =
+          detail::signed_volume6(mesh.positions[faces[f][0]], mesh.positions[faces[f][1]],
+                                 mesh.positions[faces[f][2]], origin);
+      volume6 += flip[f] ? -v : v;
+    }
+    bool reverse = false;
+    if (outward && !open && !conflict && volume6 != 0.0) {
+      reverse = volume6 < 0.0;
+      if (reverse) ++report.components_reversed;
+    } else {
+      reverse = 2 * flipped > queue.size();
+    }
+    if (reverse)
+      for (auto f : queue) flip[f] ^= 1;
+  }
+  for (std::size_t f = 0; f < nf; ++f)
+    if (flip[f]) {
+      Face& t = mesh.faces[proper.original_face(f)];
+      std::swap(t[1], t[2]);
+      ++report.flipped_faces;
+    }
+}
+
+}  // namespace
+
+RepairReport repair_mesh(TriangleMesh& mesh, const RepairOptions& o) {
+  check_mesh_indices_and_values(mesh, "mesh");
+  RepairReport report;
+  report.face_origin.resize(mesh.faces.size());
+  std::iota(report.face_origin.begin(), report.face_origin.end(), 0);
+
+  if (o.weld) {
+    report.welded_vertices = weld(mesh, o.weld_tolerance);
+    if (report.welded_vertices > 0)
+      report.changes.push_back("welded " + plural(report.welded_vertices, "vertex", "vertices") +
+                               (o.weld_tolerance > 0.0
+                                    ? " within " + std::to_string(o.weld_tolerance)
+                                    : std::string(" at identical positions")) +
+                               " into earlier ones (the copies stay in place, unreferenced)");
+  }
+  // Adjacency is rebuilt only after a step changed the faces.
+  std::optional<detail::ProperTopology> proper;
+  auto topology = [&]() -> const detail::ProperTopology& {
+    if (!proper) proper.emplace(mesh);
+    return *proper;
+  };
+  if (o.remove_degenerate || o.remove_duplicates) {
+    if (remove_faces(mesh, topology(), o, report)) proper.reset();
+    if (report.removed_degenerate_faces > 0)
+      report.changes.push_back(
+          "removed " +
+          plural(report.removed_degenerate_faces, "degenerate face", "degenerate faces") +
+          " (repeated vertex or zero area)");
+    if (report.removed_duplicate_faces > 0)
+      report.changes.push_back(
+          "removed " + plural(report.removed_duplicate_faces, "duplicate face", "duplicate faces"));
+  }
+  if (o.split_nonmanifold_vertices || o.split_nonmanifold_edges) {
+    const std::size_t split = split_vertices(mesh, topology(), o.split_nonmanifold_vertices,
+                                             o.split_nonmanifold_edges, report);
+    if (split > 0) proper.reset();
+    if (report.cut_nonmanifold_edges > 0)
+      report.changes.push_back(
+          "cut apart the sheets at " +
+          plural(report.cut_nonmanifold_edges, "non-manifold edge", "non-manifold edges") +
+          " (they become boundary edges)");
+    if (split > 0)
+      report.changes.push_back(
+          "split " + plural(split, "vertex", "vertices") + " joining separate fans (appended " +
+          plural(report.split_nonmanifold_vertices, "vertex", "vertices") + " at the end)");
+  }
+  if (o.orient) {
+    orient(mesh, topology(), o.outward, report);
+    if (report.flipped_faces > 0) {
+      std::string line = "flipped " + plural(report.flipped_faces, "face", "faces");
+      if (report.components_reversed > 0)
+        line += " (" + plural(report.components_reversed, "closed piece", "closed pieces") +
+                " turned outward)";
+      report.changes.push_back(line);
+    }
+    if (report.nonorientable_pieces > 0)
+      report.changes.push_back("could not orient " +
+                               plural(report.nonorientable_pieces, "piece", "pieces") +
+                               " consistently: the surface is not orientable (Moebius-like)");
+  }
+  return report;
+}
+
+RepairReport prepare_for_lines(TriangleMesh& mesh) {
+  RepairOptions o;
+  o.weld = true;
+  o.weld_tolerance = 0.0;
+  o.remove_degenerate = false;
+  o.remove_duplicates = false;
+  o.split_nonmanifold_vertices = false;
+  o.split_nonmanifold_edges = false;
+  o.orient = true;
+  o.outward = true;
+  return repair_mesh(mesh, o);
+}
+
+nlohmann::json to_json(const RepairReport& r) {
+  return {{"welded_vertices", r.welded_vertices},
+          {"removed_degenerate_faces", r.removed_degenerate_faces},
+          {"removed_duplicate_faces", r.removed_duplicate_faces},
+          {"flipped_faces", r.flipped_faces},
+          {"components_reversed", r.components_reversed},
+          {"split_nonmanifold_vertices", r.split_nonmanifold_vertices},
+          {"cut_nonmanifold_edges", r.cut_nonmanifold_edges},
+          {"nonorientable_pieces", r.nonorientable_pieces},
+          {"changes", r.changes}};
+}
+
+}  // namespace fabrica::io

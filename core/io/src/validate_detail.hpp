@@ -1,0 +1,84 @@
+// Private helpers shared by validate.cpp, repair.cpp and the CGAL
+// self-intersection translation unit. Not installed, not part of the API.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "fabrica/core/mesh.hpp"
+#include "fabrica/core/topology.hpp"
+
+namespace fabrica::io::detail {
+
+/// Area below this fraction of (mean edge length)^2 counts as zero.
+inline constexpr double kDegenerateAreaFraction = 1e-12;
+
+inline bool has_repeated_index(const Face& f) {
+  return f[0] == f[1] || f[1] == f[2] || f[2] == f[0];
+}
+
+/// Topology of the faces WITHOUT a repeated vertex index (those have no three
+/// distinct edges and would confuse every fan and orientation walk). Face ids
+/// of the topology are "proper" ids; original_face maps them back.
+class ProperTopology {
+ public:
+  explicit ProperTopology(const TriangleMesh& mesh);
+
+  const std::vector<Face>& faces() const { return filtered_ ? filtered_faces_ : *mesh_faces_; }
+  /// Mesh face id of proper face f.
+  std::int32_t original_face(std::size_t f) const {
+    return filtered_ ? original_face_[f] : static_cast<std::int32_t>(f);
+  }
+  std::size_t repeated_index_faces() const { return repeated_index_faces_; }
+  const Topology& topology() const { return topology_; }
+
+ private:
+  const std::vector<Face>* mesh_faces_;
+  bool filtered_ = false;
+  std::vector<Face> filtered_faces_;
+  std::vector<std::int32_t> original_face_;
+  std::size_t repeated_index_faces_ = 0;
+  Topology topology_;
+};
+
+/// Mean length of the distinct edges (0 when there are none).
+double mean_edge_length(const Topology& topology, const std::vector<Vec3>& positions);
+
+/// Index (0..2) of the corner opposite edge e in face f, or -1.
+inline int corner_opposite(const Topology& topology, std::size_t f, std::int32_t e) {
+  for (int k = 0; k < 3; ++k)
+    if (topology.face_edge(f, k) == e) return k;
+  return -1;
+}
+
+/// Vertex at which face f's directed edge opposite corner k starts.
+inline std::int32_t edge_start(const Face& f, int k) {
+  return f[(k + 1) % 3];
+}
+
+/// Fans around vertex v: fan label (0, 1, ...) of each entry of
+/// topology.vertex_faces(v), numbered in order of their lowest face; returns
+/// the number of fans. Faces are connected through any edge incident to v, or
+/// with manifold_edges_only through edges with exactly two faces.
+int vertex_fans(const Topology& topology, std::size_t v, std::vector<int>& fan_of_entry,
+                bool manifold_edges_only = false);
+
+/// Edge-connected pieces: faces joined through edges with exactly two faces.
+/// Returns the piece of each face, numbered in order of the lowest face.
+std::vector<std::int32_t> manifold_pieces(const Topology& topology, std::size_t& piece_count);
+
+/// Six times the signed volume contribution of a triangle about `origin`.
+inline double signed_volume6(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& origin) {
+  return (a - origin).dot((b - origin).cross(c - origin));
+}
+
+/// Pairs of faces that intersect other than at a shared vertex or edge, by
+/// CGAL (exact predicates). The mesh must be consistently oriented, without
+/// repeated-index faces, non-manifold edges or non-manifold vertices; returns
+/// nullopt with `why_not` set when CGAL cannot represent it.
+std::optional<std::size_t> count_self_intersecting_face_pairs(const TriangleMesh& mesh,
+                                                              std::string& why_not);
+
+}  // namespace fabrica::io::detail
