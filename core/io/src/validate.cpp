@@ -1,5 +1,8 @@
 #include "fabrica/io/validate.hpp"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -12,6 +15,8 @@
 namespace fabrica::io {
 
 namespace {
+
+constexpr std::size_t kGrain = 4096;
 
 std::int32_t find_root(std::vector<std::int32_t>& parent, std::int32_t i) {
   while (parent[i] != i) {
@@ -97,27 +102,45 @@ ValidationReport validate_mesh(const TriangleMesh& mesh, const ValidateOptions& 
   const std::size_t nf = faces.size();
   const std::size_t ne = topo.edge_count();
 
-  // Edges: boundary, non-manifold, orientation consistency.
+  // Edges: boundary, non-manifold, orientation consistency (classified in
+  // parallel, counted in order).
+  enum : std::uint8_t { kInterior, kBoundary, kNonmanifold, kInconsistent, kIsolated };
   r.edges = ne;
+  std::vector<std::uint8_t> edge_class(ne);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, ne, kGrain), [&](const auto& range) {
+    for (std::size_t e = range.begin(); e < range.end(); ++e) {
+      const auto ef = topo.edge_faces(e);
+      std::uint8_t c = kIsolated;
+      if (ef.size() == 1) {
+        c = kBoundary;
+      } else if (ef.size() > 2) {
+        c = kNonmanifold;
+      } else if (ef.size() == 2) {
+        const auto ei = static_cast<std::int32_t>(e);
+        const int k0 = detail::corner_opposite(topo, ef[0], ei);
+        const int k1 = detail::corner_opposite(topo, ef[1], ei);
+        c = detail::edge_start(faces[ef[0]], k0) == detail::edge_start(faces[ef[1]], k1)
+                ? kInconsistent
+                : kInterior;
+      }
+      edge_class[e] = c;
+    }
+  });
   std::int64_t first_nonmanifold_edge = -1, first_inconsistent_edge = -1;
   for (std::size_t e = 0; e < ne; ++e) {
-    const auto ef = topo.edge_faces(e);
-    if (ef.size() == 1) {
+    if (edge_class[e] == kBoundary) {
       ++r.boundary_edges;
-    } else if (ef.size() > 2) {
+    } else if (edge_class[e] == kNonmanifold) {
       if (r.nonmanifold_edges++ == 0) first_nonmanifold_edge = static_cast<std::int64_t>(e);
-    } else if (ef.size() == 2) {
-      const auto ei = static_cast<std::int32_t>(e);
-      const int k0 = detail::corner_opposite(topo, ef[0], ei);
-      const int k1 = detail::corner_opposite(topo, ef[1], ei);
-      if (detail::edge_start(faces[ef[0]], k0) == detail::edge_start(faces[ef[1]], k1))
-        if (r.inconsistent_edges++ == 0) first_inconsistent_edge = ei;
+    } else if (edge_class[e] == kInconsistent) {
+      if (r.inconsistent_edges++ == 0) first_inconsistent_edge = static_cast<std::int64_t>(e);
     }
   }
   r.consistently_oriented = r.inconsistent_edges == 0;
   r.mean_edge_length = detail::mean_edge_length(topo, pos);
 
-  // Areas, volume, degenerate faces (sequential sums: same bits every run).
+  // Areas, volume, degenerate faces: partial sums over fixed chunks, added
+  // in chunk order, so the bits do not depend on the thread count.
   const double zero_area =
       detail::kDegenerateAreaFraction * r.mean_edge_length * r.mean_edge_length;
   const Vec3 origin = r.bbox.center();
@@ -125,20 +148,34 @@ ValidationReport validate_mesh(const TriangleMesh& mesh, const ValidateOptions& 
   for (std::size_t f = 0; f < mesh.faces.size() && first_degenerate < 0; ++f)
     if (detail::has_repeated_index(mesh.faces[f])) first_degenerate = static_cast<std::int64_t>(f);
   r.degenerate_faces = proper.repeated_index_faces();
+  const std::size_t chunks = (nf + kGrain - 1) / kGrain;
+  std::vector<double> chunk_area(chunks, 0.0), chunk_volume6(chunks, 0.0);
+  std::vector<std::uint8_t> zero_area_face(nf, 0);
+  tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t chunk) {
+    double area = 0.0, volume6 = 0.0;
+    for (std::size_t f = chunk * kGrain; f < std::min(nf, (chunk + 1) * kGrain); ++f) {
+      const Vec3& a = pos[faces[f][0]];
+      const Vec3& b = pos[faces[f][1]];
+      const Vec3& c = pos[faces[f][2]];
+      const double face_area = 0.5 * (b - a).cross(c - a).norm();
+      area += face_area;
+      volume6 += detail::signed_volume6(a, b, c, origin);
+      zero_area_face[f] = face_area <= zero_area;
+    }
+    chunk_area[chunk] = area;
+    chunk_volume6[chunk] = volume6;
+  });
   double area = 0.0, volume6 = 0.0;
-  for (std::size_t f = 0; f < nf; ++f) {
-    const Vec3& a = pos[faces[f][0]];
-    const Vec3& b = pos[faces[f][1]];
-    const Vec3& c = pos[faces[f][2]];
-    const double face_area = 0.5 * (b - a).cross(c - a).norm();
-    area += face_area;
-    volume6 += detail::signed_volume6(a, b, c, origin);
-    if (face_area <= zero_area) {
+  for (std::size_t c = 0; c < chunks; ++c) {
+    area += chunk_area[c];
+    volume6 += chunk_volume6[c];
+  }
+  for (std::size_t f = 0; f < nf; ++f)
+    if (zero_area_face[f]) {
       ++r.degenerate_faces;
       const std::int64_t of = proper.original_face(f);
       if (first_degenerate < 0 || of < first_degenerate) first_degenerate = of;
     }
-  }
   r.area = area;
   r.signed_volume = volume6 / 6.0;
 
@@ -181,19 +218,29 @@ ValidationReport validate_mesh(const TriangleMesh& mesh, const ValidateOptions& 
   r.euler_characteristic = static_cast<long long>(proper_vertices) - static_cast<long long>(ne) +
                            static_cast<long long>(nf);
 
-  // Fans: non-manifold vertices; boundary edges paired through their fan.
-  std::vector<std::int32_t> loop_parent(ne);
-  std::iota(loop_parent.begin(), loop_parent.end(), 0);
+  // Fans: non-manifold vertices (in parallel); then boundary edges paired
+  // through their fan at each boundary vertex.
+  std::vector<std::uint8_t> several_fans(nv, 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, kGrain), [&](const auto& range) {
+    std::vector<int> fan_of_entry;
+    for (std::size_t v = range.begin(); v < range.end(); ++v)
+      several_fans[v] = detail::vertex_fans(topo, v, fan_of_entry) > 1;
+  });
+  std::int64_t first_nonmanifold_vertex = -1;
+  for (std::size_t v = 0; v < nv; ++v)
+    if (several_fans[v])
+      if (r.nonmanifold_vertices++ == 0) first_nonmanifold_vertex = static_cast<std::int64_t>(v);
+  std::vector<std::int32_t> loop_parent;
+  if (r.boundary_edges > 0) {
+    loop_parent.resize(ne);
+    std::iota(loop_parent.begin(), loop_parent.end(), 0);
+  }
   std::vector<int> fan_of_entry;
   std::vector<std::pair<int, std::int32_t>> boundary_at_v;  // (fan, edge)
-  std::int64_t first_nonmanifold_vertex = -1;
-  for (std::size_t v = 0; v < nv; ++v) {
-    const auto vf = topo.vertex_faces(v);
-    if (vf.empty()) continue;
-    const int fans = detail::vertex_fans(topo, v, fan_of_entry);
-    if (fans > 1)
-      if (r.nonmanifold_vertices++ == 0) first_nonmanifold_vertex = static_cast<std::int64_t>(v);
+  for (std::size_t v = 0; v < nv && r.boundary_edges > 0; ++v) {
     if (!topo.is_boundary_vertex(v)) continue;
+    const auto vf = topo.vertex_faces(v);
+    detail::vertex_fans(topo, v, fan_of_entry);
     boundary_at_v.clear();
     for (auto e : topo.vertex_edges(v)) {
       const auto ef = topo.edge_faces(e);
