@@ -20,7 +20,13 @@ float qtq_max(float Q11, float Q12, float Q21, float Q22, out vec2 s1) {
     q1 += sqrt(a + 0.25 * b * b);
   else
     q1 -= sqrt(a + 0.25 * b * b);
+  // The seed's eigenvector (QTQ2 - q1, -QTQ12) vanishes when the answer is
+  // (0, 1); the equivalent form from the first row of (Q^T Q - q1 I) does not.
+  // Taking the longer of the two changes nothing where the seed's is well
+  // conditioned (a numerical fix, not a change of method).
   vec2 s = vec2(QTQ2 - q1, -QTQ12);
+  vec2 r = vec2(-QTQ12, QTQ1 - q1);
+  if (dot(r, r) > dot(s, s)) s = r;
   s1 = dot(s, s) > 1.0e-30 ? normalize(s) : vec2(1.0, 0.0);  // umbilic: any direction
   return q1;
 }

@@ -533,6 +533,17 @@ Image Renderer::render(const Scene& scene, const Camera& camera, const RenderOpt
     center += d / dist * (new_r - radius);
     radius = new_r;
   }
+  // Lines may leave the meshes' spheres (e.g. offset strokes): include them.
+  for (const auto& s : scene.structures)
+    for (const auto& pl : s.lines.polylines)
+      for (const auto& v : pl.vertices) {
+        const double d = (v.position - center).norm();
+        if (d > radius) {
+          const double new_r = 0.5 * (d + radius);
+          center += (v.position - center) / d * (new_r - radius);
+          radius = new_r;
+        }
+      }
   const Matrices M = camera_matrices(camera, center, radius);
 
   double tolerance = options.depth_tolerance;

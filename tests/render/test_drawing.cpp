@@ -1,0 +1,303 @@
+// Drawing: Lambert and toon shading against the analytic sphere, lines as
+// quads whose width scales with the image, hidden-line modes, weighted
+// blended transparency, the stage-1 buffer of the hybrid method against the
+// analytic q1 of a sphere, and scene JSON round trips.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <set>
+
+#include "fabrica/core/error.hpp"
+#include "fabrica/render/renderer.hpp"
+#include "render_test_util.hpp"
+
+namespace fr = fabrica::render;
+using fabrica::Camera;
+using fabrica::Vec3;
+
+namespace {
+
+fr::Renderer& renderer() {
+  static fr::Renderer r(fr::create_headless_context());
+  return r;
+}
+
+fr::Structure sphere_structure(double radius = 10.0, fr::Role role = fr::Role::focus) {
+  fr::Structure s;
+  s.name = "sphere";
+  s.role = role;
+  s.mesh = fabrica::test::sphere_render_mesh(radius, 5);
+  s.style = fr::default_style(role);
+  s.style.color = {1.0f, 1.0f, 1.0f, 1.0f};
+  s.style.ambient = 0.0;
+  return s;
+}
+
+// Orthographic camera seeing a square of side 2 * half mm.
+Camera ortho_camera(int size, double half) {
+  Camera c = fabrica::test::front_camera(size, size, 100.0, true);
+  c.fov_deg = 2.0 * std::atan(half / 100.0) * 180.0 / M_PI;
+  return c;
+}
+
+fabrica::Polyline straight_line(const Vec3& a, const Vec3& b, int n = 16) {
+  fabrica::Polyline pl;
+  pl.family = fabrica::LineFamily::ridge;
+  for (int i = 0; i <= n; ++i) {
+    fabrica::LineVertex v;
+    v.position = a + (b - a) * (double(i) / n);
+    pl.vertices.push_back(v);
+  }
+  return pl;
+}
+
+// Sum over a column of the ink (1 - luminance) in pixels: a line's width.
+double ink_across(const fr::Image& img, int x) {
+  double sum = 0.0;
+  for (int y = 0; y < img.height; ++y) {
+    const auto* p = img.pixel(x, y);
+    sum += 1.0 - (p[0] + p[1] + p[2]) / (3.0 * 255.0);
+  }
+  return sum;
+}
+
+}  // namespace
+
+TEST(RenderDrawing, LambertSphereMatchesAnalyticProfile) {
+  fr::Scene scene;
+  scene.structures.push_back(sphere_structure());
+  scene.background = {0.0f, 0.0f, 0.0f, 1.0f};
+  const int size = 400;
+  const double half = 12.5;  // mm seen from the centre to the edge
+  const fr::Image img = renderer().render(scene, ortho_camera(size, half));
+  int checked = 0;
+  double worst = 0.0;
+  for (int y = 0; y < size; y += 7) {
+    for (int x = 0; x < size; x += 7) {
+      const double px = (x + 0.5 - size / 2.0) * (2.0 * half / size);
+      const double py = (y + 0.5 - size / 2.0) * (2.0 * half / size);
+      const double rho = std::hypot(px, py) / 10.0;
+      if (rho > 0.95) continue;
+      const double expected = 255.0 * std::sqrt(1.0 - rho * rho);  // n.l of a sphere, headlight
+      const double got = img.pixel(x, y)[0];
+      worst = std::max(worst, std::abs(got - expected));
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 1000);
+  EXPECT_LE(worst, 3.0);  // 8-bit rounding plus interpolated normals of a subdivision-5 icosphere
+  EXPECT_EQ(img.pixel(0, 0)[0], 0);
+}
+
+TEST(RenderDrawing, ToonShadingHasTheRequestedBands) {
+  fr::Scene scene;
+  scene.structures.push_back(sphere_structure());
+  scene.structures[0].style.shading = fr::Shading::toon;
+  scene.structures[0].style.toon_levels = 3;
+  scene.background = {0.0f, 0.0f, 0.0f, 1.0f};
+  const fr::Image img = renderer().render(scene, ortho_camera(200, 12.5));
+  std::set<int> values;
+  for (int y = 20; y < 180; ++y)
+    for (int x = 20; x < 180; ++x) {
+      const double rho = std::hypot(x + 0.5 - 100, y + 0.5 - 100) * 0.125 / 10.0;
+      if (rho < 0.97) values.insert(img.pixel(x, y)[0]);
+    }
+  EXPECT_TRUE(values.count(255));
+  EXPECT_TRUE(values.count(170));
+  EXPECT_TRUE(values.count(85));
+  for (int v : values) EXPECT_TRUE(v == 85 || v == 170 || v == 255) << v;
+}
+
+TEST(RenderDrawing, LineWidthScalesWithImageSize) {
+  fr::Scene scene;
+  scene.structures.push_back(sphere_structure());
+  scene.structures[0].style.shading = fr::Shading::none;
+  scene.structures[0].style.families.clear();  // draw every family
+  auto& ls = scene.structures[0].style.lines;
+  ls.width = 8.0;  // pixels at the 1024-pixel reference
+  ls.taper = 0.0;
+  scene.structures[0].lines.polylines.push_back(straight_line(Vec3(-8, 0, 11), Vec3(8, 0, 11)));
+  double widths[3];
+  const int sizes[3] = {256, 1024, 2048};
+  for (int i = 0; i < 3; ++i)
+    widths[i] = ink_across(renderer().render(scene, ortho_camera(sizes[i], 12.5)), sizes[i] / 2);
+  EXPECT_NEAR(widths[0], 2.0, 0.2);
+  EXPECT_NEAR(widths[1], 8.0, 0.3);
+  EXPECT_NEAR(widths[2], 16.0, 0.5);
+  // Fixed pixel widths when asked.
+  fr::RenderOptions fixed;
+  fixed.scale_lines_with_image = false;
+  EXPECT_NEAR(ink_across(renderer().render(scene, ortho_camera(256, 12.5), fixed), 128), 8.0, 0.3);
+  EXPECT_NEAR(ink_across(renderer().render(scene, ortho_camera(2048, 12.5), fixed), 1024), 8.0,
+              0.3);
+}
+
+TEST(RenderDrawing, FadeByStrengthAndTaper) {
+  fr::Scene scene;
+  scene.structures.push_back(sphere_structure());
+  scene.structures[0].style.shading = fr::Shading::none;
+  scene.structures[0].style.families.clear();
+  scene.structures[0].style.lines.width = 8.0;
+  scene.structures[0].style.lines.taper = 0.0;
+  auto pl = straight_line(Vec3(-8, 0, 11), Vec3(8, 0, 11));
+  for (auto& v : pl.vertices) v.strength = 0.5f;
+  scene.structures[0].lines.polylines.push_back(pl);
+  const double faded = ink_across(renderer().render(scene, ortho_camera(512, 12.5)), 256);
+  EXPECT_NEAR(faded, 0.5 * 4.0, 0.2);  // half the ink of a 4-pixel line
+  scene.structures[0].style.lines.taper = 0.3;
+  scene.structures[0].style.lines.fade_by_strength = false;
+  const fr::Image tapered = renderer().render(scene, ortho_camera(512, 12.5));
+  // Near the ends (5% of the length) the line is thinner than in the middle.
+  const int x_end = static_cast<int>(256 - 0.9 * 8.0 / 12.5 * 256);
+  EXPECT_LT(ink_across(tapered, x_end), 0.7 * ink_across(tapered, 256));
+}
+
+TEST(RenderDrawing, HiddenLinesOmittedDashedOrShown) {
+  fr::Scene scene;
+  scene.structures.push_back(sphere_structure());
+  scene.structures[0].style.shading = fr::Shading::flat;
+  scene.structures[0].style.families.clear();
+  auto& ls = scene.structures[0].style.lines;
+  ls.width = 6.0;
+  ls.taper = 0.0;
+  // Behind the sphere (z = -11), crossing it: hidden where |x| < 10.
+  scene.structures[0].lines.polylines.push_back(
+      straight_line(Vec3(-4, 0, -11), Vec3(4, 0, -11), 64));
+  double ink[3];
+  for (auto mode : {fr::HiddenLines::omit, fr::HiddenLines::dashed, fr::HiddenLines::show}) {
+    ls.hidden = mode;
+    const fr::Image img = renderer().render(scene, ortho_camera(512, 12.5));
+    double sum = 0.0;
+    for (int x = 150; x < 362; ++x) sum += ink_across(img, x);
+    ink[static_cast<int>(mode)] = sum;
+  }
+  EXPECT_LT(ink[0], 1.0);
+  EXPECT_GT(ink[2], 100.0);
+  EXPECT_GT(ink[1], 0.3 * ink[2]);
+  EXPECT_LT(ink[1], 0.7 * ink[2]);
+}
+
+TEST(RenderDrawing, GhostedContextBlendsOverFocusInAnyOrder) {
+  fr::Scene scene;
+  fr::Structure focus = sphere_structure(5.0);
+  focus.style.color = {1.0f, 0.0f, 0.0f, 1.0f};
+  fr::Structure ghost = sphere_structure(10.0, fr::Role::context);
+  ghost.style.color = {0.0f, 0.0f, 1.0f, 1.0f};
+  ghost.style.opacity = 0.25;
+  ghost.style.ambient = 0.0;
+  ghost.style.families.clear();
+  scene.structures = {ghost, focus};
+  scene.background = {0.0f, 0.0f, 0.0f, 1.0f};
+  const fr::Image a = renderer().render(scene, ortho_camera(200, 12.5));
+  std::swap(scene.structures[0], scene.structures[1]);
+  const fr::Image b = renderer().render(scene, ortho_camera(200, 12.5));
+  EXPECT_LE(fr::compare_images(a, b, 1).max_abs, 1);  // order independent
+  // Centre: one ghost layer (its back is hidden by the focus) over the red focus.
+  const auto* c = a.pixel(100, 100);
+  EXPECT_NEAR(c[0], 0.75 * 255, 3);
+  EXPECT_NEAR(c[2], 0.25 * 255, 3);
+  // Outside the focus, inside the ghost: two ghost layers over black.
+  const double rho = 7.5 / 10.0;
+  const double lambert = std::sqrt(1 - rho * rho);
+  const auto* g = a.pixel(100 + 60, 100);  // 60 px = 7.5 mm
+  const double coverage = 1.0 - 0.75 * 0.75;
+  EXPECT_NEAR(g[2], 255.0 * coverage * lambert, 6);
+  EXPECT_EQ(g[0], 0);
+}
+
+TEST(RenderDrawing, HybridStageOneMatchesAnalyticSphere) {
+  // Sphere: Q = k P^-1, so q1 (largest eigenvalue of Q^T Q) = k^2 / cos^2(theta),
+  // and t1 is the radial screen direction.
+  auto mesh = fabrica::test::sphere_render_mesh(10.0, 5);
+  fr::HybridOptions o;
+  o.tau = std::log2(0.25 * 100.0);  // q = 0.25 at the centre (k^2 = 0.01)
+  o.float_target = false;
+  const int size = 400;
+  const fr::Image buf = renderer().render_hybrid_buffer(mesh, ortho_camera(size, 12.5), o);
+  for (double rho : {0.0, 0.3, 0.5, 0.7}) {
+    const int x = static_cast<int>(size / 2 + rho * 10.0 / 12.5 * size / 2);
+    const auto* p = buf.pixel(x, size / 2);
+    const double expected = 0.25 / (1.0 - rho * rho);
+    EXPECT_NEAR(p[0] / 255.0, expected, 0.012) << "rho " << rho;
+    EXPECT_EQ(p[3], 255);
+    if (rho > 0.2) {
+      EXPECT_GT(p[1], 245) << "t1 should be +x on the right half: " << int(p[1]) << " "
+                           << int(p[2]);
+      EXPECT_NEAR(p[2], 128, 4);
+    }
+  }
+  EXPECT_EQ(buf.pixel(2, 2)[3], 0);  // background
+}
+
+TEST(RenderDrawing, HybridSphereHasOnlyTheOutline) {
+  // A sphere has no apparent ridges but its contour (q1 -> infinity).
+  auto mesh = fabrica::test::sphere_render_mesh(10.0, 5);
+  const int size = 300;
+  for (int variant = 0; variant < 4; ++variant) {
+    fr::HybridOptions o;
+    o.tau = std::log2(100.0 * 0.25);
+    o.per_fragment = variant == 1;
+    o.sign_free = variant == 2;
+    o.float_target = variant == 3;
+    const fr::Image img = renderer().render_hybrid(mesh, ortho_camera(size, 12.5), o);
+    std::size_t ink_inside = 0, ink_ring = 0;
+    std::set<int> sectors;
+    for (int y = 0; y < size; ++y)
+      for (int x = 0; x < size; ++x) {
+        if (img.pixel(x, y)[0] > 128) continue;
+        const double dx = x + 0.5 - size / 2.0, dy = y + 0.5 - size / 2.0;
+        const double rho = std::hypot(dx, dy) * (25.0 / size) / 10.0;
+        if (rho < 0.85)
+          ++ink_inside;
+        else if (rho < 1.05) {
+          ++ink_ring;
+          sectors.insert(static_cast<int>((std::atan2(dy, dx) + M_PI) / (2 * M_PI) * 36) % 36);
+        }
+      }
+    EXPECT_EQ(ink_inside, 0u) << "variant " << variant;
+    EXPECT_GT(ink_ring, 300u) << "variant " << variant;
+    EXPECT_EQ(sectors.size(), 36u) << "variant " << variant << ": the outline is closed";
+  }
+}
+
+TEST(RenderScene, JsonRoundTrip) {
+  fr::SceneSpec spec;
+  fr::StructureSpec a;
+  a.name = "liver";
+  a.mesh = "/data/liver.stl";
+  a.role = fr::Role::focus;
+  a.style = fr::default_style(fr::Role::focus);
+  a.style.hybrid_apparent_ridges = true;
+  a.style.lines.hidden = fr::HiddenLines::dashed;
+  fr::StructureSpec b;
+  b.name = "skin";
+  b.mesh = "/data/skin.stl";
+  b.role = fr::Role::context;
+  b.style = fr::default_style(fr::Role::context);
+  b.space = fabrica::Space::ras;
+  spec.structures = {a, b};
+  spec.view = fabrica::AnatomicalView::anterior;
+  spec.transparent = true;
+  const auto dir = fabrica::test::temp_dir("render_scene_json");
+  fr::write_scene_spec(spec, dir / "scene.json");
+  const fr::SceneSpec back = fr::read_scene_spec(dir / "scene.json");
+  ASSERT_EQ(back.structures.size(), 2u);
+  EXPECT_EQ(back.structures[0].name, "liver");
+  EXPECT_TRUE(back.structures[0].style.hybrid_apparent_ridges);
+  EXPECT_EQ(back.structures[0].style.lines.hidden, fr::HiddenLines::dashed);
+  EXPECT_EQ(back.structures[1].role, fr::Role::context);
+  EXPECT_DOUBLE_EQ(back.structures[1].style.opacity, 0.25);
+  EXPECT_EQ(back.structures[1].space, fabrica::Space::ras);
+  EXPECT_EQ(back.structures[1].style.families, b.style.families);
+  EXPECT_EQ(back.view, fabrica::AnatomicalView::anterior);
+  EXPECT_TRUE(back.transparent);
+  // Errors name the scene and the structure.
+  nlohmann::json bad = {{"structures", {{{"mesh", "a.stl"}, {"role", "hero"}}}}};
+  try {
+    fr::scene_spec_from_json(bad, dir, "my.json");
+    FAIL();
+  } catch (const fabrica::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("my.json: structures[0]"), std::string::npos) << e.what();
+  }
+}
