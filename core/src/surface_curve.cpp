@@ -11,7 +11,9 @@
 #include <array>
 #include <cmath>
 #include <numbers>
+#include <span>
 #include <sstream>
+#include <unordered_map>
 #include <utility>
 
 #include "fabrica/core/error.hpp"
@@ -64,6 +66,7 @@ struct FanFace {
   std::int32_t edge1 = -1, edge2 = -1;  ///< edges (v,w1) and (v,w2)
   double alpha = 0.0, gamma = 0.0;      ///< start angle, interior angle at v
   double l1 = 0.0, l2 = 0.0;            ///< |w1 - v|, |w2 - v|
+  Vec2 w2_local = Vec2::Zero();         ///< w2 in the face's frame (v at 0, w1 on +x)
 };
 
 struct Fan {
@@ -176,21 +179,17 @@ class CurveGeometry {
     return b;
   }
 
-  /// Faces a node lies in, increasing index.
-  std::vector<std::int32_t> faces_of(const Node& n) const {
+  /// Faces a node lies in, increasing index (a view valid while `n` lives).
+  std::span<const std::int32_t> faces_of(const Node& n) const {
     switch (n.kind) {
-      case NodeKind::vertex: {
-        const auto fs = topology_.vertex_faces(static_cast<std::size_t>(n.id));
-        return {fs.begin(), fs.end()};
-      }
-      case NodeKind::edge: {
-        const auto fs = topology_.edge_faces(static_cast<std::size_t>(n.id));
-        return {fs.begin(), fs.end()};
-      }
+      case NodeKind::vertex:
+        return topology_.vertex_faces(static_cast<std::size_t>(n.id));
+      case NodeKind::edge:
+        return topology_.edge_faces(static_cast<std::size_t>(n.id));
       case NodeKind::face:
-        return {n.id};
+        break;
     }
-    return {};
+    return {&n.id, 1};
   }
 
   std::int32_t common_face(const Node& a, const Node& b) const {
@@ -221,7 +220,14 @@ class CurveGeometry {
         static_cast<std::size_t>(a))[static_cast<std::size_t>(it - nb.begin())];
   }
 
-  Fan fan(std::int32_t v) const {
+  /// The unfolded fan of v, built on first use and cached.
+  const Fan& fan(std::int32_t v) const {
+    const auto it = fans_.find(v);
+    if (it != fans_.end()) return it->second;
+    return fans_.emplace(v, build_fan(v)).first->second;
+  }
+
+  Fan build_fan(std::int32_t v) const {
     Fan fan;
     fan.vertex = v;
     const auto faces = topology_.vertex_faces(static_cast<std::size_t>(v));
@@ -253,6 +259,7 @@ class CurveGeometry {
       ff.l1 = a.norm();
       ff.l2 = b.norm();
       ff.gamma = std::atan2(a.cross(b).norm(), a.dot(b));
+      ff.w2_local = ff.l2 * Vec2(std::cos(ff.gamma), std::sin(ff.gamma));
       ff.alpha = fan.total;
       fan.total += ff.gamma;
       fan.faces.push_back(ff);
@@ -284,8 +291,7 @@ class CurveGeometry {
       const Vec3 b = bary_in(ff.face, q);
       const double b1 = b[corner_of(ff.face, ff.w1)];
       const double b2 = b[corner_of(ff.face, ff.w2)];
-      const Vec2 local =
-          b1 * Vec2(ff.l1, 0.0) + b2 * ff.l2 * Vec2(std::cos(ff.gamma), std::sin(ff.gamma));
+      const Vec2 local = b1 * Vec2(ff.l1, 0.0) + b2 * ff.w2_local;
       out.r = local.norm();
       if (b2 == 0.0) {
         out.position = 2 * j;
@@ -363,6 +369,7 @@ class CurveGeometry {
  private:
   const TriangleMesh& mesh_;
   const Topology& topology_;
+  mutable std::unordered_map<std::int32_t, Fan> fans_;
 };
 
 /// Signed angle between d1 and d2 about the unit normal n.
@@ -382,7 +389,7 @@ double turning_angle(const CurveGeometry& g, const Node& prev, const Node& node,
       return u.orientation * std::atan2(cross2(d1, d2), d1.dot(d2));
     }
   } else if (node.kind == NodeKind::vertex) {
-    const Fan fan = g.fan(node.id);
+    const Fan& fan = g.fan(node.id);
     if (!fan.valid) return 0.0;
     const FanPosition p = g.locate(fan, prev), q = g.locate(fan, next);
     if (!p.ok || !q.ok) return 0.0;
@@ -667,13 +674,16 @@ class Smoother {
         std::size_t j = i;
         while (j + 1 < n && on_edge_of_v(nodes_[j + 1])) ++j;
         const std::size_t run = j - i + 1;
+        // A single point is handled by the smoothing step (its target is
+        // clamped to v when the straight line passes beyond v).
+        if (run < 2) continue;
         if (j + 1 == n && !closed_) continue;
         if (closed_ && out.size() + (n - i) - run + 1 < 3) continue;
         const Node prev = out.empty() ? nodes_[n - 1] : out.back();
         const Node next = j + 1 < n ? nodes_[j + 1] : (out.empty() ? nodes_[0] : out.front());
         const FanSides sides = fan_sides(v, prev, next);
         if (!sides.ok) continue;
-        const FanPosition r = g_.locate(sides.fan, node);
+        const FanPosition r = g_.locate(sides.fan(), node);
         if (!r.ok) continue;
         const bool ccw = sides.ccw_side_holds(r.position);
         if (ccw ? !sides.ccw_ok : !sides.cw_ok) continue;
@@ -694,7 +704,7 @@ class Smoother {
           removals += run - 1;
           changed = true;
         } else {
-          if (run < 2 || !straightened || !(length <= current)) continue;
+          if (!straightened || !(length <= current)) continue;
           if (straight.size() == run) {
             for (std::size_t k = 0; k < run; ++k) {
               const Node& old = nodes_[i + k];
@@ -765,15 +775,16 @@ class Smoother {
   /// next, in v's unfolded fan.
   struct FanSides {
     bool ok = false;
-    Fan fan;
+    const Fan* fan_ptr = nullptr;
     FanPosition p, q;
+    const Fan& fan() const { return *fan_ptr; }
     bool ccw_ok = false, cw_ok = false;
     double ccw_angle = 0.0, cw_angle = 0.0;
 
     /// Whether fan position `position` lies strictly between p and q counter-clockwise.
     bool ccw_side_holds(int position) const {
-      if (!fan.closed) return p.position < position && position < q.position;
-      const int count = fan.position_count();
+      if (!fan().closed) return p.position < position && position < q.position;
+      const int count = fan().position_count();
       const int to_q = ((q.position - p.position) % count + count) % count;
       const int to_r = ((position - p.position) % count + count) % count;
       return to_r > 0 && to_r < to_q;
@@ -782,15 +793,15 @@ class Smoother {
 
   FanSides fan_sides(std::int32_t v, const Node& prev, const Node& next) const {
     FanSides s;
-    s.fan = g_.fan(v);
-    if (!s.fan.valid) return s;
-    s.p = g_.locate(s.fan, prev);
-    s.q = g_.locate(s.fan, next);
+    s.fan_ptr = &g_.fan(v);
+    if (!s.fan().valid) return s;
+    s.p = g_.locate(s.fan(), prev);
+    s.q = g_.locate(s.fan(), next);
     if (!s.p.ok || !s.q.ok || s.p.position == s.q.position) return s;
-    if (s.fan.closed) {
-      s.ccw_angle = s.q.phi - s.p.phi + (s.q.position < s.p.position ? s.fan.total : 0.0);
-      s.ccw_angle = std::clamp(s.ccw_angle, 0.0, s.fan.total);
-      s.cw_angle = s.fan.total - s.ccw_angle;
+    if (s.fan().closed) {
+      s.ccw_angle = s.q.phi - s.p.phi + (s.q.position < s.p.position ? s.fan().total : 0.0);
+      s.ccw_angle = std::clamp(s.ccw_angle, 0.0, s.fan().total);
+      s.cw_angle = s.fan().total - s.ccw_angle;
       s.ccw_ok = s.cw_ok = true;
     } else {
       s.ccw_ok = s.q.position > s.p.position;
@@ -811,7 +822,7 @@ class Smoother {
                          std::vector<Node>& inserted, double& length, bool& through_vertex) const {
     inserted.clear();
     through_vertex = false;
-    const Fan& fan = sides.fan;
+    const Fan& fan = sides.fan();
     const FanPosition& p = sides.p;
     const FanPosition& q = sides.q;
     const double angle = ccw ? sides.ccw_angle : sides.cw_angle;
