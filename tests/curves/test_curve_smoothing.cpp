@@ -418,3 +418,28 @@ TEST(CurveSmoothing, SphereArcErrorShrinksWithRefinement) {
   EXPECT_LT(deviations[2], 0.6 * deviations[1]);
   EXPECT_LT(deviations[2], 0.003);
 }
+
+// Two cones glued at their apex (a non-manifold vertex whose fan has two
+// sheets): a curve passing from one sheet to the other through the apex
+// cannot be re-routed and must come back unchanged, without errors.
+TEST(CurveSmoothing, NonManifoldVertexIsLeftAlone) {
+  TriangleMesh mesh = test::make_fan(6, Vec3(0, 0, 0), [](int) { return -0.5; });
+  const TriangleMesh upper = test::make_fan(6, Vec3(0, 0, 0), [](int) { return 0.5; });
+  const auto offset = static_cast<std::int32_t>(mesh.vertex_count()) - 1;  // shares vertex 0
+  for (std::size_t v = 1; v < upper.vertex_count(); ++v)
+    mesh.positions.push_back(upper.positions[v]);
+  for (Face f : upper.faces) {
+    for (auto& v : f)
+      if (v != 0) v += offset;
+    std::swap(f[1], f[2]);  // keep the upper sheet's normals outward (up)
+    mesh.faces.push_back(f);
+  }
+  const Topology topo(mesh);
+  const SurfaceCurve curve = test::vertex_path_curve(mesh, topo, {1, 0, 1 + offset + 3});
+  const auto result = smooth_surface_curve(mesh, topo, curve);
+  test::expect_edge_polyline(mesh, topo, result.curve);
+  ASSERT_EQ(result.curve.size(), 3u);
+  EXPECT_EQ(to_vertex(mesh, result.curve.points[1]).value_or(-1), 0);
+  EXPECT_EQ(result.splits, 0u);
+  EXPECT_EQ(geodesic_turning_angles(mesh, topo, result.curve)[1], 0.0);
+}

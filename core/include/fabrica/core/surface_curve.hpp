@@ -13,9 +13,11 @@
 // straight in the unfolding of the edge's two faces (zero geodesic
 // curvature); a point that reaches a mesh vertex is re-routed through the
 // vertex's triangle fan on the side whose angle is below pi (the splitting
-// step), and points that become redundant are removed. Every operation is a
-// Gauss–Seidel step that never lengthens the curve, so the length is
-// non-increasing over iterations.
+// step), points that become redundant are removed, and a run of points
+// around one vertex is solved as a block in the vertex's unfolded fan
+// (collapsing onto the vertex when the passage through it is shortest).
+// Every operation is a Gauss–Seidel step that never lengthens the curve
+// (up to vertex snapping), so the length is non-increasing over iterations.
 //
 // Units: lengths in mesh units (mm); angles in radians. Sign convention of
 // the geodesic curvature (turning angle): positive when the curve turns left
