@@ -1,0 +1,200 @@
+// `fabrica extract VOLUME -o DIR`: one surface mesh per label of a label
+// volume (NIfTI, NRRD / .seg.nrrd, MetaImage), or one iso-surface of a scalar
+// volume (--iso), in LPS patient millimetres (docs/volumes.md). Each mesh is
+// named after its label (sanitised for file names) or label_<N>; a label that
+// yields no surface is reported and skipped. Also writes DIR/surfaces.json
+// (name, label, layer, colour, file, counts) so colours survive.
+#include <CLI/CLI.hpp>
+#include <cctype>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "commands.hpp"
+#include "fabrica/core/atomic_file.hpp"
+#include "fabrica/core/error.hpp"
+#include "fabrica/io/label_volume.hpp"
+#include "fabrica/io/mesh_io.hpp"
+
+namespace fabrica::cli {
+
+namespace {
+
+struct ExtractCommandOptions {
+  std::string volume;
+  std::string output;
+  std::vector<int> labels;
+  std::optional<int> smooth;
+  double passband = 0.1;
+  double decimate = 0.0;
+  std::optional<double> iso;
+  std::string format = "stl";
+  std::string names;
+  std::string space = "lps";
+};
+
+/// Keeps letters, digits, '-', '_' and '.'; everything else becomes '_'
+/// (runs collapsed); no leading dots, no empty names.
+std::string sanitize_file_name(const std::string& name, const std::string& fallback) {
+  std::string out;
+  for (const char c : name) {
+    const auto u = static_cast<unsigned char>(c);
+    const bool keep = std::isalnum(u) || c == '-' || c == '_' || c == '.';
+    if (keep) {
+      out.push_back(c);
+    } else if (!out.empty() && out.back() != '_') {
+      out.push_back('_');
+    }
+  }
+  while (!out.empty() && (out.back() == '_' || out.back() == '.')) out.pop_back();
+  while (!out.empty() && (out.front() == '.' || out.front() == '_')) out.erase(out.begin());
+  if (out.size() > 120) out.resize(120);
+  return out.empty() ? fallback : out;
+}
+
+std::string dims_text(const io::VolumeGeometry& g) {
+  char buf[160];
+  std::snprintf(buf, sizeof buf, "%dx%dx%d voxels, spacing %.4gx%.4gx%.4g mm", g.dims[0], g.dims[1],
+                g.dims[2], g.spacing[0], g.spacing[1], g.spacing[2]);
+  return buf;
+}
+
+int run_extract(const ExtractCommandOptions& o) {
+  io::LabelVolume volume = io::read_label_volume(o.volume);
+  if (!o.names.empty()) {
+    for (const io::LabelInfo& entry : io::read_label_names(o.names)) {
+      bool replaced = false;
+      for (io::LabelInfo& info : volume.labels)
+        if (info.value == entry.value) {
+          info.name = entry.name;
+          if (entry.color) info.color = entry.color;
+          replaced = true;
+        }
+      if (!replaced) volume.labels.push_back(entry);
+    }
+  }
+  std::printf("read %s: %s, %s\n", o.volume.c_str(), volume.format.c_str(),
+              dims_text(volume.geometry).c_str());
+  std::printf("  orientation: %s\n", volume.orientation_source.c_str());
+  for (const std::string& note : volume.notes) std::printf("  note: %s\n", note.c_str());
+
+  io::ExtractOptions options;
+  options.labels = o.labels;
+  options.smoothing_iterations = o.smooth;
+  options.smoothing_passband = o.passband;
+  options.decimate = o.decimate;
+  options.iso_value = o.iso;
+  const std::vector<io::ExtractedSurface> surfaces = io::extract_surfaces(volume, options);
+
+  const std::filesystem::path dir(o.output);
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec || !std::filesystem::is_directory(dir))
+    throw OutputError("cannot create output folder '" + dir.string() +
+                      "': " + (ec ? ec.message() : std::string("not a folder")));
+
+  const Space space = o.space == "ras" || o.space == "RAS" ? Space::ras : Space::lps;
+  std::set<std::string> used;
+  nlohmann::json manifest = nlohmann::json::array();
+  std::size_t written = 0, skipped = 0, write_failures = 0;
+  for (const io::ExtractedSurface& s : surfaces) {
+    const std::string fallback = "label_" + std::to_string(s.label);
+    std::string base = sanitize_file_name(s.name, fallback);
+    if (used.count(base) != 0) base += "_" + std::to_string(s.label);
+    if (used.count(base) != 0) base += "_layer" + std::to_string(s.layer);
+    for (int n = 2; used.count(base) != 0; ++n) base += "_" + std::to_string(n);
+    if (s.mesh.empty()) {
+      ++skipped;
+      std::printf("  skipped %s (label %d): %s\n", s.name.c_str(), s.label, s.problem.c_str());
+      continue;
+    }
+    used.insert(base);
+    const std::filesystem::path file = dir / (base + "." + o.format);
+    TriangleMesh mesh = s.mesh;
+    if (space == Space::ras) {
+      // RAS = LPS with x and y negated: a rotation, so winding stays outward.
+      for (Vec3& p : mesh.positions) p = Vec3(-p.x(), -p.y(), p.z());
+      mesh.space = Space::ras;
+      mesh.space_source = SpaceSource::user_override;
+    }
+    try {
+      io::write_mesh(mesh, file);
+    } catch (const Error& e) {
+      ++write_failures;
+      std::fprintf(stderr, "fabrica: %s\n", e.what());
+      continue;
+    }
+    ++written;
+    std::printf("  wrote %s  (label %d%s, %zu voxels, %zu vertices, %zu faces)\n",
+                file.string().c_str(), s.label,
+                s.layer > 0 ? (", layer " + std::to_string(s.layer)).c_str() : "", s.voxel_count,
+                mesh.vertex_count(), mesh.face_count());
+    nlohmann::json entry = {{"name", s.name},
+                            {"label", s.label},
+                            {"layer", s.layer},
+                            {"file", file.filename().string()},
+                            {"voxels", s.voxel_count},
+                            {"vertices", mesh.vertex_count()},
+                            {"faces", mesh.face_count()},
+                            {"space", to_string(mesh.space)}};
+    if (s.color) entry["color"] = {(*s.color)[0], (*s.color)[1], (*s.color)[2]};
+    manifest.push_back(std::move(entry));
+  }
+  if (written > 0) {
+    const nlohmann::json doc = {{"volume", o.volume},
+                                {"format", volume.format},
+                                {"orientation", volume.orientation_source},
+                                {"surfaces", manifest}};
+    write_file_atomically(dir / "surfaces.json",
+                          [&](std::ostream& out) { out << doc.dump(2) << "\n"; });
+  }
+  std::printf("%zu surface(s) written to %s", written, dir.string().c_str());
+  if (skipped > 0) std::printf(", %zu label(s) skipped", skipped);
+  if (write_failures > 0) std::printf(", %zu could not be written", write_failures);
+  std::printf("\n");
+  if (written == 0) {
+    if (write_failures > 0) throw OutputError("no surface could be written to " + dir.string());
+    throw InputError(o.volume + ": no label yielded a surface (see the reasons above)");
+  }
+  return 0;
+}
+
+}  // namespace
+
+void add_extract_command(CLI::App& app, Action& action) {
+  auto* cmd = app.add_subcommand(
+      "extract",
+      "Label volume (NIfTI, NRRD/.seg.nrrd, MetaImage) to one surface per label, in LPS mm "
+      "(docs/volumes.md)");
+  auto o = std::make_shared<ExtractCommandOptions>();
+  cmd->add_option("VOLUME", o->volume, "volume file (.nii .nii.gz .nrrd .seg.nrrd .nhdr .mha .mhd)")
+      ->required();
+  cmd->add_option("-o,--output", o->output, "output folder (created if missing)")->required();
+  cmd->add_option("--labels", o->labels,
+                  "label values to extract, e.g. 1,2,5 (default: all nonzero)")
+      ->delimiter(',');
+  cmd->add_option("--smooth", o->smooth,
+                  "windowed-sinc smoothing iterations (default 20 for labels, 0 for --iso)")
+      ->check(CLI::Range(0, 10000));
+  cmd->add_option("--passband", o->passband, "smoothing pass band in (0,2); smaller is smoother")
+      ->capture_default_str();
+  cmd->add_option("--decimate", o->decimate, "fraction of faces to remove, in [0,1)")
+      ->check(CLI::Range(0.0, 0.999));
+  cmd->add_option("--iso", o->iso,
+                  "extract the iso-surface at this value (level sets, intensity images)");
+  cmd->add_option("--format", o->format, "mesh format of the outputs")
+      ->check(CLI::IsMember({"stl", "obj", "ply", "off"}))
+      ->capture_default_str();
+  cmd->add_option("--names", o->names,
+                  "label table naming labels: lines 'VALUE NAME [R G B]' (Slicer / ITK-SNAP)");
+  cmd->add_option("--space", o->space, "coordinates of the outputs: lps (default) or ras")
+      ->check(CLI::IsMember({"lps", "ras", "LPS", "RAS"}));
+  cmd->callback([o, &action] { action = [o] { return run_extract(*o); }; });
+}
+
+}  // namespace fabrica::cli
