@@ -1,0 +1,12 @@
+# Mesh file reading and writing (OBJ, PLY, STL, OFF; VTP and legacy VTK read
+# through VTK, which stays private to fabrica_io).
+target_sources(fabrica_io PRIVATE
+  ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io.cpp
+  ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_obj.cpp
+  ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_off.cpp
+  ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_ply.cpp
+  ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_stl.cpp
+  ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_vtk.cpp
+)
+target_link_libraries(fabrica_io PRIVATE VTK::IOXML VTK::IOLegacy VTK::CommonDataModel VTK::CommonCore)
+vtk_module_autoinit(TARGETS fabrica_io MODULES VTK::IOXML VTK::IOLegacy VTK::CommonDataModel VTK::CommonCore)
