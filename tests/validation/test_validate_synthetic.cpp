@@ -218,6 +218,42 @@ TEST(Validate, TwoComponentsOneInward) {
   EXPECT_TRUE(validate_mesh(after).clean());
 }
 
+TEST(Validate, NestedShellsFaceOutOfTheSolid) {
+  // A hollow ball: outer sphere outward, inner sphere (the cavity wall)
+  // facing into the cavity, i.e. negative volume.
+  TriangleMesh m = test::make_icosphere(2.0, 2);
+  const auto outer_faces = m.faces.size();
+  append(m, sphere(), Vec3(0.1, -0.2, 0.05));
+  for (std::size_t f = outer_faces; f < m.faces.size(); ++f) m.faces[f] = reversed(m.faces[f]);
+  auto r = validate_mesh(m);
+  EXPECT_EQ(r.components, 2u);
+  EXPECT_TRUE(r.outward.value_or(false));
+  EXPECT_TRUE(r.clean());
+  TriangleMesh after;
+  EXPECT_FALSE(repair_and_check_order(m, after).changed());
+
+  // Both shells outward: the cavity wall faces into the solid.
+  for (std::size_t f = outer_faces; f < m.faces.size(); ++f) m.faces[f] = reversed(m.faces[f]);
+  r = validate_mesh(m);
+  EXPECT_FALSE(r.outward.value_or(true));
+  EXPECT_EQ(r.inward_pieces, 1u);
+  const auto rep = repair_and_check_order(m, after);
+  EXPECT_EQ(rep.components_reversed, 1u);
+  EXPECT_EQ(rep.flipped_faces, 80u);
+  EXPECT_TRUE(validate_mesh(after).clean());
+
+  // A ball inside the cavity (three shells) is solid again: outward.
+  append(m, test::make_icosphere(0.3, 1), Vec3(0.1, -0.2, 0.05));
+  r = validate_mesh(m);
+  EXPECT_EQ(r.inward_pieces, 1u);  // still only the cavity wall
+  EXPECT_EQ(repair_and_check_order(m, after).flipped_faces, 80u);
+
+  // Overlapping, not nested, spheres are each outward.
+  TriangleMesh two = sphere();
+  append(two, sphere(), Vec3(0.5, 0.3, 0.1));
+  EXPECT_TRUE(validate_mesh(two).outward.value_or(false));
+}
+
 TEST(Validate, BowTieVertex) {
   TriangleMesh m;
   m.positions = {{0, 0, 0}, {1, -0.5, 0}, {1, 0.5, 0}, {-1, 0.5, 0}, {-1, -0.5, 0}};

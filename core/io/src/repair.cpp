@@ -180,7 +180,9 @@ std::size_t split_vertices(TriangleMesh& mesh, const detail::ProperTopology& pro
 }
 
 // Consistent orientation by breadth-first search through two-face edges;
-// outward (positive volume) per closed piece, majority orientation otherwise.
+// then each closed piece faces out of the solid (positive volume, negative
+// for a cavity wall nested inside an odd number of other closed pieces), and
+// every other piece keeps the orientation of the majority of its faces.
 void orient(TriangleMesh& mesh, const detail::ProperTopology& proper, bool outward,
             RepairReport& report) {
   const Topology& topo = proper.topology();
@@ -188,25 +190,31 @@ void orient(TriangleMesh& mesh, const detail::ProperTopology& proper, bool outwa
   const std::size_t nf = faces.size();
   const Vec3 origin = bounding_box(mesh.positions).center();
 
+  struct PieceState {
+    std::size_t begin = 0, end = 0;  // range in `order`
+    bool conflict = false, open = false;
+    std::size_t flipped = 0;
+    double volume6 = 0.0;
+  };
+  std::vector<PieceState> pieces;
   std::vector<std::int32_t> piece(nf, -1);
   std::vector<std::uint8_t> flip(nf, 0);
-  std::vector<std::int32_t> queue;
-  queue.reserve(nf);
-  std::int32_t piece_count = 0;
+  std::vector<std::int32_t> order;  // faces in breadth-first order, piece by piece
+  order.reserve(nf);
   for (std::size_t seed = 0; seed < nf; ++seed) {
     if (piece[seed] >= 0) continue;
-    const std::int32_t id = piece_count++;
-    queue.clear();
-    queue.push_back(static_cast<std::int32_t>(seed));
+    const auto id = static_cast<std::int32_t>(pieces.size());
+    PieceState state;
+    state.begin = order.size();
+    order.push_back(static_cast<std::int32_t>(seed));
     piece[seed] = id;
-    bool conflict = false, open = false;
-    for (std::size_t head = 0; head < queue.size(); ++head) {
-      const auto f = queue[head];
+    for (std::size_t head = state.begin; head < order.size(); ++head) {
+      const auto f = order[head];
       for (int k = 0; k < 3; ++k) {
         const auto e = topo.face_edge(f, k);
         const auto ef = topo.edge_faces(e);
         if (ef.size() != 2) {
-          open = true;
+          state.open = true;
           continue;
         }
         const auto g = ef[0] == f ? ef[1] : ef[0];
@@ -216,31 +224,41 @@ void orient(TriangleMesh& mesh, const detail::ProperTopology& proper, bool outwa
         if (piece[g] < 0) {
           piece[g] = id;
           flip[g] = want;
-          queue.push_back(g);
+          order.push_back(g);
         } else if (flip[g] != want) {
-          conflict = true;
+          state.conflict = true;
         }
       }
     }
-    if (conflict) ++report.nonorientable_pieces;
-    std::size_t flipped = 0;
-    double volume6 = 0.0;
-    for (auto f : queue) {
-      flipped += flip[f];
+    state.end = order.size();
+    for (std::size_t i = state.begin; i < state.end; ++i) {
+      const auto f = order[i];
+      state.flipped += flip[f];
       const double v =
           detail::signed_volume6(mesh.positions[faces[f][0]], mesh.positions[faces[f][1]],
                                  mesh.positions[faces[f][2]], origin);
-      volume6 += flip[f] ? -v : v;
+      state.volume6 += flip[f] ? -v : v;
     }
+    if (state.conflict) ++report.nonorientable_pieces;
+    pieces.push_back(state);
+  }
+
+  std::vector<std::uint8_t> closed(pieces.size(), 0);
+  for (std::size_t p = 0; p < pieces.size(); ++p)
+    closed[p] = outward && !pieces[p].open && !pieces[p].conflict && pieces[p].volume6 != 0.0;
+  const std::vector<int> depth = detail::nesting_depths(mesh.positions, faces, piece, closed);
+  for (std::size_t p = 0; p < pieces.size(); ++p) {
+    const PieceState& state = pieces[p];
     bool reverse = false;
-    if (outward && !open && !conflict && volume6 != 0.0) {
-      reverse = volume6 < 0.0;
+    if (closed[p]) {
+      const bool want_positive = depth[p] % 2 == 0;
+      reverse = (state.volume6 > 0.0) != want_positive;
       if (reverse) ++report.components_reversed;
     } else {
-      reverse = 2 * flipped > queue.size();
+      reverse = 2 * state.flipped > state.end - state.begin;
     }
     if (reverse)
-      for (auto f : queue) flip[f] ^= 1;
+      for (std::size_t i = state.begin; i < state.end; ++i) flip[order[i]] ^= 1;
   }
   for (std::size_t f = 0; f < nf; ++f)
     if (flip[f]) {

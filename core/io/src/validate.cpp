@@ -270,8 +270,11 @@ ValidationReport validate_mesh(const TriangleMesh& mesh, const ValidateOptions& 
     for (std::size_t f = 0; f < nf; ++f)
       piece_volume6[piece[f]] +=
           detail::signed_volume6(pos[faces[f][0]], pos[faces[f][1]], pos[faces[f][2]], origin);
-    r.inward_pieces = static_cast<std::size_t>(std::count_if(
-        piece_volume6.begin(), piece_volume6.end(), [](double v) { return v < 0.0; }));
+    const std::vector<std::uint8_t> closed_piece(pieces, 1);
+    const auto depth = detail::nesting_depths(pos, faces, piece, closed_piece);
+    for (std::size_t p = 0; p < pieces; ++p)
+      if (piece_volume6[p] != 0.0 && (piece_volume6[p] > 0.0) != (depth[p] % 2 == 0))
+        ++r.inward_pieces;
     r.outward = r.inward_pieces == 0;
   }
 
@@ -303,8 +306,8 @@ ValidationReport validate_mesh(const TriangleMesh& mesh, const ValidateOptions& 
         edge_name(topo, static_cast<std::size_t>(first_inconsistent_edge)));
   if (r.outward && !*r.outward)
     r.problems.push_back("normals point inward: " +
-                         plural(r.inward_pieces, "closed piece encloses", "closed pieces enclose") +
-                         " negative volume (lines and shading expect outward normals)");
+                         plural(r.inward_pieces, "closed piece faces", "closed pieces face") +
+                         " into the solid (lines and shading expect outward normals)");
   if (r.self_intersecting_face_pairs && *r.self_intersecting_face_pairs > 0)
     r.problems.push_back(plural(*r.self_intersecting_face_pairs, "pair", "pairs") +
                          " of faces intersect each other");

@@ -1,7 +1,12 @@
 #include "validate_detail.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <numeric>
+#include <span>
+
+#include "fabrica/core/mesh.hpp"
 
 namespace fabrica::io::detail {
 
@@ -112,6 +117,150 @@ std::vector<std::int32_t> manifold_pieces(const Topology& topology, std::size_t&
   }
   piece_count = static_cast<std::size_t>(count);
   return piece;
+}
+
+namespace {
+
+// Ray parity against one closed piece: triangles projected along a fixed
+// generic direction d onto the plane (u, w) perpendicular to it and binned in
+// a uniform 2D grid, so each query tests only the triangles over its cell.
+class RayParity {
+ public:
+  RayParity(const std::vector<Vec3>& pos, const std::vector<Face>& faces,
+            std::span<const std::int32_t> piece_faces)
+      : pos_(pos), faces_(faces), piece_faces_(piece_faces) {
+    d_ = Vec3(0.5377, 0.6391, 0.5498).normalized();
+    u_ = d_.cross(Vec3(1, 0, 0)).normalized();
+    w_ = d_.cross(u_);
+    lo_ = Eigen::Vector2d::Constant(std::numeric_limits<double>::max());
+    hi_ = -lo_;
+    for (auto f : piece_faces_)
+      for (int k = 0; k < 3; ++k) {
+        const auto q = project(pos_[faces_[f][k]]);
+        lo_ = lo_.cwiseMin(q);
+        hi_ = hi_.cwiseMax(q);
+      }
+    n_ = std::clamp(static_cast<int>(std::sqrt(static_cast<double>(piece_faces_.size()) / 2.0)), 1,
+                    1024);
+    cell_ = ((hi_ - lo_) / n_).cwiseMax(Eigen::Vector2d::Constant(1e-300));
+    std::vector<std::int32_t> counts(static_cast<std::size_t>(n_) * n_ + 1, 0);
+    auto for_cells = [&](std::int32_t f, auto visit) {
+      Eigen::Vector2d a = project(pos_[faces_[f][0]]), b = a;
+      for (int k = 1; k < 3; ++k) {
+        const auto q = project(pos_[faces_[f][k]]);
+        a = a.cwiseMin(q);
+        b = b.cwiseMax(q);
+      }
+      const int i0 = cell_index(a.x(), 0), i1 = cell_index(b.x(), 0);
+      const int j0 = cell_index(a.y(), 1), j1 = cell_index(b.y(), 1);
+      for (int i = i0; i <= i1; ++i)
+        for (int j = j0; j <= j1; ++j) visit(i * n_ + j);
+    };
+    for (auto f : piece_faces_) for_cells(f, [&](int c) { ++counts[c + 1]; });
+    std::partial_sum(counts.begin(), counts.end(), counts.begin());
+    offsets_ = counts;
+    cell_faces_.resize(offsets_.back());
+    for (auto f : piece_faces_) for_cells(f, [&](int c) { cell_faces_[counts[c]++] = f; });
+  }
+
+  /// Whether p is inside the closed piece (odd number of crossings along d).
+  bool inside(const Vec3& p) const {
+    const auto q = project(p);
+    if ((q.array() < lo_.array()).any() || (q.array() > hi_.array()).any()) return false;
+    const int c = cell_index(q.x(), 0) * n_ + cell_index(q.y(), 1);
+    int crossings = 0;
+    for (auto i = offsets_[c]; i < offsets_[c + 1]; ++i) {
+      const Face& f = faces_[cell_faces_[i]];
+      const Vec3& a = pos_[f[0]];
+      const Vec3& b = pos_[f[1]];
+      const Vec3& cc = pos_[f[2]];
+      // Signed volumes of the ray against the three edges (Pluecker-like
+      // test): same sign = the line through p along d crosses the triangle.
+      const double s0 = d_.dot((b - p).cross(cc - p));
+      const double s1 = d_.dot((cc - p).cross(a - p));
+      const double s2 = d_.dot((a - p).cross(b - p));
+      if (!((s0 > 0 && s1 > 0 && s2 > 0) || (s0 < 0 && s1 < 0 && s2 < 0))) continue;
+      const Vec3 n = (b - a).cross(cc - a);
+      const double nd = n.dot(d_);
+      if (nd == 0.0) continue;
+      if (n.dot(a - p) / nd > 0.0) ++crossings;  // in front of p
+    }
+    return crossings % 2 == 1;
+  }
+
+ private:
+  Eigen::Vector2d project(const Vec3& p) const { return {u_.dot(p), w_.dot(p)}; }
+  int cell_index(double x, int axis) const {
+    const double t = (x - lo_[axis]) / cell_[axis];
+    return std::clamp(static_cast<int>(std::floor(t)), 0, n_ - 1);
+  }
+
+  const std::vector<Vec3>& pos_;
+  const std::vector<Face>& faces_;
+  std::span<const std::int32_t> piece_faces_;
+  Vec3 d_, u_, w_;
+  Eigen::Vector2d lo_, hi_, cell_;
+  int n_ = 1;
+  std::vector<std::int32_t> offsets_, cell_faces_;
+};
+
+}  // namespace
+
+std::vector<int> nesting_depths(const std::vector<Vec3>& positions, const std::vector<Face>& faces,
+                                const std::vector<std::int32_t>& piece,
+                                const std::vector<std::uint8_t>& piece_closed) {
+  const std::size_t np = piece_closed.size();
+  std::vector<int> depth(np, 0);
+  if (std::count(piece_closed.begin(), piece_closed.end(), 1) < 2) return depth;
+
+  // Faces of each piece (CSR), bounding boxes and extreme vertices.
+  std::vector<std::int32_t> offsets(np + 1, 0), piece_faces(faces.size());
+  for (auto p : piece) ++offsets[p + 1];
+  std::partial_sum(offsets.begin(), offsets.end(), offsets.begin());
+  {
+    std::vector<std::int32_t> cursor(offsets.begin(), offsets.end() - 1);
+    for (std::size_t f = 0; f < faces.size(); ++f)
+      piece_faces[cursor[piece[f]]++] = static_cast<std::int32_t>(f);
+  }
+  std::vector<BoundingBox> box(np);
+  std::vector<std::array<std::int32_t, 6>> extreme(np);
+  for (std::size_t p = 0; p < np; ++p) {
+    bool first = true;
+    for (auto i = offsets[p]; i < offsets[p + 1]; ++i)
+      for (auto v : faces[piece_faces[i]]) {
+        const Vec3& x = positions[v];
+        for (int a = 0; a < 3; ++a) {
+          if (first || x[a] < positions[extreme[p][a]][a]) extreme[p][a] = v;
+          if (first || x[a] > positions[extreme[p][3 + a]][a]) extreme[p][3 + a] = v;
+        }
+        box[p].min = first ? x : box[p].min.cwiseMin(x);
+        box[p].max = first ? x : box[p].max.cwiseMax(x);
+        first = false;
+      }
+  }
+
+  for (std::size_t b = 0; b < np; ++b) {
+    if (!piece_closed[b]) continue;
+    std::vector<std::size_t> candidates;
+    for (std::size_t a = 0; a < np; ++a)
+      if (a != b && piece_closed[a] && (box[a].min.array() >= box[b].min.array()).all() &&
+          (box[a].max.array() <= box[b].max.array()).all())
+        candidates.push_back(a);
+    if (candidates.empty()) continue;
+    const RayParity container(positions, faces,
+                              std::span<const std::int32_t>(piece_faces.data() + offsets[b],
+                                                            piece_faces.data() + offsets[b + 1]));
+    for (auto a : candidates) {
+      bool all_inside = true;
+      for (auto v : extreme[a])
+        if (!container.inside(positions[v])) {
+          all_inside = false;
+          break;
+        }
+      depth[a] += all_inside;
+    }
+  }
+  return depth;
 }
 
 }  // namespace fabrica::io::detail

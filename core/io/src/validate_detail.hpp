@@ -74,6 +74,16 @@ inline double signed_volume6(const Vec3& a, const Vec3& b, const Vec3& c, const 
   return (a - origin).dot((b - origin).cross(c - origin));
 }
 
+/// How many other closed pieces enclose each closed piece (0 for open ones):
+/// piece A is inside piece B when A's bounding box lies in B's and each of A's
+/// six extreme vertices (min/max x, y, z) is inside B by ray parity. A piece
+/// at odd depth is a cavity wall: its normals point into the cavity, i.e. out
+/// of the solid, so its signed volume should be negative. `piece` gives the
+/// piece of every face of `faces`.
+std::vector<int> nesting_depths(const std::vector<Vec3>& positions, const std::vector<Face>& faces,
+                                const std::vector<std::int32_t>& piece,
+                                const std::vector<std::uint8_t>& piece_closed);
+
 /// Pairs of faces that intersect other than at a shared vertex or edge, by
 /// CGAL (exact predicates). The mesh must be consistently oriented, without
 /// repeated-index faces, non-manifold edges or non-manifold vertices; returns

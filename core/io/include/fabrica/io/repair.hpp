@@ -20,8 +20,10 @@
 //  5. orient consistently: breadth-first over faces through edges with exactly
 //     two faces, flipping neighbours that disagree; an open piece keeps the
 //     orientation of the majority of its faces;
-//  6. outward: every closed edge-connected piece with negative signed volume is
-//     reversed.
+//  6. outward: every closed edge-connected piece whose normals point into the
+//     solid is reversed: a piece should enclose positive signed volume, except
+//     a cavity wall (nested inside an odd number of other closed pieces, by
+//     ray parity of its extreme vertices), which should enclose negative.
 // With split_nonmanifold_edges off, non-manifold edges stay (the orientation
 // walk does not cross them) and validate_mesh keeps reporting them.
 #pragma once

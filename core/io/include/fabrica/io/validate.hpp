@@ -23,8 +23,9 @@
 // - consistently oriented: every edge with exactly two faces is used in
 //   opposite directions by them.
 // - outward: for closed, consistently oriented, edge-manifold meshes, whether
-//   every edge-connected piece encloses positive signed volume (normals,
-//   counter-clockwise faces, pointing out of the solid).
+//   the normals of every edge-connected piece point out of the solid: positive
+//   signed volume, or negative for a cavity wall (a piece nested inside an odd
+//   number of other closed pieces, tested by ray parity).
 // Units: lengths in the mesh's units (mm), areas in units^2, volume units^3.
 #pragma once
 
@@ -65,9 +66,10 @@ struct ValidationReport {
   bool consistently_oriented = true;  ///< inconsistent_edges == 0
   bool closed = false;                ///< faces and no boundary edges
   /// Only for closed, consistently oriented meshes without non-manifold
-  /// edges: true when every edge-connected piece has positive signed volume.
+  /// edges: true when every edge-connected piece faces out of the solid
+  /// (positive signed volume; negative for a nested cavity wall).
   std::optional<bool> outward;
-  std::size_t inward_pieces = 0;  ///< closed pieces with negative volume (when outward is set)
+  std::size_t inward_pieces = 0;  ///< closed pieces facing into the solid (when outward is set)
 
   double signed_volume = 0.0;     ///< sum over faces (divergence theorem), units^3
   double area = 0.0;              ///< total face area, units^2
