@@ -28,6 +28,38 @@ void unite(std::vector<std::int32_t>& parent, std::int32_t a, std::int32_t b) {
   parent[a] = b;  // the lower index becomes the root: deterministic labels
 }
 
+// The common case, fast: walk around v from its first face through two-face
+// edges in both directions; one fan when the walk meets every face of v.
+bool single_fan_by_walk(const Topology& topology, std::size_t v, std::int32_t first_face,
+                        int first_corner, std::size_t face_count) {
+  const auto vertex = static_cast<std::int32_t>(v);
+  // The edge of face f at v other than `from`.
+  auto other_edge_at_v = [&](std::int32_t f, std::int32_t from) {
+    for (int k = 0; k < 3; ++k) {
+      const auto e = topology.face_edge(f, k);
+      if (e == from || e < 0) continue;
+      const auto& ends = topology.edge(e);
+      if (ends[0] == vertex || ends[1] == vertex) return e;
+    }
+    return std::int32_t{-1};
+  };
+  std::size_t seen = 1;
+  const std::int32_t start_edges[2] = {topology.face_edge(first_face, (first_corner + 1) % 3),
+                                       topology.face_edge(first_face, (first_corner + 2) % 3)};
+  for (int side = 0; side < 2; ++side) {
+    std::int32_t f = first_face, e = start_edges[side];
+    while (e >= 0 && seen <= face_count) {
+      const auto ef = topology.edge_faces(e);
+      if (ef.size() != 2) break;
+      f = ef[0] == f ? ef[1] : ef[0];
+      if (f == first_face) return seen == face_count;  // closed ring
+      ++seen;
+      e = other_edge_at_v(f, e);
+    }
+  }
+  return seen == face_count;
+}
+
 }  // namespace
 
 ProperTopology::ProperTopology(const TriangleMesh& mesh) : mesh_faces_(&mesh.faces) {
@@ -69,6 +101,7 @@ int vertex_fans(const Topology& topology, std::size_t v, std::vector<int>& fan_o
   const auto n = static_cast<std::int32_t>(faces.size());
   fan_of_entry.assign(faces.size(), 0);
   if (n <= 1) return n;
+  if (single_fan_by_walk(topology, v, faces.front(), corners.front(), faces.size())) return 1;
   thread_local std::vector<std::int32_t> parent;
   thread_local std::vector<int> label;
   parent.resize(faces.size());
