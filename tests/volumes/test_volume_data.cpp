@@ -93,12 +93,17 @@ TEST(VolumeData, TotalSegmentatorLabelMap) {
   EXPECT_EQ(find(surfaces, 79).name, "spinal_cord");
   EXPECT_TRUE(find(surfaces, 5).color.has_value());
 
+  std::size_t nonmanifold = 0, faces = 0;
   for (const auto& s : surfaces) {
     SCOPED_TRACE(s.name);
     ASSERT_FALSE(s.mesh.empty()) << s.problem;
     EXPECT_EQ(test::open_and_misoriented_edges(s.mesh).first, 0u);
     EXPECT_GT(test::enclosed_volume(s.mesh), 0.0);
+    nonmanifold += test::nonmanifold_edges(s.mesh);
+    faces += s.mesh.face_count();
   }
+  std::printf("[ measure  ] TotalSegmentator: %zu faces, %zu non-manifold edges\n", faces,
+              nonmanifold);
   // Smoothing keeps volume: the liver's mesh volume is close to its voxels'.
   const auto& liver = find(surfaces, 5);
   const double voxel_volume = static_cast<double>(liver.voxel_count) * 27.0;

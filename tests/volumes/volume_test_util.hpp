@@ -203,6 +203,19 @@ inline std::pair<std::size_t, std::size_t> open_and_misoriented_edges(const Tria
   return {open, misoriented};
 }
 
+/// Undirected edges with more than two faces (non-manifold edges).
+inline std::size_t nonmanifold_edges(const TriangleMesh& m) {
+  std::map<std::pair<int, int>, int> count;
+  for (const Face& f : m.faces)
+    for (int k = 0; k < 3; ++k) {
+      const int a = f[k], b = f[(k + 1) % 3];
+      ++count[{std::min(a, b), std::max(a, b)}];
+    }
+  std::size_t n = 0;
+  for (const auto& [e, c] : count) n += c > 2 ? 1 : 0;
+  return n;
+}
+
 inline double point_triangle_distance(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
   // Closest point on triangle (Ericson, Real-Time Collision Detection 5.1.5).
   const Vec3 ab = b - a, ac = c - a, ap = p - a;
