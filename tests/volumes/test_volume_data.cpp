@@ -9,6 +9,7 @@
 #include <set>
 
 #include "fabrica/io/label_volume.hpp"
+#include "fabrica/io/mesh_io.hpp"
 #include "test_support.hpp"
 #include "volume_test_util.hpp"
 
@@ -18,33 +19,6 @@ namespace {
 
 std::filesystem::path volumes() {
   return test::shared_data() / "meshes" / "volumes";
-}
-
-/// Binary STL without welding beyond exact coordinate matches (test-local:
-/// keeps this test independent of the mesh reader).
-TriangleMesh read_binary_stl(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  char header[80];
-  in.read(header, 80);
-  std::uint32_t count = 0;
-  in.read(reinterpret_cast<char*>(&count), 4);
-  TriangleMesh m;
-  std::map<std::array<float, 3>, std::int32_t> index;
-  for (std::uint32_t t = 0; t < count && in; ++t) {
-    float v[12];
-    in.read(reinterpret_cast<char*>(v), 48);
-    char attribute[2];
-    in.read(attribute, 2);
-    Face f{};
-    for (int k = 0; k < 3; ++k) {
-      const std::array<float, 3> p{v[3 + 3 * k], v[4 + 3 * k], v[5 + 3 * k]};
-      auto [it, inserted] = index.emplace(p, static_cast<std::int32_t>(m.positions.size()));
-      if (inserted) m.positions.emplace_back(p[0], p[1], p[2]);
-      f[k] = it->second;
-    }
-    m.faces.push_back(f);
-  }
-  return m;
 }
 
 const io::ExtractedSurface& find(const std::vector<io::ExtractedSurface>& s, int label) {
@@ -159,8 +133,9 @@ TEST(VolumeData, VmtkAortaLevelSetMatchesTheVmtkSurface) {
   EXPECT_GT(test::enclosed_volume(ours), 0.0);
 
   // vmtk writes world coordinates in RAS (x, y negated w.r.t. ITK's LPS).
-  TriangleMesh vmtk = read_binary_stl(test::shared_data() / "meshes" / "anatomy" / "vessels" /
-                                      "vmtk_aorta-surface.stl");
+  TriangleMesh vmtk = io::read_mesh(test::shared_data() / "meshes" / "anatomy" / "vessels" /
+                                    "vmtk_aorta-surface.stl")
+                          .mesh;
   ASSERT_EQ(vmtk.faces.size(), 12932u);
   for (Vec3& p : vmtk.positions) p = Vec3(-p.x(), -p.y(), p.z());
 

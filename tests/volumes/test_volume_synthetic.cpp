@@ -3,7 +3,10 @@
 // surface), labels and names of .seg.nrrd files, and clear errors.
 #include <gtest/gtest.h>
 
+#include <tbb/global_control.h>
+
 #include <numbers>
+#include <sstream>
 
 #include "fabrica/core/error.hpp"
 #include "fabrica/io/label_volume.hpp"
@@ -167,6 +170,89 @@ TEST(VolumeOrientation, NiftiSformIsAppliedAndRasBecomesLps) {
     EXPECT_TRUE(volume.geometry.direction.isApprox(d, 1e-6));
     EXPECT_TRUE(volume.geometry.spacing.isApprox(g.spacing, 1e-6));
     expect_two_spheres(volume, 0.3);
+  }
+}
+
+TEST(VolumeOrientation, NiftiQformWithNegativeQfac) {
+  // No sform: the quaternion gives a proper rotation R and qfac = -1 mirrors
+  // the k axis. Pick the LPS axes first, then derive R (RAS) from them.
+  const auto dir = test::temp_dir("vol-nifti-qform");
+  Mat3 d = rotation(0.25, -0.3, 0.6);
+  d.col(2) *= -1.0;  // det -1
+  VolumeGeometry g = grid(d, Vec3(0.9, 1.0, 1.2));
+  const Eigen::DiagonalMatrix<double, 3> ras(-1.0, -1.0, 1.0);
+  const Mat3 r = ras * d * Eigen::DiagonalMatrix<double, 3>(1.0, 1.0, -1.0);
+  ASSERT_NEAR(r.determinant(), 1.0, 1e-12);
+  // The header stores floats: snap the geometry to what the file can hold.
+  const Eigen::Quaterniond q(r);
+  const Vec3 offset = (ras * g.origin).cast<float>().cast<double>();
+  test::write_nifti_qform(dir / "q.nii", g.dims, q, -1.0f, g.spacing, offset,
+                          test::sample_labels(g, two_spheres));
+  const io::LabelVolume volume = io::read_label_volume(dir / "q.nii");
+  EXPECT_NE(volume.orientation_source.find("qform"), std::string::npos);
+  EXPECT_TRUE(volume.geometry.direction.isApprox(d, 1e-6)) << volume.geometry.direction;
+  EXPECT_LT(volume.geometry.direction.determinant(), 0.0);
+  expect_two_spheres(volume, 0.3);
+}
+
+TEST(VolumeFormats, DetachedBigEndianAndTextData) {
+  const auto dir = test::temp_dir("vol-formats");
+  const VolumeGeometry g = grid(Mat3::Identity(), Vec3(1.0, 1.0, 1.0));
+  const auto labels = test::sample_labels(g, two_spheres);
+  std::string big;  // int16 big endian
+  for (std::uint8_t v : labels) {
+    big.push_back('\0');
+    big.push_back(static_cast<char>(v));
+  }
+  // NRRD detached header (.nhdr) + raw data file, big endian.
+  test::write_bytes(dir / "data.raw", big);
+  std::ostringstream h;
+  h << "NRRD0004\ntype: short\ndimension: 3\nspace: left-posterior-superior\nsizes: " << g.dims[0]
+    << " " << g.dims[1] << " " << g.dims[2]
+    << "\nspace directions: (1,0,0) (0,1,0) (0,0,1)\nendian: big\nencoding: raw\n"
+    << "space origin: " << test::vec_text(g.origin) << "\ndata file: data.raw\n";
+  test::write_bytes(dir / "vol.nhdr", h.str());
+  expect_two_spheres(io::read_label_volume(dir / "vol.nhdr"), 0.3);
+
+  // MetaImage .mhd + .raw, big endian, with HeaderSize = -1 (data at the end).
+  test::write_bytes(dir / "meta.raw", std::string(100, 'x') + big);
+  std::ostringstream m;
+  m << "NDims = 3\nDimSize = " << g.dims[0] << " " << g.dims[1] << " " << g.dims[2]
+    << "\nElementSpacing = 1 1 1\nOffset = " << g.origin.x() << " " << g.origin.y() << " "
+    << g.origin.z() << "\nElementByteOrderMSB = True\nHeaderSize = -1\n"
+    << "ElementType = MET_SHORT\nElementDataFile = meta.raw\n";
+  test::write_bytes(dir / "meta.mhd", m.str());
+  expect_two_spheres(io::read_label_volume(dir / "meta.mhd"), 0.3);
+
+  // NRRD ascii.
+  std::ostringstream a;
+  a << "NRRD0004\ntype: int\ndimension: 3\nspace: LPS\nsizes: " << g.dims[0] << " " << g.dims[1]
+    << " " << g.dims[2]
+    << "\nspace directions: (1,0,0) (0,1,0) (0,0,1)\nencoding: ascii\nspace origin: "
+    << test::vec_text(g.origin) << "\n\n";
+  for (std::uint8_t v : labels) a << int(v) << (v == 2 ? "\n" : " ");
+  test::write_bytes(dir / "text.nrrd", a.str());
+  expect_two_spheres(io::read_label_volume(dir / "text.nrrd"), 0.3);
+}
+
+TEST(VolumeExtraction, SameBitsAtAnyThreadCount) {
+  const auto dir = test::temp_dir("vol-threads");
+  const VolumeGeometry g = grid(rotation(0.1, 0.2, 0.3), Vec3(0.8, 0.8, 0.8));
+  test::write_mha(dir / "t.mha", g, as_string(test::sample_labels(g, two_spheres)), "MET_UCHAR",
+                  false);
+  const io::LabelVolume volume = io::read_label_volume(dir / "t.mha");
+  ExtractOptions o;
+  o.decimate = 0.3;
+  const auto many = io::extract_surfaces(volume, o);
+  std::vector<io::ExtractedSurface> one;
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    one = io::extract_surfaces(volume, o);
+  }
+  ASSERT_EQ(many.size(), one.size());
+  for (std::size_t s = 0; s < many.size(); ++s) {
+    ASSERT_EQ(many[s].mesh.faces, one[s].mesh.faces);
+    ASSERT_EQ(many[s].mesh.positions, one[s].mesh.positions);
   }
 }
 

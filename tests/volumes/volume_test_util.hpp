@@ -164,6 +164,32 @@ inline void write_nifti(const std::filesystem::path& path, const std::array<int,
   write_bytes(path, gz ? gzip_bytes(file) : file);
 }
 
+/// Single-file NIfTI-1 (uint8) oriented by its qform only (sform_code 0):
+/// quaternion (b, c, d), qfac (+1 or -1), voxel sizes and offset, all RAS.
+inline void write_nifti_qform(const std::filesystem::path& path, const std::array<int, 3>& dims,
+                              const Eigen::Quaterniond& q, float qfac, const Vec3& pixdim,
+                              const Vec3& qoffset, const std::vector<std::uint8_t>& data) {
+  std::string hdr(352, '\0');
+  auto put = [&](std::size_t off, auto value) { std::memcpy(&hdr[off], &value, sizeof value); };
+  put(0, std::int32_t{348});
+  put(40, std::int16_t{3});
+  for (int a = 0; a < 3; ++a) put(42 + 2 * a, static_cast<std::int16_t>(dims[a]));
+  put(70, std::int16_t{2});
+  put(72, std::int16_t{8});
+  put(76, qfac);
+  for (int a = 0; a < 3; ++a) put(80 + 4 * a, static_cast<float>(pixdim[a]));
+  put(108, 352.0f);
+  put(252, std::int16_t{1});  // qform_code: scanner
+  put(254, std::int16_t{0});  // no sform
+  const Eigen::Quaterniond u = q.w() < 0 ? Eigen::Quaterniond(-q.coeffs()) : q;
+  put(256, static_cast<float>(u.x()));
+  put(260, static_cast<float>(u.y()));
+  put(264, static_cast<float>(u.z()));
+  for (int a = 0; a < 3; ++a) put(268 + 4 * a, static_cast<float>(qoffset[a]));
+  std::memcpy(&hdr[344], "n+1\0", 4);
+  write_bytes(path, hdr + as_bytes(data));
+}
+
 // ---------------------------------------------------------------- measurements
 
 /// Signed enclosed volume (positive when faces point outward).
