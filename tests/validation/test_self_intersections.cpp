@@ -1,6 +1,7 @@
 // Self-intersections (CGAL, exact predicates) through validate_mesh.
 #include <gtest/gtest.h>
 
+#include "fabrica/io/repair.hpp"
 #include "fabrica/io/validate.hpp"
 #include "test_support.hpp"
 
@@ -56,6 +57,23 @@ TEST(SelfIntersections, TouchingAtAPinchVertexIsNotAnIntersection) {
   // Shear the second tetrahedron into the first: now they cross.
   for (int i = 4; i < 7; ++i) m.positions[i] += Vec3(0.6, 0.6, 0.6);
   EXPECT_GT(check(m).self_intersecting_face_pairs.value_or(0), 0u);
+}
+
+TEST(SelfIntersections, SheetsCutApartAtANonManifoldEdgeDoNotIntersect) {
+  TriangleMesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0.5, 1, 0}, {0.5, -1, 0}, {0.5, 0, 1}};
+  m.faces = {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}};
+  io::repair_mesh(m);  // cuts the edge: three triangles sharing only positions
+  auto r = check(m);
+  ASSERT_TRUE(r.self_intersecting_face_pairs.has_value()) << r.self_intersections_skipped;
+  EXPECT_EQ(*r.self_intersecting_face_pairs, 0u);
+
+  // Fold the third sheet flat onto the first: now they overlap.
+  m.positions.push_back({0.5, 0.5, 0});
+  m.faces[2] = {m.faces[2][0], m.faces[2][1], static_cast<std::int32_t>(m.positions.size() - 1)};
+  r = check(m);
+  ASSERT_TRUE(r.self_intersecting_face_pairs.has_value()) << r.self_intersections_skipped;
+  EXPECT_EQ(*r.self_intersecting_face_pairs, 1u);
 }
 
 TEST(SelfIntersections, InconsistentOrientationIsHandledOnACopy) {
