@@ -1,5 +1,5 @@
-# Mesh file reading and writing (OBJ, PLY, STL, OFF; VTP and legacy VTK read
-# through VTK, which stays private to fabrica_io).
+# Mesh file reading and writing (OBJ, PLY, STL, OFF, legacy VTK parsed here;
+# VTP read through VTK, which stays private to fabrica_io).
 target_sources(fabrica_io PRIVATE
   ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io.cpp
   ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_obj.cpp
@@ -7,6 +7,7 @@ target_sources(fabrica_io PRIVATE
   ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_ply.cpp
   ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_stl.cpp
   ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_vtk.cpp
+  ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_vtk_legacy.cpp
 )
-target_link_libraries(fabrica_io PRIVATE VTK::IOXML VTK::IOLegacy VTK::CommonDataModel VTK::CommonCore)
-vtk_module_autoinit(TARGETS fabrica_io MODULES VTK::IOXML VTK::IOLegacy VTK::CommonDataModel VTK::CommonCore)
+target_link_libraries(fabrica_io PRIVATE VTK::IOXML VTK::CommonDataModel VTK::CommonCore)
+vtk_module_autoinit(TARGETS fabrica_io MODULES VTK::IOXML VTK::CommonDataModel VTK::CommonCore)

@@ -3,10 +3,13 @@
 #include <gtest/gtest.h>
 
 // OpenMesh: MeshIO.hh must come before the mesh types (registers readers).
+#include <vtkCellArray.h>
 #include <vtkNew.h>
 #include <vtkPLYReader.h>
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
+#include <vtkPolyDataReader.h>
+#include <vtkPolyDataWriter.h>
 #include <vtkSTLReader.h>
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
@@ -202,6 +205,55 @@ TEST(IndependentReaders, VtkAgreesOnBigEndianPlyAndBinaryStl) {
           ++differing;
       }
     EXPECT_EQ(differing, 0u);
+  }
+}
+
+/// Our legacy VTK parser against vtkPolyDataReader: the classic file, and the
+/// 5.1 layout (OFFSETS/CONNECTIVITY) VTK 9 writes, in ascii and binary.
+TEST(IndependentReaders, LegacyVtkAgreesWithVtkPolyDataReader) {
+  const auto original = mesh_path("classic/vtkdata_fran_cut.vtk");
+  vtkNew<vtkPolyDataReader> reader;
+  reader->SetFileName(original.c_str());
+  reader->Update();
+  vtkPolyData* poly = reader->GetOutput();
+  ASSERT_GT(poly->GetNumberOfPolys(), 0);
+  const auto dir = test::temp_dir("mesh_io_legacy");
+  std::vector<std::filesystem::path> files = {original};
+  for (bool binary : {false, true}) {
+    vtkNew<vtkPolyDataWriter> writer;
+    const auto path = dir / (binary ? "fran_binary.vtk" : "fran_ascii51.vtk");
+    writer->SetFileName(path.c_str());
+    writer->SetInputData(poly);
+    if (binary) writer->SetFileTypeToBinary();
+    writer->SetHeader("written by VTK SPACE=RAS");
+    ASSERT_EQ(writer->Write(), 1);
+    files.push_back(path);
+  }
+  for (const auto& path : files) {
+    const auto r = io::read_mesh(path);
+    ASSERT_EQ(static_cast<std::size_t>(poly->GetNumberOfPoints()), r.mesh.vertex_count()) << path;
+    for (vtkIdType i = 0; i < poly->GetNumberOfPoints(); ++i) {
+      double p[3];
+      poly->GetPoint(i, p);
+      // VTK rounds ascii "float" data to float; we keep the decimal value as double.
+      const Vec3 ours = r.mesh.positions[static_cast<std::size_t>(i)];
+      for (int k = 0; k < 3; ++k)
+        ASSERT_EQ(static_cast<float>(ours[k]), static_cast<float>(p[k])) << path << " point " << i;
+    }
+    vtkIdType n = 0;
+    const vtkIdType* ids = nullptr;
+    std::size_t f = 0;
+    vtkCellArray* polys = poly->GetPolys();
+    for (polys->InitTraversal(); polys->GetNextCell(n, ids);)
+      for (vtkIdType k = 1; k + 1 < n; ++k, ++f) {
+        ASSERT_LT(f, r.mesh.face_count());
+        const Face expected = {static_cast<std::int32_t>(ids[0]), static_cast<std::int32_t>(ids[k]),
+                               static_cast<std::int32_t>(ids[k + 1])};
+        ASSERT_EQ(r.mesh.faces[f], expected) << path;
+      }
+    EXPECT_EQ(f, r.mesh.face_count());
+    EXPECT_EQ(r.info.binary, path.filename() == "fran_binary.vtk");
+    EXPECT_EQ(r.mesh.space, path == original ? Space::lps : Space::ras) << path;
   }
 }
 

@@ -140,6 +140,16 @@ TEST_F(MalformedFiles, VtkFilesFailQuietly) {
                           "# vtk DataFile Version 3.0\nx\nASCII\nDATASET POLYDATA\n"
                           "POINTS 3 float\n0 0 0 1 0 0 0 1 0\nPOLYGONS 1 4\n3 0 1 5\n"),
                      "");
+  // A truncated copy of a real file (this crashes vtkPolyDataReader).
+  const std::string fran =
+      test::read_bytes(test::shared_data() / "meshes/classic/vtkdata_fran_cut.vtk");
+  ASSERT_GT(fran.size(), 117480u);
+  expect_input_error(file("truncated.vtk", fran.substr(0, 117480)), "");
+  expect_input_error(file("truncated_points.vtk", fran.substr(0, 2000)), "truncated");
+  expect_input_error(file("nan.vtk",
+                          "# vtk DataFile Version 3.0\nx\nASCII\nDATASET POLYDATA\n"
+                          "POINTS 3 float\n0 0 0 1 nan 0 0 1 0\nPOLYGONS 1 4\n3 0 1 2\n"),
+                     "not a finite number");
   const std::string noise = ::testing::internal::GetCapturedStderr();
   EXPECT_TRUE(noise.empty()) << "VTK printed: " << noise;
 }

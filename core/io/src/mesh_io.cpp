@@ -173,13 +173,12 @@ LoadedMesh read_mesh(const std::filesystem::path& path, const ReadOptions& optio
   const std::string ext = lower_extension(path);
   LoadedMesh out;
   out.info.path = name;
-  const bool vtk_xml = ext == ".vtp";
-  if (ext == ".vtp" || ext == ".vtk") {
+  if (ext == ".vtp") {
     // Check existence and emptiness ourselves: VTK's messages are not one-line.
     (void)open_for_reading(path, name);
-    detail::read_vtk_polydata(path, vtk_xml, name, options, out);
+    detail::read_vtp(path, name, options, out);
   } else {
-    if (ext != ".obj" && ext != ".ply" && ext != ".stl" && ext != ".off")
+    if (ext != ".obj" && ext != ".ply" && ext != ".stl" && ext != ".off" && ext != ".vtk")
       detail::fail(name,
                    "unknown mesh file extension '" + ext + "' (fabrica reads " + kKnownRead + ")");
     const std::string data = read_whole_file(path, name);
@@ -189,8 +188,10 @@ LoadedMesh read_mesh(const std::filesystem::path& path, const ReadOptions& optio
       detail::read_ply(data, name, options, out);
     else if (ext == ".stl")
       detail::read_stl(data, name, options, out);
-    else
+    else if (ext == ".off")
       detail::read_off(data, name, options, out);
+    else
+      detail::read_vtk_legacy(data, name, options, out);
   }
   if (out.mesh.faces.empty())
     detail::fail(name, "the file has no faces (" + std::to_string(out.mesh.positions.size()) +

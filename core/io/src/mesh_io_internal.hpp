@@ -202,8 +202,10 @@ void read_ply(std::string_view data, const std::string& name, const ReadOptions&
               LoadedMesh& out);
 void read_stl(std::string_view data, const std::string& name, const ReadOptions& options,
               LoadedMesh& out);
-void read_vtk_polydata(const std::filesystem::path& path, bool xml, const std::string& name,
-                       const ReadOptions& options, LoadedMesh& out);
+void read_vtk_legacy(std::string_view data, const std::string& name, const ReadOptions& options,
+                     LoadedMesh& out);
+void read_vtp(const std::filesystem::path& path, const std::string& name,
+              const ReadOptions& options, LoadedMesh& out);
 
 // Writers (the mesh has been checked; streams are opened by write_mesh).
 void write_obj(const TriangleMesh& mesh, std::ostream& out, const WriteOptions& options);

@@ -1,5 +1,5 @@
-// VTK polydata readers: XML .vtp (vtkXMLPolyDataReader) and legacy .vtk
-// (vtkPolyDataReader). Polygons are fan-triangulated and triangle strips
+// VTK XML PolyData (.vtp) reader through vtkXMLPolyDataReader (legacy .vtk
+// files are parsed in mesh_io_vtk_legacy.cpp). Polygons are fan-triangulated and triangle strips
 // unrolled here (same rules as the PLY reader), so the file's point order is
 // kept. Vertices and lines cells are ignored (noted). VTK's own messages are
 // captured by observers and never printed.
@@ -14,7 +14,6 @@
 #include <vtkPointData.h>
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
-#include <vtkPolyDataReader.h>
 #include <vtkSmartPointer.h>
 #include <vtkXMLPolyDataReader.h>
 
@@ -79,7 +78,7 @@ class QuietVtk {
       }
     });
     ++t_quiet_depth;
-    // Some messages (vtkGenericWarningMacro in the legacy reader) go straight
+    // Some messages (vtkGenericWarningMacro) go straight
     // to vtkLogger's stderr sink: mute it while any of our reads runs.
     const std::lock_guard<std::mutex> lock(logger_mutex());
     if (logger_depth()++ == 0) {
@@ -123,9 +122,6 @@ class VtkMessages {
     object->AddObserver(vtkCommand::WarningEvent, command_);
   }
   bool has_errors() const { return !errors_.empty(); }
-  /// The legacy reader reports malformed data ("Error reading ascii data")
-  /// as warnings: for it, warnings count as errors.
-  void promote_warnings() { errors_.insert(errors_.end(), warnings_.begin(), warnings_.end()); }
   /// The first error, trimmed to one line without VTK's class/address prefix.
   std::string first_error() const {
     if (errors_.empty()) return {};
@@ -143,11 +139,9 @@ class VtkMessages {
     auto* self = static_cast<VtkMessages*>(client);
     const char* text = static_cast<const char*>(call);
     if (event == vtkCommand::ErrorEvent) self->errors_.emplace_back(text ? text : "unknown error");
-    if (event == vtkCommand::WarningEvent) self->warnings_.emplace_back(text ? text : "warning");
   }
   vtkNew<vtkCallbackCommand> command_;
   std::vector<std::string> errors_;
-  std::vector<std::string> warnings_;
 };
 
 void convert(vtkPolyData* poly, const std::string& name, const ReadOptions& options,
@@ -217,48 +211,26 @@ void convert(vtkPolyData* poly, const std::string& name, const ReadOptions& opti
 
 }  // namespace
 
-void read_vtk_polydata(const std::filesystem::path& path, bool xml, const std::string& name,
-                       const ReadOptions& options, LoadedMesh& out) {
+void read_vtp(const std::filesystem::path& path, const std::string& name,
+              const ReadOptions& options, LoadedMesh& out) {
   MeshFileInfo& info = out.info;
+  info.format = "vtp";
   const QuietVtk quiet;
   VtkMessages messages;
-  vtkPolyData* poly = nullptr;
-  vtkSmartPointer<vtkAlgorithm> keep_alive;
-  if (xml) {
-    info.format = "vtp";
-    auto reader = vtkSmartPointer<vtkXMLPolyDataReader>::New();
-    keep_alive = reader;
-    messages.observe(reader);
-    messages.observe(reader->GetExecutive());
-    reader->SetReaderErrorObserver(messages.command());
-    reader->SetParserErrorObserver(messages.command());
-    if (!reader->CanReadFile(path.c_str())) fail(name, "not a VTK XML PolyData (.vtp) file");
-    reader->SetFileName(path.c_str());
-    reader->Update();
-    if (messages.has_errors() || reader->GetErrorCode() != 0)
-      fail(name, "cannot read VTK XML PolyData: " +
-                     (messages.has_errors() ? messages.first_error() : std::string("read error")));
-    poly = reader->GetOutput();
-    info.binary = true;  // appended/binary or ascii data arrays; VTK does not say
-  } else {
-    info.format = "vtk";
-    auto reader = vtkSmartPointer<vtkPolyDataReader>::New();
-    keep_alive = reader;
-    messages.observe(reader);
-    messages.observe(reader->GetExecutive());
-    reader->SetFileName(path.c_str());
-    if (!reader->IsFilePolyData())
-      fail(name, "not a legacy VTK POLYDATA file (only DATASET POLYDATA is read)");
-    reader->Update();
-    messages.promote_warnings();
-    if (messages.has_errors() || reader->GetErrorCode() != 0)
-      fail(name, "cannot read legacy VTK file: " +
-                     (messages.has_errors() ? messages.first_error() : std::string("read error")));
-    poly = reader->GetOutput();
-    info.binary = reader->GetFileType() == VTK_BINARY;
-    if (const char* header = reader->GetHeader()) info.tagged_space = find_space_tag(header);
-  }
+  vtkNew<vtkXMLPolyDataReader> reader;
+  messages.observe(reader);
+  messages.observe(reader->GetExecutive());
+  reader->SetReaderErrorObserver(messages.command());
+  reader->SetParserErrorObserver(messages.command());
+  if (!reader->CanReadFile(path.c_str())) fail(name, "not a VTK XML PolyData (.vtp) file");
+  reader->SetFileName(path.c_str());
+  reader->Update();
+  if (messages.has_errors() || reader->GetErrorCode() != 0)
+    fail(name, "cannot read VTK XML PolyData: " +
+                   (messages.has_errors() ? messages.first_error() : std::string("read error")));
+  vtkPolyData* poly = reader->GetOutput();
   if (!poly) fail(name, "VTK reader returned no data");
+  info.binary = true;  // appended/binary or ascii data arrays; VTK does not say
   convert(poly, name, options, out);
 }
 
