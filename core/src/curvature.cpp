@@ -26,37 +26,31 @@ namespace {
 constexpr std::size_t kFaceGrain = 2048;
 constexpr std::size_t kVertexGrain = 1024;
 
-/// Solves the SPD system A x = b (row-major N x N) by LDLᵀ without pivoting.
-/// Returns false when a pivot is not clearly positive (rank-deficient fit).
+/// Solves the symmetric tridiagonal system with diagonal `diag` and
+/// off-diagonal `off` (off[i] = A[i][i+1]) by LDLᵀ without pivoting (the
+/// normal equations of both per-face fits are tridiagonal). Returns false
+/// when a pivot is not clearly positive (rank-deficient fit).
 template <int N>
-bool solve_spd(const double (&A)[N][N], const double (&b)[N], double (&x)[N]) {
-  double L[N][N] = {};
-  double d[N];
+bool solve_spd_tridiagonal(const double (&diag)[N], const double (&off)[N - 1],
+                           const double (&b)[N], double (&x)[N]) {
   double max_diag = 0.0;
-  for (int i = 0; i < N; ++i) max_diag = std::max(max_diag, A[i][i]);
+  for (int i = 0; i < N; ++i) max_diag = std::max(max_diag, diag[i]);
   if (!(max_diag > 0.0)) return false;
-  for (int j = 0; j < N; ++j) {
-    double dj = A[j][j];
-    for (int k = 0; k < j; ++k) dj -= L[j][k] * L[j][k] * d[k];
-    if (!(dj > 1e-12 * max_diag)) return false;
-    d[j] = dj;
-    for (int i = j + 1; i < N; ++i) {
-      double s = A[i][j];
-      for (int k = 0; k < j; ++k) s -= L[i][k] * L[j][k] * d[k];
-      L[i][j] = s / dj;
-    }
+  const double tiny = 1e-12 * max_diag;
+  double inv_d[N], l[N], y[N];
+  double d = diag[0];
+  if (!(d > tiny)) return false;
+  inv_d[0] = 1.0 / d;
+  y[0] = b[0];
+  for (int i = 1; i < N; ++i) {
+    l[i] = off[i - 1] * inv_d[i - 1];
+    d = diag[i] - l[i] * off[i - 1];
+    if (!(d > tiny)) return false;
+    inv_d[i] = 1.0 / d;
+    y[i] = b[i] - l[i] * y[i - 1];
   }
-  double y[N];
-  for (int i = 0; i < N; ++i) {
-    double s = b[i];
-    for (int k = 0; k < i; ++k) s -= L[i][k] * y[k];
-    y[i] = s;
-  }
-  for (int i = N - 1; i >= 0; --i) {
-    double s = y[i] / d[i];
-    for (int k = i + 1; k < N; ++k) s -= L[k][i] * x[k];
-    x[i] = s;
-  }
+  x[N - 1] = y[N - 1] * inv_d[N - 1];
+  for (int i = N - 2; i >= 0; --i) x[i] = y[i] * inv_d[i] - l[i + 1] * x[i + 1];
   return true;
 }
 
@@ -94,12 +88,40 @@ inline TangentTensor2 tensor_from_principal(double k1, double k2, double c, doub
 }
 
 /// Coefficients of the cubic form C (a,b,c,d in a frame F) in a new frame
-/// whose axes have coordinates x = (x1,x2), y = (y1,y2) in F.
+/// whose axes have coordinates x = (x1,x2), y = (y1,y2) in F:
+/// C(x,x,x), C(x,x,y), C(x,y,y), C(y,y,y), expanded.
 inline void cubic_reexpress(const double (&C)[4], const Vec2& x, const Vec2& y, double (&out)[4]) {
-  out[0] = curvature_derivative_form(C[0], C[1], C[2], C[3], x, x, x);
-  out[1] = curvature_derivative_form(C[0], C[1], C[2], C[3], x, x, y);
-  out[2] = curvature_derivative_form(C[0], C[1], C[2], C[3], x, y, y);
-  out[3] = curvature_derivative_form(C[0], C[1], C[2], C[3], y, y, y);
+  const double a = C[0], b = C[1], c = C[2], d = C[3];
+  const double x1 = x[0], x2 = x[1], y1 = y[0], y2 = y[1];
+  // C(p, q, .) as a linear form in the last argument: (C(p,q,e1), C(p,q,e2)).
+  const double xx1 = a * x1 * x1 + 2 * b * x1 * x2 + c * x2 * x2;  // C(x,x,e1)
+  const double xx2 = b * x1 * x1 + 2 * c * x1 * x2 + d * x2 * x2;  // C(x,x,e2)
+  const double yy1 = a * y1 * y1 + 2 * b * y1 * y2 + c * y2 * y2;  // C(y,y,e1)
+  const double yy2 = b * y1 * y1 + 2 * c * y1 * y2 + d * y2 * y2;  // C(y,y,e2)
+  out[0] = xx1 * x1 + xx2 * x2;
+  out[1] = xx1 * y1 + xx2 * y2;
+  out[2] = yy1 * x1 + yy2 * x2;
+  out[3] = yy1 * y1 + yy2 * y2;
+}
+
+/// Coordinates, in the face frame (t, b), of the vertex tangent vectors x
+/// and y after the minimal rotation from the vertex plane (normal n) into
+/// the face plane (normal nT). Uses R x . t = x . t - (nT . x)(n . t)/(1+c),
+/// which follows from R x = x - (nT . x)/(1+c) (n + nT) and t, b _|_ nT.
+struct FrameInFace {
+  double x1, x2, y1, y2;
+};
+inline FrameInFace frame_in_face(const Vec3& x, const Vec3& y, const Vec3& n, const Vec3& nT,
+                                 const Vec3& t, const Vec3& b) {
+  const double c = n.dot(nT);
+  if (!(c > -1.0 + 1e-12)) {
+    const Vec3 rx = detail::rotate_tangent(x, n, nT), ry = detail::rotate_tangent(y, n, nT);
+    return {rx.dot(t), rx.dot(b), ry.dot(t), ry.dot(b)};
+  }
+  const double s = 1.0 / (1.0 + c);
+  const double nt = n.dot(t) * s, nb = n.dot(b) * s;
+  const double xn = nT.dot(x), yn = nT.dot(y);
+  return {x.dot(t) - xn * nt, x.dot(b) - xn * nb, y.dot(t) - yn * nt, y.dot(b) - yn * nb};
 }
 
 }  // namespace
@@ -108,7 +130,7 @@ PrincipalFrame diagonalize(const TangentTensor2& t, const Vec3& u, const Vec3& v
                            const Vec3& normal) {
   const double m = 0.5 * (t.xx + t.yy);
   const double d = 0.5 * (t.xx - t.yy);
-  const double r = std::hypot(d, t.xy);
+  const double r = std::sqrt(d * d + t.xy * t.xy);
   double x1, x2;  // eigenvector of m + r
   if (d >= 0.0) {
     x1 = r + d;
@@ -117,7 +139,7 @@ PrincipalFrame diagonalize(const TangentTensor2& t, const Vec3& u, const Vec3& v
     x1 = t.xy;
     x2 = r - d;
   }
-  const double len = std::hypot(x1, x2);
+  const double len = std::sqrt(x1 * x1 + x2 * x2);
   if (len > 0.0) {
     x1 /= len;
     x2 /= len;
@@ -144,91 +166,185 @@ PrincipalFrame diagonalize(const TangentTensor2& t, const Vec3& u, const Vec3& v
 
 namespace detail {
 
-PrincipalCurvatures estimate_curvature(const CurvatureInputs& in) {
+namespace {
+
+/// The least-squares fit of II on one face (ALGORITHMS.md §2.1), in the
+/// frame (t, b = nT x t); false if the normal equations are singular.
+inline bool fit_second_fundamental_form(const Vec3 (&e)[3], const Vec3* const (&n)[3],
+                                        const Vec3& t, const Vec3& b, double (&x)[3]) {
+  // Per edge j (head corner j+2, tail j+1): e u + f v = dn.t, f u + g v = dn.b.
+  double suu = 0, suv = 0, svv = 0, r0 = 0, r1 = 0, r2 = 0;
+  for (int j = 0; j < 3; ++j) {
+    const double u = e[j].dot(t), v = e[j].dot(b);
+    const Vec3 dn = *n[(j + 2) % 3] - *n[(j + 1) % 3];
+    const double dnt = dn.dot(t), dnb = dn.dot(b);
+    suu += u * u;
+    suv += u * v;
+    svv += v * v;
+    r0 += u * dnt;
+    r1 += v * dnt + u * dnb;
+    r2 += v * dnb;
+  }
+  // Normal equations [[suu, suv, 0], [suv, suu + svv, suv], [0, suv, svv]].
+  const double diag[3] = {suu, suu + svv, svv};
+  const double off[2] = {suv, suv};
+  const double rhs[3] = {r0, r1, r2};
+  return solve_spd_tridiagonal<3>(diag, off, rhs, x);
+}
+
+/// The least-squares fit of C on one face (§2.3) from the three vertices'
+/// II in the face frame.
+inline bool fit_curvature_derivative(const Vec3 (&e)[3], const TangentTensor2 (&II)[3],
+                                     const Vec3& t, const Vec3& b, double (&x)[4]) {
+  // Per edge: de = a u + b v, df = b u + c v (counted twice), dg = c u + d v.
+  // The normal equations are tridiagonal:
+  // [[uu, uv, 0, 0], [uv, vv + 2uu, 2uv, 0], [0, 2uv, 2vv + uu, uv], [0, 0, uv, vv]].
+  double suu = 0, suv = 0, svv = 0;
+  double rhs[4] = {0.0, 0.0, 0.0, 0.0};
+  for (int j = 0; j < 3; ++j) {
+    const double u = e[j].dot(t), v = e[j].dot(b);
+    const TangentTensor2& h = II[(j + 2) % 3];
+    const TangentTensor2& l = II[(j + 1) % 3];
+    const double de = h.xx - l.xx, df = h.xy - l.xy, dg = h.yy - l.yy;
+    suu += u * u;
+    suv += u * v;
+    svv += v * v;
+    rhs[0] += u * de;
+    rhs[1] += v * de + 2.0 * u * df;
+    rhs[2] += 2.0 * v * df + u * dg;
+    rhs[3] += v * dg;
+  }
+  const double diag[4] = {suu, svv + 2.0 * suu, 2.0 * svv + suu, svv};
+  const double off[3] = {suv, 2.0 * suv, suv};
+  return solve_spd_tridiagonal<4>(diag, off, rhs, x);
+}
+
+}  // namespace
+
+namespace {
+
+/// For every (face, corner), its position in the vertex -> faces CSR list
+/// of Topology, so a face pass can write per-corner results where the
+/// vertex pass will read them contiguously, in vertex_faces(v) order.
+void fill_corner_slots(const Topology& topo, ScratchArray<std::array<std::int32_t, 3>>& slots) {
+  const std::size_t nv = topo.vertex_count();
+  slots.resize(topo.face_count());
+  if (nv == 0) return;
+  const std::int32_t* base = topo.vertex_faces(0).data();
+  parallel_chunks(nv, 8192, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t v = begin; v < end; ++v) {
+      const auto faces = topo.vertex_faces(v);
+      const auto corners = topo.vertex_face_corners(v);
+      const auto offset = static_cast<std::int32_t>(faces.data() - base);
+      for (std::size_t i = 0; i < faces.size(); ++i)
+        slots[faces[i]][corners[i]] = offset + static_cast<std::int32_t>(i);
+    }
+  });
+}
+
+}  // namespace
+
+// Layout (for speed): per-vertex data the face passes need is packed into
+// one record per vertex; each face pass fits its tensor and immediately
+// re-expresses it in the frame of each of its three vertices, writing the
+// weighted result into that corner's slot of a CSR array ordered like
+// topology().vertex_faces(v). The vertex pass then sums contiguous slots in
+// that fixed order: no scattered reads, no atomics, same bits at any thread
+// count.
+PrincipalCurvatures estimate_curvature(const CurvatureInputs& in, FaceFitScratch& scratch) {
   const TriangleMesh& mesh = in.mesh;
+  const Topology& topo = in.topology;
   const std::size_t nf = mesh.faces.size();
   const std::size_t nv = mesh.positions.size();
 
-  // Per face: frame axis t, fitted II = (e, f, g) in (t, n x t), fit ok.
-  struct FaceFit {
-    Vec3 t;
-    double e, f, g;
+  fill_corner_slots(topo, scratch.corner_slot);
+  scratch.slots.resize(3 * nf);
+  scratch.axis.resize(nf);
+
+  // Per vertex: normal and tangent frame axis u (v = n x u).
+  struct VertexFrame {
+    Vec3 n;
+    Vec3 u;
   };
-  std::vector<FaceFit> fits(nf);
-  std::vector<std::uint8_t> fit_ok(nf);
+  ScratchArray<VertexFrame> frames;
+  frames.resize(nv);
+  parallel_chunks(nv, kVertexGrain, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t vi = begin; vi < end; ++vi) {
+      frames[vi].n = in.vertex_normals[vi];
+      if (!in.normal_valid[vi]) {
+        frames[vi].u = Vec3::Zero();
+        continue;
+      }
+      Vec3 u, v;
+      vertex_frame(mesh, topo, vi, frames[vi].n, u, v);
+      frames[vi].u = u;
+    }
+  });
+
+  auto& slots = scratch.slots;
   parallel_chunks(nf, kFaceGrain, [&](std::size_t begin, std::size_t end) {
     for (std::size_t fi = begin; fi < end; ++fi) {
       const Face& face = mesh.faces[fi];
       const Vec3& nT = in.face_normals[fi];
-      fit_ok[fi] = 0;
-      fits[fi] = FaceFit{Vec3::Zero(), 0.0, 0.0, 0.0};
-      if (nT.isZero() || !in.normal_valid[face[0]] || !in.normal_valid[face[1]] ||
-          !in.normal_valid[face[2]])
-        continue;
+      const auto& slot = scratch.corner_slot[fi];
+      for (int k = 0; k < 3; ++k) slots[slot[k]] = {0.0, 0.0, 0.0, 0.0, 0.0};
       const Vec3& p0 = mesh.positions[face[0]];
       const Vec3& p1 = mesh.positions[face[1]];
       const Vec3& p2 = mesh.positions[face[2]];
       const Vec3 e[3] = {p2 - p1, p0 - p2, p1 - p0};
-      const Vec3 t = e[0].normalized();
-      const Vec3 b = nT.cross(t);
-      const Vec3* n[3] = {&in.vertex_normals[face[0]], &in.vertex_normals[face[1]],
-                          &in.vertex_normals[face[2]]};
-      // Normal equations of: e u + f v = dn.t, f u + g v = dn.b per edge.
-      double suu = 0, suv = 0, svv = 0, r0 = 0, r1 = 0, r2 = 0;
-      for (int j = 0; j < 3; ++j) {
-        const double u = e[j].dot(t), v = e[j].dot(b);
-        const Vec3 dn = *n[(j + 2) % 3] - *n[(j + 1) % 3];
-        const double dnt = dn.dot(t), dnb = dn.dot(b);
-        suu += u * u;
-        suv += u * v;
-        svv += v * v;
-        r0 += u * dnt;
-        r1 += v * dnt + u * dnb;
-        r2 += v * dnb;
+      if (nT.isZero()) {
+        scratch.axis[fi] = Vec3::Zero();
+        continue;
       }
-      const double A[3][3] = {{suu, suv, 0.0}, {suv, suu + svv, suv}, {0.0, suv, svv}};
-      const double rhs[3] = {r0, r1, r2};
+      const Vec3 t = e[0].normalized();
+      scratch.axis[fi] = t;
+      if (!in.normal_valid[face[0]] || !in.normal_valid[face[1]] || !in.normal_valid[face[2]])
+        continue;
+      const VertexFrame* V[3] = {&frames[face[0]], &frames[face[1]], &frames[face[2]]};
+      const Vec3* const n[3] = {&V[0]->n, &V[1]->n, &V[2]->n};
+      const Vec3 b = nT.cross(t);
       double x[3];
-      if (!solve_spd<3>(A, rhs, x)) continue;
-      fits[fi] = FaceFit{t, x[0], x[1], x[2]};
-      fit_ok[fi] = 1;
+      if (!fit_second_fundamental_form(e, n, t, b, x)) continue;
+      const Vec3& ca = in.corner_areas[fi];
+      for (int k = 0; k < 3; ++k) {
+        const double w = ca[k];
+        if (!(w > 0.0)) continue;
+        const Vec3& u = V[k]->u;
+        const FrameInFace r = frame_in_face(u, V[k]->n.cross(u), V[k]->n, nT, t, b);
+        const double a1 = r.x1, b1 = r.x2, a2 = r.y1, b2 = r.y2;
+        slots[slot[k]] = {w * (a1 * a1 * x[0] + 2.0 * a1 * b1 * x[1] + b1 * b1 * x[2]),
+                          w * (a1 * a2 * x[0] + (a1 * b2 + a2 * b1) * x[1] + b1 * b2 * x[2]),
+                          w * (a2 * a2 * x[0] + 2.0 * a2 * b2 * x[1] + b2 * b2 * x[2]), 0.0, w};
+      }
     }
   });
 
   PrincipalCurvatures out;
-  out.k1.assign(nv, 0.0);
-  out.k2.assign(nv, 0.0);
-  out.e1.assign(nv, Vec3::Zero());
-  out.e2.assign(nv, Vec3::Zero());
+  assign_large(out.k1, nv, 0.0);
+  assign_large(out.k2, nv, 0.0);
+  assign_large(out.e1, nv, Vec3(Vec3::Zero()));
+  assign_large(out.e2, nv, Vec3(Vec3::Zero()));
   out.valid.assign(nv, 0);
+  const auto* base = nv ? topo.vertex_faces(0).data() : nullptr;
   parallel_chunks(nv, kVertexGrain, [&](std::size_t begin, std::size_t end) {
     for (std::size_t vi = begin; vi < end; ++vi) {
       if (!in.normal_valid[vi]) continue;
-      const Vec3& n = in.vertex_normals[vi];
-      Vec3 u, v;
-      vertex_frame(mesh, in.topology, vi, n, u, v);
-      const auto faces = in.topology.vertex_faces(vi);
-      const auto corners = in.topology.vertex_face_corners(vi);
+      const auto faces = topo.vertex_faces(vi);
+      const std::size_t first = static_cast<std::size_t>(faces.data() - base);
       double ku = 0, kuv = 0, kv = 0, wsum = 0;
       for (std::size_t i = 0; i < faces.size(); ++i) {
-        const auto fi = static_cast<std::size_t>(faces[i]);
-        if (!fit_ok[fi]) continue;
-        const double w = in.corner_areas[fi][corners[i]];
-        if (!(w > 0.0)) continue;
-        const FaceFit& F = fits[fi];
-        const Vec3& nT = in.face_normals[fi];
-        const Vec3 bT = nT.cross(F.t);
-        const Vec3 ru = rotate_tangent(u, n, nT);
-        const Vec3 rv = rotate_tangent(v, n, nT);
-        const double a1 = ru.dot(F.t), b1 = ru.dot(bT);
-        const double a2 = rv.dot(F.t), b2 = rv.dot(bT);
-        ku += w * (a1 * a1 * F.e + 2.0 * a1 * b1 * F.f + b1 * b1 * F.g);
-        kuv += w * (a1 * a2 * F.e + (a1 * b2 + a2 * b1) * F.f + b1 * b2 * F.g);
-        kv += w * (a2 * a2 * F.e + 2.0 * a2 * b2 * F.f + b2 * b2 * F.g);
-        wsum += w;
+        const auto& c = slots[first + i];
+        if (!(c[4] > 0.0)) continue;
+        ku += c[0];
+        kuv += c[1];
+        kv += c[2];
+        wsum += c[4];
       }
       if (!(wsum > 0.0)) continue;
-      const PrincipalFrame pf = diagonalize({ku / wsum, kuv / wsum, kv / wsum}, u, v, n);
+      const double inv = 1.0 / wsum;
+      const Vec3& n = frames[vi].n;
+      const Vec3& u = frames[vi].u;
+      const PrincipalFrame pf = diagonalize({ku * inv, kuv * inv, kv * inv}, u, n.cross(u), n);
       if (!std::isfinite(pf.k1) || !std::isfinite(pf.k2)) continue;
       out.k1[vi] = pf.k1;
       out.k2[vi] = pf.k2;
@@ -241,96 +357,84 @@ PrincipalCurvatures estimate_curvature(const CurvatureInputs& in) {
 }
 
 CurvatureDerivatives estimate_curvature_derivatives(const CurvatureInputs& in,
-                                                    const PrincipalCurvatures& curv) {
+                                                    const PrincipalCurvatures& curv,
+                                                    FaceFitScratch& scratch) {
   const TriangleMesh& mesh = in.mesh;
+  const Topology& topo = in.topology;
   const std::size_t nf = mesh.faces.size();
   const std::size_t nv = mesh.positions.size();
 
-  struct FaceFit {
-    Vec3 t;
-    double C[4];
+  // Per vertex, what the face pass reads, packed into one cache line.
+  struct VertexRecord {
+    Vec3 n;
+    Vec3 e1;
+    double k1, k2;
   };
-  std::vector<FaceFit> fits(nf);
-  std::vector<std::uint8_t> fit_ok(nf);
+  ScratchArray<VertexRecord> vrec;
+  vrec.resize(nv);
+  parallel_chunks(nv, 8192, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t v = begin; v < end; ++v)
+      vrec[v] = VertexRecord{in.vertex_normals[v], curv.e1[v], curv.valid[v] ? curv.k1[v] : 0.0,
+                             curv.valid[v] ? curv.k2[v] : 0.0};
+  });
+
+  // Face pass: re-uses the face frames (t) and slot map of the II fit.
+  auto& slots = scratch.slots;
   parallel_chunks(nf, kFaceGrain, [&](std::size_t begin, std::size_t end) {
     for (std::size_t fi = begin; fi < end; ++fi) {
       const Face& face = mesh.faces[fi];
       const Vec3& nT = in.face_normals[fi];
-      fit_ok[fi] = 0;
-      fits[fi] = FaceFit{Vec3::Zero(), {0.0, 0.0, 0.0, 0.0}};
+      const auto& slot = scratch.corner_slot[fi];
+      for (int k = 0; k < 3; ++k) slots[slot[k]] = {0.0, 0.0, 0.0, 0.0, 0.0};
       if (nT.isZero() || !curv.valid[face[0]] || !curv.valid[face[1]] || !curv.valid[face[2]])
         continue;
       const Vec3& p0 = mesh.positions[face[0]];
       const Vec3& p1 = mesh.positions[face[1]];
       const Vec3& p2 = mesh.positions[face[2]];
       const Vec3 e[3] = {p2 - p1, p0 - p2, p1 - p0};
-      const Vec3 t = e[0].normalized();
+      const Vec3& t = scratch.axis[fi];
       const Vec3 b = nT.cross(t);
+      const VertexRecord* V[3] = {&vrec[face[0]], &vrec[face[1]], &vrec[face[2]]};
+      Vec3 e2[3];
+      FrameInFace r[3];
       TangentTensor2 II[3];
       for (int k = 0; k < 3; ++k) {
-        const auto v = static_cast<std::size_t>(face[k]);
-        const Vec3 E1 = rotate_tangent(curv.e1[v], in.vertex_normals[v], nT);
-        II[k] = tensor_from_principal(curv.k1[v], curv.k2[v], E1.dot(t), E1.dot(b));
+        e2[k] = V[k]->n.cross(V[k]->e1);
+        r[k] = frame_in_face(V[k]->e1, e2[k], V[k]->n, nT, t, b);
+        II[k] = tensor_from_principal(V[k]->k1, V[k]->k2, r[k].x1, r[k].x2);
       }
-      // Per edge: de = a u + b v, df = b u + c v (counted twice), dg = c u + d v.
-      double A[4][4] = {};
-      double rhs[4] = {};
-      for (int j = 0; j < 3; ++j) {
-        const double u = e[j].dot(t), v = e[j].dot(b);
-        const TangentTensor2& h = II[(j + 2) % 3];
-        const TangentTensor2& l = II[(j + 1) % 3];
-        const double de = h.xx - l.xx, df = h.xy - l.xy, dg = h.yy - l.yy;
-        const double uu = u * u, uv = u * v, vv = v * v;
-        A[0][0] += uu;
-        A[0][1] += uv;
-        A[1][1] += vv + 2.0 * uu;
-        A[1][2] += 2.0 * uv;
-        A[2][2] += 2.0 * vv + uu;
-        A[2][3] += uv;
-        A[3][3] += vv;
-        rhs[0] += u * de;
-        rhs[1] += v * de + 2.0 * u * df;
-        rhs[2] += 2.0 * v * df + u * dg;
-        rhs[3] += v * dg;
-      }
-      A[1][0] = A[0][1];
-      A[2][1] = A[1][2];
-      A[3][2] = A[2][3];
       double x[4];
-      if (!solve_spd<4>(A, rhs, x)) continue;
-      fits[fi] = FaceFit{t, {x[0], x[1], x[2], x[3]}};
-      fit_ok[fi] = 1;
+      if (!fit_curvature_derivative(e, II, t, b, x)) continue;
+      const Vec3& ca = in.corner_areas[fi];
+      for (int k = 0; k < 3; ++k) {
+        const double w = ca[k];
+        if (!(w > 0.0)) continue;
+        double C[4];
+        cubic_reexpress(x, Vec2(r[k].x1, r[k].x2), Vec2(r[k].y1, r[k].y2), C);
+        slots[slot[k]] = {w * C[0], w * C[1], w * C[2], w * C[3], w};
+      }
     }
   });
 
   CurvatureDerivatives out;
-  out.a.assign(nv, 0.0);
-  out.b.assign(nv, 0.0);
-  out.c.assign(nv, 0.0);
-  out.d.assign(nv, 0.0);
+  assign_large(out.a, nv, 0.0);
+  assign_large(out.b, nv, 0.0);
+  assign_large(out.c, nv, 0.0);
+  assign_large(out.d, nv, 0.0);
   out.valid.assign(nv, 0);
+  const auto* base = nv ? topo.vertex_faces(0).data() : nullptr;
   parallel_chunks(nv, kVertexGrain, [&](std::size_t begin, std::size_t end) {
     for (std::size_t vi = begin; vi < end; ++vi) {
       if (!curv.valid[vi]) continue;
-      const Vec3& n = in.vertex_normals[vi];
-      const auto faces = in.topology.vertex_faces(vi);
-      const auto corners = in.topology.vertex_face_corners(vi);
+      const auto faces = topo.vertex_faces(vi);
+      const std::size_t first = static_cast<std::size_t>(faces.data() - base);
       double acc[4] = {0.0, 0.0, 0.0, 0.0};
       double wsum = 0.0;
       for (std::size_t i = 0; i < faces.size(); ++i) {
-        const auto fi = static_cast<std::size_t>(faces[i]);
-        if (!fit_ok[fi]) continue;
-        const double w = in.corner_areas[fi][corners[i]];
-        if (!(w > 0.0)) continue;
-        const FaceFit& F = fits[fi];
-        const Vec3& nT = in.face_normals[fi];
-        const Vec3 bT = nT.cross(F.t);
-        const Vec3 r1 = rotate_tangent(curv.e1[vi], n, nT);
-        const Vec3 r2 = rotate_tangent(curv.e2[vi], n, nT);
-        double C[4];
-        cubic_reexpress(F.C, Vec2(r1.dot(F.t), r1.dot(bT)), Vec2(r2.dot(F.t), r2.dot(bT)), C);
-        for (int k = 0; k < 4; ++k) acc[k] += w * C[k];
-        wsum += w;
+        const auto& c = slots[first + i];
+        if (!(c[4] > 0.0)) continue;
+        for (int k = 0; k < 4; ++k) acc[k] += c[k];
+        wsum += c[4];
       }
       if (!(wsum > 0.0)) continue;
       const double inv = 1.0 / wsum;

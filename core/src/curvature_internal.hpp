@@ -2,12 +2,14 @@
 // cache (surface.cpp) with its already computed inputs. Not installed.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
 #include "fabrica/core/mesh.hpp"
 #include "fabrica/core/surface.hpp"
 #include "fabrica/core/topology.hpp"
+#include "geometry_kernels.hpp"
 
 namespace fabrica::detail {
 
@@ -20,13 +22,26 @@ struct CurvatureInputs {
   const std::vector<std::uint8_t>& normal_valid;
 };
 
+/// Buffers shared by the two fits (allocated once per Surface): the face
+/// frame axis t = e0/|e0| of each face (the frame is (t, n x t)), each
+/// (face, corner)'s position in the vertex -> faces CSR list, and one slot
+/// per such position holding that corner's weighted, re-expressed tensor
+/// (II: 3 values, C: 4) and its weight (last entry; 0 = not used).
+struct FaceFitScratch {
+  ScratchArray<Vec3> axis;
+  ScratchArray<std::array<std::int32_t, 3>> corner_slot;
+  ScratchArray<std::array<double, 5>> slots;
+};
+
 /// Rusinkiewicz per-face fit of II and its re-expression at the vertices.
-PrincipalCurvatures estimate_curvature(const CurvatureInputs& in);
+/// Fills scratch (kept for the derivative fit).
+PrincipalCurvatures estimate_curvature(const CurvatureInputs& in, FaceFitScratch& scratch);
 
 /// Per-face fit of the derivative tensor C from `curvature` and its
-/// re-expression at the vertices.
+/// re-expression at the vertices. Uses scratch from estimate_curvature.
 CurvatureDerivatives estimate_curvature_derivatives(const CurvatureInputs& in,
-                                                    const PrincipalCurvatures& curvature);
+                                                    const PrincipalCurvatures& curvature,
+                                                    FaceFitScratch& scratch);
 
 /// Run `body(begin, end)` over [0, n) in parallel chunks, inside an isolated
 /// task region (a thread waiting here never picks up unrelated outer tasks,

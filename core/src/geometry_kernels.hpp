@@ -10,12 +10,79 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <memory>
+#include <vector>
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 
 #include "fabrica/core/mesh.hpp"
 #include "fabrica/core/surface.hpp"
 #include "fabrica/core/types.hpp"
 
 namespace fabrica::detail {
+
+/// Sets v to n copies of `value`. For large arrays (>= 4 MiB) the storage is
+/// first reserved and marked for transparent huge pages (Linux), so filling
+/// it takes a few hundred page faults instead of thousands: on the 2-core
+/// build machines that is ~20 ms of a ~40 ms precompute on a 270k-face mesh.
+/// Only the memory's paging changes, never its contents.
+template <class T>
+void assign_large(std::vector<T>& v, std::size_t n, const T& value) {
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+  constexpr std::size_t kHuge = std::size_t(2) << 20;
+  const std::size_t bytes = n * sizeof(T);
+  if (bytes >= 2 * kHuge && v.capacity() < n) {
+    std::vector<T>().swap(v);
+    v.reserve(n);
+    const auto begin = reinterpret_cast<std::uintptr_t>(v.data());
+    const std::uintptr_t first = (begin + kHuge - 1) & ~(kHuge - 1);
+    const std::uintptr_t last = (begin + bytes) & ~(kHuge - 1);
+    if (last > first) madvise(reinterpret_cast<void*>(first), last - first, MADV_HUGEPAGE);
+  }
+#endif
+  v.assign(n, value);
+}
+
+/// A scratch array whose elements are NOT initialised (every pass that uses
+/// one writes each element before anything reads it), so the first touch of
+/// its pages happens inside the parallel pass that fills it, and large ones
+/// use transparent huge pages as in assign_large.
+template <class T>
+class ScratchArray {
+ public:
+  void resize(std::size_t n) {
+    if (n > capacity_) {
+      data_.reset();
+      data_.reset(new T[n]);
+      capacity_ = n;
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+      constexpr std::size_t kHuge = std::size_t(2) << 20;
+      const std::size_t bytes = n * sizeof(T);
+      const auto begin = reinterpret_cast<std::uintptr_t>(data_.get());
+      const std::uintptr_t first = (begin + kHuge - 1) & ~(kHuge - 1);
+      const std::uintptr_t last = (begin + bytes) & ~(kHuge - 1);
+      if (bytes >= 2 * kHuge && last > first)
+        madvise(reinterpret_cast<void*>(first), last - first, MADV_HUGEPAGE);
+#endif
+    }
+    size_ = n;
+  }
+  std::size_t size() const {
+    return size_;
+  }
+  T& operator[](std::size_t i) {
+    return data_[i];
+  }
+  const T& operator[](std::size_t i) const {
+    return data_[i];
+  }
+
+ private:
+  std::unique_ptr<T[]> data_;
+  std::size_t size_ = 0, capacity_ = 0;
+};
 
 /// A face is degenerate when twice its area is below this fraction of its
 /// longest squared edge (the sine of its largest angle is ~1e-12 or less),

@@ -33,6 +33,7 @@ struct Surface::Cache {
 
   std::once_flag curvature_once;
   PrincipalCurvatures curvature;
+  detail::FaceFitScratch fit_scratch;  ///< per-face fits, freed after the derivatives
 
   std::once_flag derivative_once;
   CurvatureDerivatives derivatives;
@@ -80,10 +81,10 @@ void compute_face_and_vertex(const TriangleMesh& mesh, const Topology& topo,
                              std::vector<double>* vertex_areas) {
   const std::size_t nf = mesh.faces.size();
   const std::size_t nv = mesh.positions.size();
-  face_normals.resize(nf);
-  face_areas.resize(nf);
-  corner_areas.resize(nf);
-  std::vector<Vec3> weights;
+  detail::assign_large(face_normals, nf, Vec3(Vec3::Zero()));
+  detail::assign_large(face_areas, nf, 0.0);
+  detail::assign_large(corner_areas, nf, Vec3(Vec3::Zero()));
+  detail::ScratchArray<Vec3> weights;
   if (vertex_normals) weights.resize(nf);
   detail::parallel_chunks(nf, kFaceGrain, [&](std::size_t begin, std::size_t end) {
     for (std::size_t f = begin; f < end; ++f) {
@@ -95,9 +96,9 @@ void compute_face_and_vertex(const TriangleMesh& mesh, const Topology& topo,
     }
   });
   if (!vertex_normals) return;
-  vertex_normals->assign(nv, Vec3::Zero());
+  detail::assign_large(*vertex_normals, nv, Vec3(Vec3::Zero()));
   normal_valid->assign(nv, 0);
-  vertex_areas->assign(nv, 0.0);
+  detail::assign_large(*vertex_areas, nv, 0.0);
   detail::parallel_chunks(nv, kVertexGrain, [&](std::size_t begin, std::size_t end) {
     for (std::size_t v = begin; v < end; ++v) {
       const auto faces = topo.vertex_faces(v);
@@ -173,7 +174,7 @@ const PrincipalCurvatures& Surface::curvature() const {
   std::call_once(c.curvature_once, [&] {
     const detail::CurvatureInputs in{mesh_,          c.topology,       c.face_normals,
                                      c.corner_areas, c.vertex_normals, c.normal_valid};
-    c.curvature = detail::estimate_curvature(in);
+    c.curvature = detail::estimate_curvature(in, c.fit_scratch);
     if (options_.curvature_smoothing_passes > 0)
       smooth_curvature(*this, c.curvature,
                        options_.curvature_smoothing_sigma * median_edge_length(),
@@ -188,7 +189,8 @@ const CurvatureDerivatives& Surface::curvature_derivatives() const {
   std::call_once(c.derivative_once, [&] {
     const detail::CurvatureInputs in{mesh_,          c.topology,       c.face_normals,
                                      c.corner_areas, c.vertex_normals, c.normal_valid};
-    c.derivatives = detail::estimate_curvature_derivatives(in, curv);
+    c.derivatives = detail::estimate_curvature_derivatives(in, curv, c.fit_scratch);
+    c.fit_scratch = {};
     if (options_.derivative_smoothing_passes > 0)
       smooth_curvature_derivatives(*this, curv, c.derivatives,
                                    options_.curvature_smoothing_sigma * median_edge_length(),
