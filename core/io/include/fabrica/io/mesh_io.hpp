@@ -38,7 +38,7 @@ struct ReadOptions {
   /// wins over a tag in the file. Coordinates are never transformed.
   std::optional<Space> space;
   /// Keep per-vertex normals stored in the file (OBJ vn matched to vertices
-  /// only when unambiguous, PLY nx/ny/nz, VTK point normals, OFF NOFF) in
+  /// only when unambiguous, PLY nx/ny/nz, VTP point normals, OFF NOFF) in
   /// MeshFileInfo::file_normals. Ignored otherwise (fabrica computes its own).
   bool keep_file_normals = false;
 };
