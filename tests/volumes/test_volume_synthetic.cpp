@@ -256,6 +256,30 @@ TEST(VolumeExtraction, SameBitsAtAnyThreadCount) {
   }
 }
 
+TEST(VolumeExtraction, ProgressAndCancel) {
+  const auto dir = test::temp_dir("vol-progress");
+  const VolumeGeometry g = grid(Mat3::Identity(), Vec3(1.0, 1.0, 1.0));
+  test::write_mha(dir / "p.mha", g, as_string(test::sample_labels(g, two_spheres)), "MET_UCHAR",
+                  false);
+  const io::LabelVolume volume = io::read_label_volume(dir / "p.mha");
+  ExtractOptions o;
+  std::vector<std::size_t> calls;
+  o.progress = [&](std::size_t done, std::size_t total) {
+    calls.push_back(done * 10 + total);
+    return true;
+  };
+  const auto all = io::extract_surfaces(volume, o);
+  EXPECT_EQ(calls, (std::vector<std::size_t>{12, 22}));
+  // Cancel after the first label (one thread: the second never starts).
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+  o.progress = [](std::size_t, std::size_t) { return false; };
+  const auto cancelled = io::extract_surfaces(volume, o);
+  ASSERT_EQ(cancelled.size(), 2u);
+  EXPECT_EQ(std::count_if(cancelled.begin(), cancelled.end(),
+                          [](const io::ExtractedSurface& s) { return s.problem == "cancelled"; }),
+            1);
+}
+
 TEST(VolumeOrientation, MirroredEncodingsGiveTheSameSurface) {
   // The same physical object stored with identity axes and with every axis
   // reversed and permuted (det -1): the surfaces must coincide, not mirror.

@@ -20,9 +20,11 @@
 #include <vtkWindowedSincPolyDataFilter.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <map>
+#include <mutex>
 #include <tuple>
 
 #include "fabrica/core/error.hpp"
@@ -323,6 +325,15 @@ std::vector<ExtractedSurface> extract_surfaces(const LabelVolume& volume,
   const bool layered = volume.layers.size() > 1;
   const int iterations = options.smoothing_iterations.value_or(20);
   std::vector<ExtractedSurface> results(targets.size());
+  std::mutex progress_mutex;
+  std::size_t done = 0;
+  std::atomic<bool> cancelled{false};
+  auto report = [&] {
+    if (!options.progress) return;
+    const std::lock_guard<std::mutex> lock(progress_mutex);
+    ++done;
+    if (!options.progress(done, targets.size())) cancelled = true;
+  };
   tbb::parallel_for(std::size_t{0}, targets.size(), [&](std::size_t t) {
     const Target& target = targets[t];
     ExtractedSurface& r = results[t];
@@ -338,9 +349,14 @@ std::vector<ExtractedSurface> extract_surfaces(const LabelVolume& volume,
       }
     if (target.stats == nullptr) {
       r.problem = "label " + std::to_string(target.value) + " has no voxels in this volume";
+      report();
       return;
     }
     r.voxel_count = target.stats->count;
+    if (cancelled) {
+      r.problem = "cancelled";
+      return;
+    }
     try {
       r.mesh = extract_label(volume, *target.stats, options, iterations);
       if (r.mesh.faces.empty()) r.problem = "the label's surface is empty";
@@ -348,6 +364,7 @@ std::vector<ExtractedSurface> extract_surfaces(const LabelVolume& volume,
       r.mesh = {};
       r.problem = std::string("extraction failed: ") + e.what();
     }
+    report();
   });
   return results;
 }

@@ -29,6 +29,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -112,6 +113,11 @@ struct ExtractOptions {
   /// such as level sets; also allowed on label maps, e.g. 0.5 for a mask).
   /// A scalar (non-integer) volume requires it.
   std::optional<double> iso_value;
+  /// Optional progress report, called after each label is done with
+  /// (labels done, labels in total); calls never overlap but may come from
+  /// worker threads. Return false to cancel: labels not started yet come
+  /// back with an empty mesh and problem "cancelled".
+  std::function<bool(std::size_t done, std::size_t total)> progress;
 };
 
 /// One extracted surface. `mesh` is empty when the label yielded no surface;
