@@ -160,6 +160,7 @@ int run_info(const InfoOptions& o) {
     out << "repair\n";
     if (!repair_report->changed()) out << "  nothing to change\n";
     for (const auto& c : repair_report->changes) out << "  - " << c << "\n";
+    for (const auto& w : repair_report->warnings) out << "  ! " << w << "\n";
     out << "after repair\n";
     if (after->clean()) {
       out << "  clean: no defects\n";

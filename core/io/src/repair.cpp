@@ -77,10 +77,66 @@ std::vector<std::int32_t> tolerance_representatives(const std::vector<Vec3>& pos
   return rep;
 }
 
+// Welds coincident vertices that close cracks: only vertices on boundary
+// edges are merged, into the first such vertex at that position, and a merge
+// is undone when it would create a non-manifold edge or vertex (so copies
+// made by splitting stay split and repair is idempotent).
 std::size_t weld(TriangleMesh& mesh, double tolerance) {
-  const auto rep = tolerance > 0.0 ? tolerance_representatives(mesh.positions, tolerance)
-                                   : exact_representatives(mesh.positions);
-  std::vector<std::uint8_t> moved(mesh.positions.size(), 0);
+  const std::size_t nv = mesh.positions.size();
+  std::vector<std::int32_t> rep(nv);
+  std::iota(rep.begin(), rep.end(), 0);
+  {
+    const detail::ProperTopology before(mesh);
+    std::vector<std::int32_t> candidates;
+    for (std::size_t v = 0; v < nv; ++v)
+      if (before.topology().is_boundary_vertex(v))
+        candidates.push_back(static_cast<std::int32_t>(v));
+    if (candidates.size() < 2) return 0;
+    std::vector<Vec3> points(candidates.size());
+    for (std::size_t i = 0; i < candidates.size(); ++i) points[i] = mesh.positions[candidates[i]];
+    const auto local = tolerance > 0.0 ? tolerance_representatives(points, tolerance)
+                                       : exact_representatives(points);
+    for (std::size_t i = 0; i < candidates.size(); ++i) rep[candidates[i]] = candidates[local[i]];
+  }
+  std::vector<std::uint8_t> is_target(nv, 0);
+  bool any = false;
+  for (std::size_t v = 0; v < nv; ++v)
+    if (rep[v] != static_cast<std::int32_t>(v)) is_target[rep[v]] = any = true;
+  if (!any) return 0;
+
+  // Undo merges whose result is non-manifold; undoing one merge can expose
+  // another (two merges that only together made a fan), so repeat until none.
+  for (bool reverted = true; reverted && any;) {
+    TriangleMesh welded;
+    welded.positions.resize(nv, Vec3::Zero());  // the adjacency only needs the count
+    welded.faces = mesh.faces;
+    for (Face& f : welded.faces)
+      for (auto& v : f) v = rep[v];
+    const detail::ProperTopology after(welded);
+    const Topology& topo = after.topology();
+    std::vector<std::uint8_t> revert(nv, 0);
+    for (std::size_t e = 0; e < topo.edge_count(); ++e)
+      if (topo.is_nonmanifold_edge(e)) {
+        const auto& ends = topo.edge(e);
+        if (is_target[ends[0]] || is_target[ends[1]]) revert[ends[0]] = revert[ends[1]] = 1;
+      }
+    std::vector<int> fan_of_entry;
+    for (std::size_t v = 0; v < nv; ++v)
+      if (is_target[v] && detail::vertex_fans(topo, v, fan_of_entry) > 1) revert[v] = 1;
+    reverted = false;
+    for (std::size_t v = 0; v < nv; ++v)
+      if (revert[rep[v]] && rep[v] != static_cast<std::int32_t>(v)) {
+        rep[v] = static_cast<std::int32_t>(v);
+        reverted = true;
+      }
+    std::fill(is_target.begin(), is_target.end(), 0);
+    any = false;
+    for (std::size_t v = 0; v < nv; ++v)
+      if (rep[v] != static_cast<std::int32_t>(v)) is_target[rep[v]] = any = true;
+  }
+  if (!any) return 0;
+
+  std::vector<std::uint8_t> moved(nv, 0);
   for (Face& f : mesh.faces)
     for (int k = 0; k < 3; ++k)
       if (rep[f[k]] != f[k]) {
@@ -276,32 +332,40 @@ RepairReport repair_mesh(TriangleMesh& mesh, const RepairOptions& o) {
   report.face_origin.resize(mesh.faces.size());
   std::iota(report.face_origin.begin(), report.face_origin.end(), 0);
 
-  if (o.weld) {
-    report.welded_vertices = weld(mesh, o.weld_tolerance);
-    if (report.welded_vertices > 0)
-      report.changes.push_back("welded " + plural(report.welded_vertices, "vertex", "vertices") +
-                               (o.weld_tolerance > 0.0
-                                    ? " within " + std::to_string(o.weld_tolerance)
-                                    : std::string(" at identical positions")) +
-                               " into earlier ones (the copies stay in place, unreferenced)");
-  }
   // Adjacency is rebuilt only after a step changed the faces.
   std::optional<detail::ProperTopology> proper;
   auto topology = [&]() -> const detail::ProperTopology& {
     if (!proper) proper.emplace(mesh);
     return *proper;
   };
-  if (o.remove_degenerate || o.remove_duplicates) {
-    if (remove_faces(mesh, topology(), o, report)) proper.reset();
-    if (report.removed_degenerate_faces > 0)
-      report.changes.push_back(
-          "removed " +
-          plural(report.removed_degenerate_faces, "degenerate face", "degenerate faces") +
-          " (repeated vertex or zero area)");
-    if (report.removed_duplicate_faces > 0)
-      report.changes.push_back(
-          "removed " + plural(report.removed_duplicate_faces, "duplicate face", "duplicate faces"));
+  // Weld and removal alternate until nothing changes: welding reveals
+  // duplicates, and removing them can unblock a weld that would have made a
+  // non-manifold edge with a face that is now gone.
+  for (int round = 0; round < 4; ++round) {
+    const std::size_t welded = o.weld ? weld(mesh, o.weld_tolerance) : 0;
+    report.welded_vertices += welded;
+    if (welded > 0) proper.reset();
+    bool removed = false;
+    if (o.remove_degenerate || o.remove_duplicates)
+      removed = remove_faces(mesh, topology(), o, report);
+    if (removed) proper.reset();
+    if (!removed || !o.weld) break;
   }
+  if (report.welded_vertices > 0)
+    report.changes.push_back(
+        "welded " + plural(report.welded_vertices, "vertex", "vertices") +
+        (o.weld_tolerance > 0.0 ? " within " + std::to_string(o.weld_tolerance)
+                                : std::string(" at identical positions")) +
+        " on boundary edges into earlier ones (closing cracks; the copies stay in place, "
+        "unreferenced)");
+  if (report.removed_degenerate_faces > 0)
+    report.changes.push_back(
+        "removed " +
+        plural(report.removed_degenerate_faces, "degenerate face", "degenerate faces") +
+        " (repeated vertex or zero area)");
+  if (report.removed_duplicate_faces > 0)
+    report.changes.push_back(
+        "removed " + plural(report.removed_duplicate_faces, "duplicate face", "duplicate faces"));
   if (o.split_nonmanifold_vertices || o.split_nonmanifold_edges) {
     const std::size_t split = split_vertices(mesh, topology(), o.split_nonmanifold_vertices,
                                              o.split_nonmanifold_edges, report);
@@ -326,9 +390,9 @@ RepairReport repair_mesh(TriangleMesh& mesh, const RepairOptions& o) {
       report.changes.push_back(line);
     }
     if (report.nonorientable_pieces > 0)
-      report.changes.push_back("could not orient " +
-                               plural(report.nonorientable_pieces, "piece", "pieces") +
-                               " consistently: the surface is not orientable (Moebius-like)");
+      report.warnings.push_back("could not orient " +
+                                plural(report.nonorientable_pieces, "piece", "pieces") +
+                                " consistently: the surface is not orientable (Moebius-like)");
   }
   return report;
 }
@@ -355,7 +419,8 @@ nlohmann::json to_json(const RepairReport& r) {
           {"split_nonmanifold_vertices", r.split_nonmanifold_vertices},
           {"cut_nonmanifold_edges", r.cut_nonmanifold_edges},
           {"nonorientable_pieces", r.nonorientable_pieces},
-          {"changes", r.changes}};
+          {"changes", r.changes},
+          {"warnings", r.warnings}};
 }
 
 }  // namespace fabrica::io

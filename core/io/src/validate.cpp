@@ -270,7 +270,8 @@ ValidationReport validate_mesh(const TriangleMesh& mesh, const ValidateOptions& 
     for (std::size_t f = 0; f < nf; ++f)
       piece_volume6[piece[f]] +=
           detail::signed_volume6(pos[faces[f][0]], pos[faces[f][1]], pos[faces[f][2]], origin);
-    const std::vector<std::uint8_t> closed_piece(pieces, 1);
+    std::vector<std::uint8_t> closed_piece(pieces, 1);  // as in repair: flat pieces have no side
+    for (std::size_t p = 0; p < pieces; ++p) closed_piece[p] = piece_volume6[p] != 0.0;
     const auto depth = detail::nesting_depths(pos, faces, piece, closed_piece);
     for (std::size_t p = 0; p < pieces; ++p)
       if (piece_volume6[p] != 0.0 && (piece_volume6[p] > 0.0) != (depth[p] % 2 == 0))

@@ -9,7 +9,10 @@
 // (a, c, b) so corner 0 keeps its vertex.
 //
 // Steps, in order (each can be switched off in RepairOptions):
-//  1. weld vertices at identical positions (or within weld_tolerance);
+//  1. weld vertices at identical positions (or within weld_tolerance) to close
+//     cracks: only vertices on boundary edges, and never where the merge would
+//     create a non-manifold edge or vertex (so a repaired mesh stays repaired,
+//     and repair is idempotent);
 //  2. remove degenerate faces (repeated vertex, or zero area relative to the
 //     mean edge length^2, as in validate.hpp);
 //  3. remove duplicate faces (same vertex set as an earlier face);
@@ -67,6 +70,8 @@ struct RepairReport {
   std::vector<std::int32_t> face_origin;
   /// Human-readable one-liners; empty when nothing changed.
   std::vector<std::string> changes;
+  /// What could not be repaired (a non-orientable piece keeps one seam).
+  std::vector<std::string> warnings;
 
   bool changed() const { return !changes.empty(); }
 };
