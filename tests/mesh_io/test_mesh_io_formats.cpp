@@ -156,6 +156,10 @@ TEST(MeshIoObj, ReferenceFormsNegativeIndicesPolygonsComments) {
   EXPECT_EQ(r.mesh.positions[1], Vec3(1, 0, 0));
   EXPECT_EQ(r.mesh.positions[4], Vec3(0.5, 0.5, 1));
   EXPECT_TRUE(r.info.file_normals.empty());  // not asked for
+
+  // A UTF-8 byte-order mark must not hide the first vertex.
+  test::write_bytes(dir / "bom.obj", "\xEF\xBB\xBFv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  EXPECT_EQ(read_mesh(dir / "bom.obj").mesh.vertex_count(), 3u);
 }
 
 TEST(MeshIoPly, TriangleStripsWithRestartsAndDegenerates) {

@@ -181,7 +181,10 @@ LoadedMesh read_mesh(const std::filesystem::path& path, const ReadOptions& optio
     if (ext != ".obj" && ext != ".ply" && ext != ".stl" && ext != ".off" && ext != ".vtk")
       detail::fail(name,
                    "unknown mesh file extension '" + ext + "' (fabrica reads " + kKnownRead + ")");
-    const std::string data = read_whole_file(path, name);
+    const std::string bytes = read_whole_file(path, name);
+    std::string_view data = bytes;
+    // Text written by some Windows tools starts with a UTF-8 byte-order mark.
+    if (ext != ".stl" && data.substr(0, 3) == "\xEF\xBB\xBF") data.remove_prefix(3);
     if (ext == ".obj")
       detail::read_obj(data, name, options, out);
     else if (ext == ".ply")
