@@ -256,6 +256,32 @@ TEST(VolumeExtraction, SameBitsAtAnyThreadCount) {
   }
 }
 
+TEST(VolumeExtraction, DecimationHalvesFacesAndKeepsTheShape) {
+  const auto dir = test::temp_dir("vol-decimate");
+  const VolumeGeometry g = grid(Mat3::Identity(), Vec3(0.5, 0.5, 0.5));
+  test::write_mha(dir / "d.mha", g, as_string(test::sample_labels(g, two_spheres)), "MET_UCHAR",
+                  true);
+  const io::LabelVolume volume = io::read_label_volume(dir / "d.mha");
+  ExtractOptions o;
+  o.labels = {1};
+  const auto full = io::extract_surfaces(volume, o);
+  o.decimate = 0.5;
+  const auto half = io::extract_surfaces(volume, o);
+  ASSERT_EQ(full.size(), 1u);
+  ASSERT_EQ(half.size(), 1u);
+  const double ratio = static_cast<double>(half[0].mesh.face_count()) /
+                       static_cast<double>(full[0].mesh.face_count());
+  EXPECT_NEAR(ratio, 0.5, 0.05);
+  EXPECT_EQ(test::open_and_misoriented_edges(half[0].mesh).first, 0u);
+  const double expected = 4.0 / 3.0 * kPi * std::pow(kBigR, 3);
+  EXPECT_NEAR(test::enclosed_volume(half[0].mesh), expected, 0.05 * expected);
+  EXPECT_LT((test::volume_centroid(half[0].mesh) - kBig).norm(), 0.1);
+  double worst = 0.0;
+  for (const Vec3& p : half[0].mesh.positions)
+    worst = std::max(worst, std::abs((p - kBig).norm() - kBigR));
+  EXPECT_LT(worst, 0.5);  // one voxel
+}
+
 TEST(VolumeExtraction, ProgressAndCancel) {
   const auto dir = test::temp_dir("vol-progress");
   const VolumeGeometry g = grid(Mat3::Identity(), Vec3(1.0, 1.0, 1.0));
