@@ -372,6 +372,44 @@ TEST(Validate, OpenCylinderHasTwoBoundaryLoops) {
   EXPECT_EQ(after.faces, m.faces);
 }
 
+// Two holes touching at a vertex with faces between them on both sides: the
+// surface's boundary runs from one hole through the vertex into the other,
+// so it is one loop (plus the rim), before and after splitting the vertex.
+TEST(Validate, HolesTouchingAtAVertexFollowTheSurface) {
+  TriangleMesh m = test::make_plane(4.0, 5);  // 5 x 5 vertices, one boundary loop
+  ASSERT_EQ(validate_mesh(m).boundary_loops, 1u);
+  const std::int32_t center = 12;
+  // Remove two faces at the centre that share only the centre vertex.
+  std::vector<std::size_t> at_center;
+  for (std::size_t f = 0; f < m.faces.size(); ++f)
+    if (std::count(m.faces[f].begin(), m.faces[f].end(), center)) at_center.push_back(f);
+  std::size_t a = 0, b = 0;
+  for (std::size_t i = 0; i < at_center.size() && b == 0; ++i)
+    for (std::size_t j = i + 1; j < at_center.size(); ++j) {
+      int common = 0;
+      for (auto u : m.faces[at_center[i]])
+        common += std::count(m.faces[at_center[j]].begin(), m.faces[at_center[j]].end(), u);
+      if (common == 1) {
+        a = at_center[i];
+        b = at_center[j];
+        break;
+      }
+    }
+  ASSERT_NE(b, 0u);
+  m.faces.erase(m.faces.begin() + static_cast<std::ptrdiff_t>(b));
+  m.faces.erase(m.faces.begin() + static_cast<std::ptrdiff_t>(a));
+  const auto r = validate_mesh(m);
+  EXPECT_EQ(r.boundary_loops, 2u);  // the rim and the figure-eight hole
+  EXPECT_EQ(r.nonmanifold_vertices, 1u);
+  EXPECT_NE(r.problems.front().find("vertex 12"), std::string::npos);
+  TriangleMesh after;
+  const auto rep = repair_and_check_order(m, after);
+  EXPECT_EQ(rep.split_nonmanifold_vertices, 1u);
+  const auto again = validate_mesh(after);
+  EXPECT_TRUE(again.clean());
+  EXPECT_EQ(again.boundary_loops, 2u);
+}
+
 TEST(Validate, MoebiusStripIsNotOrientable) {
   TriangleMesh m;
   const int n = 24;

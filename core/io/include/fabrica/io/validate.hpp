@@ -15,9 +15,10 @@
 //   touching at one vertex are one component); unreferenced vertices belong
 //   to none.
 // - boundary edge: used by exactly one face; non-manifold edge: by three or
-//   more. A boundary loop is a chain of boundary edges joined at each vertex
-//   through the fan of faces around it (two holes touching at a vertex are
-//   two loops).
+//   more. A boundary loop is a boundary cycle of the surface: at each vertex
+//   the two boundary edges of the same fan of faces are joined (a bow-tie of
+//   two triangles has two loops), so the count does not change when
+//   non-manifold vertices are split.
 // - non-manifold vertex: its faces form more than one fan (sets connected
 //   through edges incident to the vertex): a bow-tie or pinch point.
 // - consistently oriented: every edge with exactly two faces is used in
