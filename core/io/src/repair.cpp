@@ -81,12 +81,11 @@ std::vector<std::int32_t> tolerance_representatives(const std::vector<Vec3>& pos
 // edges are merged, into the first such vertex at that position, and a merge
 // is undone when it would create a non-manifold edge or vertex (so copies
 // made by splitting stay split and repair is idempotent).
-std::size_t weld(TriangleMesh& mesh, double tolerance) {
+std::size_t weld(TriangleMesh& mesh, const detail::ProperTopology& before, double tolerance) {
   const std::size_t nv = mesh.positions.size();
   std::vector<std::int32_t> rep(nv);
   std::iota(rep.begin(), rep.end(), 0);
   {
-    const detail::ProperTopology before(mesh);
     std::vector<std::int32_t> candidates;
     for (std::size_t v = 0; v < nv; ++v)
       if (before.topology().is_boundary_vertex(v))
@@ -342,7 +341,7 @@ RepairReport repair_mesh(TriangleMesh& mesh, const RepairOptions& o) {
   // duplicates, and removing them can unblock a weld that would have made a
   // non-manifold edge with a face that is now gone.
   for (int round = 0; round < 4; ++round) {
-    const std::size_t welded = o.weld ? weld(mesh, o.weld_tolerance) : 0;
+    const std::size_t welded = o.weld ? weld(mesh, topology(), o.weld_tolerance) : 0;
     report.welded_vertices += welded;
     if (welded > 0) proper.reset();
     bool removed = false;
