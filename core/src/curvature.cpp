@@ -221,11 +221,6 @@ inline bool fit_curvature_derivative(const Vec3 (&e)[3], const TangentTensor2 (&
 
 }  // namespace
 
-namespace {
-
-/// For every (face, corner), its position in the vertex -> faces CSR list
-/// of Topology, so a face pass can write per-corner results where the
-/// vertex pass will read them contiguously, in vertex_faces(v) order.
 void fill_corner_slots(const Topology& topo, ScratchArray<std::array<std::int32_t, 3>>& slots) {
   const std::size_t nv = topo.vertex_count();
   slots.resize(topo.face_count());
@@ -242,8 +237,6 @@ void fill_corner_slots(const Topology& topo, ScratchArray<std::array<std::int32_
   });
 }
 
-}  // namespace
-
 // Layout (for speed): per-vertex data the face passes need is packed into
 // one record per vertex; each face pass fits its tensor and immediately
 // re-expresses it in the frame of each of its three vertices, writing the
@@ -257,7 +250,7 @@ PrincipalCurvatures estimate_curvature(const CurvatureInputs& in, FaceFitScratch
   const std::size_t nf = mesh.faces.size();
   const std::size_t nv = mesh.positions.size();
 
-  fill_corner_slots(topo, scratch.corner_slot);
+  if (scratch.corner_slot.size() != nf) fill_corner_slots(topo, scratch.corner_slot);
   scratch.slots.resize(3 * nf);
   scratch.axis.resize(nf);
 
@@ -265,6 +258,7 @@ PrincipalCurvatures estimate_curvature(const CurvatureInputs& in, FaceFitScratch
   struct VertexFrame {
     Vec3 n;
     Vec3 u;
+    Vec3 v;  // n x u
   };
   ScratchArray<VertexFrame> frames;
   frames.resize(nv);
@@ -272,12 +266,10 @@ PrincipalCurvatures estimate_curvature(const CurvatureInputs& in, FaceFitScratch
     for (std::size_t vi = begin; vi < end; ++vi) {
       frames[vi].n = in.vertex_normals[vi];
       if (!in.normal_valid[vi]) {
-        frames[vi].u = Vec3::Zero();
+        frames[vi].u = frames[vi].v = Vec3::Zero();
         continue;
       }
-      Vec3 u, v;
-      vertex_frame(mesh, topo, vi, frames[vi].n, u, v);
-      frames[vi].u = u;
+      vertex_frame(mesh, topo, vi, frames[vi].n, frames[vi].u, frames[vi].v);
     }
   });
 
@@ -309,8 +301,7 @@ PrincipalCurvatures estimate_curvature(const CurvatureInputs& in, FaceFitScratch
       for (int k = 0; k < 3; ++k) {
         const double w = ca[k];
         if (!(w > 0.0)) continue;
-        const Vec3& u = V[k]->u;
-        const FrameInFace r = frame_in_face(u, V[k]->n.cross(u), V[k]->n, nT, t, b);
+        const FrameInFace r = frame_in_face(V[k]->u, V[k]->v, V[k]->n, nT, t, b);
         const double a1 = r.x1, b1 = r.x2, a2 = r.y1, b2 = r.y2;
         slots[slot[k]] = {w * (a1 * a1 * x[0] + 2.0 * a1 * b1 * x[1] + b1 * b1 * x[2]),
                           w * (a1 * a2 * x[0] + (a1 * b2 + a2 * b1) * x[1] + b1 * b2 * x[2]),
@@ -342,9 +333,8 @@ PrincipalCurvatures estimate_curvature(const CurvatureInputs& in, FaceFitScratch
       }
       if (!(wsum > 0.0)) continue;
       const double inv = 1.0 / wsum;
-      const Vec3& n = frames[vi].n;
-      const Vec3& u = frames[vi].u;
-      const PrincipalFrame pf = diagonalize({ku * inv, kuv * inv, kv * inv}, u, n.cross(u), n);
+      const VertexFrame& F = frames[vi];
+      const PrincipalFrame pf = diagonalize({ku * inv, kuv * inv, kv * inv}, F.u, F.v, F.n);
       if (!std::isfinite(pf.k1) || !std::isfinite(pf.k2)) continue;
       out.k1[vi] = pf.k1;
       out.k2[vi] = pf.k2;
@@ -364,18 +354,19 @@ CurvatureDerivatives estimate_curvature_derivatives(const CurvatureInputs& in,
   const std::size_t nf = mesh.faces.size();
   const std::size_t nv = mesh.positions.size();
 
-  // Per vertex, what the face pass reads, packed into one cache line.
+  // Per vertex, what the face pass reads, packed together.
   struct VertexRecord {
     Vec3 n;
     Vec3 e1;
+    Vec3 e2;
     double k1, k2;
   };
   ScratchArray<VertexRecord> vrec;
   vrec.resize(nv);
   parallel_chunks(nv, 8192, [&](std::size_t begin, std::size_t end) {
     for (std::size_t v = begin; v < end; ++v)
-      vrec[v] = VertexRecord{in.vertex_normals[v], curv.e1[v], curv.valid[v] ? curv.k1[v] : 0.0,
-                             curv.valid[v] ? curv.k2[v] : 0.0};
+      vrec[v] = VertexRecord{in.vertex_normals[v], curv.e1[v], curv.e2[v],
+                             curv.valid[v] ? curv.k1[v] : 0.0, curv.valid[v] ? curv.k2[v] : 0.0};
   });
 
   // Face pass: re-uses the face frames (t) and slot map of the II fit.
@@ -395,12 +386,10 @@ CurvatureDerivatives estimate_curvature_derivatives(const CurvatureInputs& in,
       const Vec3& t = scratch.axis[fi];
       const Vec3 b = nT.cross(t);
       const VertexRecord* V[3] = {&vrec[face[0]], &vrec[face[1]], &vrec[face[2]]};
-      Vec3 e2[3];
       FrameInFace r[3];
       TangentTensor2 II[3];
       for (int k = 0; k < 3; ++k) {
-        e2[k] = V[k]->n.cross(V[k]->e1);
-        r[k] = frame_in_face(V[k]->e1, e2[k], V[k]->n, nT, t, b);
+        r[k] = frame_in_face(V[k]->e1, V[k]->e2, V[k]->n, nT, t, b);
         II[k] = tensor_from_principal(V[k]->k1, V[k]->k2, r[k].x1, r[k].x2);
       }
       double x[4];

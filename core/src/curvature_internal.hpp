@@ -33,6 +33,11 @@ struct FaceFitScratch {
   ScratchArray<std::array<double, 5>> slots;
 };
 
+/// For every (face, corner), its position in the vertex -> faces CSR list
+/// of `topo`, so a face pass can write per-corner results where a vertex
+/// pass reads them contiguously, in vertex_faces(v) order.
+void fill_corner_slots(const Topology& topo, ScratchArray<std::array<std::int32_t, 3>>& slots);
+
 /// Rusinkiewicz per-face fit of II and its re-expression at the vertices.
 /// Fills scratch (kept for the derivative fit).
 PrincipalCurvatures estimate_curvature(const CurvatureInputs& in, FaceFitScratch& scratch);

@@ -33,7 +33,8 @@ struct Surface::Cache {
 
   std::once_flag curvature_once;
   PrincipalCurvatures curvature;
-  detail::FaceFitScratch fit_scratch;  ///< per-face fits, freed after the derivatives
+  detail::FaceFitScratch
+      fit_scratch;  ///< per-corner slots (normals, fits), freed after the derivatives
 
   std::once_flag derivative_once;
   CurvatureDerivatives derivatives;
@@ -78,40 +79,49 @@ void compute_face_and_vertex(const TriangleMesh& mesh, const Topology& topo,
                              std::vector<double>& face_areas, std::vector<Vec3>& corner_areas,
                              std::vector<Vec3>* vertex_normals,
                              std::vector<std::uint8_t>* normal_valid,
-                             std::vector<double>* vertex_areas) {
+                             std::vector<double>* vertex_areas, detail::FaceFitScratch* scratch) {
   const std::size_t nf = mesh.faces.size();
   const std::size_t nv = mesh.positions.size();
   detail::assign_large(face_normals, nf, Vec3(Vec3::Zero()));
   detail::assign_large(face_areas, nf, 0.0);
   detail::assign_large(corner_areas, nf, Vec3(Vec3::Zero()));
-  detail::ScratchArray<Vec3> weights;
-  if (vertex_normals) weights.resize(nf);
+  // With vertex outputs, each face also writes its three corners' weighted
+  // normals and areas into the CSR slots that the vertex pass sums.
+  if (vertex_normals) {
+    detail::fill_corner_slots(topo, scratch->corner_slot);
+    scratch->slots.resize(3 * nf);
+  }
   detail::parallel_chunks(nf, kFaceGrain, [&](std::size_t begin, std::size_t end) {
     for (std::size_t f = begin; f < end; ++f) {
       const auto t = detail::triangle_shape(mesh, mesh.faces[f]);
       face_areas[f] = 0.5 * t.twice_area;
-      face_normals[f] = t.degenerate ? Vec3::Zero() : Vec3(t.cross / t.twice_area);
-      corner_areas[f] = detail::corner_areas(t, opt.mixed_areas);
-      if (vertex_normals) weights[f] = detail::normal_corner_weights(t, opt.normal_weighting);
+      const Vec3 n = t.degenerate ? Vec3::Zero() : Vec3(t.cross / t.twice_area);
+      face_normals[f] = n;
+      const Vec3 ca = detail::corner_areas(t, opt.mixed_areas);
+      corner_areas[f] = ca;
+      if (!vertex_normals) continue;
+      const Vec3 w = detail::normal_corner_weights(t, opt.normal_weighting);
+      const auto& slot = scratch->corner_slot[f];
+      for (int k = 0; k < 3; ++k)
+        scratch->slots[slot[k]] = {w[k] * n.x(), w[k] * n.y(), w[k] * n.z(), w[k], ca[k]};
     }
   });
   if (!vertex_normals) return;
   detail::assign_large(*vertex_normals, nv, Vec3(Vec3::Zero()));
   normal_valid->assign(nv, 0);
   detail::assign_large(*vertex_areas, nv, 0.0);
+  const std::int32_t* base = nv ? topo.vertex_faces(0).data() : nullptr;
   detail::parallel_chunks(nv, kVertexGrain, [&](std::size_t begin, std::size_t end) {
     for (std::size_t v = begin; v < end; ++v) {
       const auto faces = topo.vertex_faces(v);
-      const auto corners = topo.vertex_face_corners(v);
+      const auto first = static_cast<std::size_t>(faces.data() - base);
       Vec3 n = Vec3::Zero();
       double wsum = 0.0, area = 0.0;
       for (std::size_t i = 0; i < faces.size(); ++i) {
-        const auto f = static_cast<std::size_t>(faces[i]);
-        const int k = corners[i];
-        const double w = weights[f][k];
-        n += w * face_normals[f];
-        wsum += w;
-        area += corner_areas[f][k];
+        const auto& c = scratch->slots[first + i];
+        n += Vec3(c[0], c[1], c[2]);
+        wsum += c[3];
+        area += c[4];
       }
       (*vertex_areas)[v] = area;
       const double len = n.norm();
@@ -129,7 +139,7 @@ const std::vector<Vec3>& Surface::face_normals() const {
   Cache& c = *cache_;
   std::call_once(c.face_once, [&] {
     compute_face_and_vertex(mesh_, c.topology, options_, c.face_normals, c.face_areas,
-                            c.corner_areas, nullptr, nullptr, nullptr);
+                            c.corner_areas, nullptr, nullptr, nullptr, nullptr);
   });
   return c.face_normals;
 }
@@ -153,7 +163,7 @@ const std::vector<Vec3>& Surface::vertex_normals() const {
     std::vector<Vec3> fn, ca;
     std::vector<double> fa;
     compute_face_and_vertex(mesh_, topo, options_, fn, fa, ca, &c.vertex_normals, &c.normal_valid,
-                            &c.vertex_areas);
+                            &c.vertex_areas, &c.fit_scratch);
     std::call_once(c.face_once, [&] {
       c.face_normals = std::move(fn);
       c.face_areas = std::move(fa);
