@@ -45,25 +45,24 @@ Topology::Topology(const TriangleMesh& mesh) {
       }
   }
 
-  // Vertex -> sorted unique neighbours. Two passes: count, then fill.
-  auto gather = [&](std::size_t v, std::vector<std::int32_t>& out) {
-    out.clear();
-    for (auto f : vertex_faces(v))
-      for (int k = 0; k < 3; ++k) {
-        const auto w = mesh.faces[f][k];
-        if (static_cast<std::size_t>(w) != v) out.push_back(w);
-      }
-    std::sort(out.begin(), out.end());
-    out.erase(std::unique(out.begin(), out.end()), out.end());
-  };
+  // Vertex -> sorted unique neighbours. Each vertex's candidates (two per
+  // incident face) are sorted once in a scratch segment, then compacted.
+  std::vector<std::int32_t> candidates(2 * vertex_faces_.size());
   std::vector<std::int32_t> neighbor_counts(nv), upper_counts(nv);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, kGrain), [&](const auto& r) {
-    std::vector<std::int32_t> scratch;
     for (std::size_t v = r.begin(); v < r.end(); ++v) {
-      gather(v, scratch);
-      neighbor_counts[v] = static_cast<std::int32_t>(scratch.size());
+      auto* const first = candidates.data() + 2 * vertex_face_offsets_[v];
+      auto* last = first;
+      for (auto f : vertex_faces(v))
+        for (int k = 0; k < 3; ++k) {
+          const auto w = mesh.faces[f][k];
+          if (static_cast<std::size_t>(w) != v) *last++ = w;
+        }
+      std::sort(first, last);
+      last = std::unique(first, last);
+      neighbor_counts[v] = static_cast<std::int32_t>(last - first);
       upper_counts[v] = static_cast<std::int32_t>(
-          scratch.end() - std::upper_bound(scratch.begin(), scratch.end(), static_cast<std::int32_t>(v)));
+          last - std::upper_bound(first, last, static_cast<std::int32_t>(v)));
     }
   });
   vertex_neighbor_offsets_ = offsets_from_counts(neighbor_counts);
@@ -72,16 +71,17 @@ Topology::Topology(const TriangleMesh& mesh) {
   vertex_edges_.resize(vertex_neighbor_offsets_.back());
   edges_.resize(edge_offsets.back());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, kGrain), [&](const auto& r) {
-    std::vector<std::int32_t> scratch;
     for (std::size_t v = r.begin(); v < r.end(); ++v) {
-      gather(v, scratch);
-      std::copy(scratch.begin(), scratch.end(), vertex_neighbors_.begin() + vertex_neighbor_offsets_[v]);
-      const auto first_upper = std::upper_bound(scratch.begin(), scratch.end(), static_cast<std::int32_t>(v));
+      const auto* const first = candidates.data() + 2 * vertex_face_offsets_[v];
+      const auto* const last = first + neighbor_counts[v];
+      std::copy(first, last, vertex_neighbors_.begin() + vertex_neighbor_offsets_[v]);
+      const auto* const first_upper = last - upper_counts[v];
       std::int32_t e = edge_offsets[v];
-      for (auto it = first_upper; it != scratch.end(); ++it, ++e)
+      for (auto* it = first_upper; it != last; ++it, ++e)
         edges_[e] = {static_cast<std::int32_t>(v), *it};
     }
   });
+  candidates = {};
   // Edge ids of the lower neighbours come from the lower vertex's list.
   auto find_edge = [&](std::int32_t a, std::int32_t b) -> std::int32_t {
     if (a == b) return -1;
@@ -110,7 +110,8 @@ Topology::Topology(const TriangleMesh& mesh) {
   std::vector<std::int32_t> edge_counts(edges_.size(), 0);
   for (const auto& fe : face_edges_)
     for (int k = 0; k < 3; ++k)
-      if (fe[k] >= 0 && (k == 0 || fe[k] != fe[0]) && (k < 2 || fe[k] != fe[1])) ++edge_counts[fe[k]];
+      if (fe[k] >= 0 && (k == 0 || fe[k] != fe[0]) && (k < 2 || fe[k] != fe[1]))
+        ++edge_counts[fe[k]];
   edge_face_offsets_ = offsets_from_counts(edge_counts);
   edge_faces_.resize(edge_face_offsets_.back());
   {
