@@ -242,14 +242,21 @@ double Surface::feature_size() const {
 
 void Surface::precompute() const {
   topology();
+  // Two independent chains; the feature size (a selection over all
+  // curvatures) overlaps the derivative pass. No item is asked for by two
+  // concurrent branches before it exists except through std::call_once,
+  // which only makes the later one wait.
   tbb::this_task_arena::isolate([&] {
-    tbb::parallel_invoke([&] { curvature_derivatives(); },
-                         [&] {
-                           median_edge_length();
-                           bounding_sphere_center();
-                         });
+    tbb::parallel_invoke(
+        [&] {
+          curvature();
+          tbb::parallel_invoke([&] { curvature_derivatives(); }, [&] { feature_size(); });
+        },
+        [&] {
+          bounding_sphere_center();
+          median_edge_length();
+        });
   });
-  feature_size();
 }
 
 }  // namespace fabrica
