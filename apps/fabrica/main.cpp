@@ -35,6 +35,10 @@ int main(int argc, char** argv) {
 #ifdef FABRICA_HAVE_CMD_BATCH
   fabrica::cli::add_batch_command(app, action);
 #endif
+  if (argc < 2) {  // no command: the usage, on stderr, as a bad-arguments error
+    std::fputs(app.help().c_str(), stderr);
+    return 2;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -24,7 +24,8 @@ void rename_into_place(const std::filesystem::path& tmp, const std::filesystem::
   std::error_code ec;
   std::filesystem::rename(tmp, path, ec);
   if (ec) {
-    std::filesystem::remove(tmp, ec);
+    std::error_code ignored;  // keep ec: its message is the reason
+    std::filesystem::remove(tmp, ignored);
     throw OutputError(path.string() + ": cannot write: " + ec.message());
   }
 }

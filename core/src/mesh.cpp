@@ -24,6 +24,9 @@ void check_mesh_indices_and_values(const TriangleMesh& mesh, const std::string& 
     if (!mesh.positions[i].allFinite())
       throw InputError(what + ": vertex " + std::to_string(i) +
                        " has a coordinate that is not a finite number (NaN or infinity); fix or remove it");
+    else if (mesh.positions[i].cwiseAbs().maxCoeff() > 1e15)  // areas, normals would overflow
+      throw InputError(what + ": vertex " + std::to_string(i) +
+                       " has a coordinate beyond 1e15 (mm); rescale the mesh");
   for (std::size_t f = 0; f < mesh.faces.size(); ++f)
     for (int k = 0; k < 3; ++k)
       if (mesh.faces[f][k] < 0 || mesh.faces[f][k] >= nv)

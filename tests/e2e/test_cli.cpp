@@ -1,0 +1,890 @@
+// End-to-end tests of the `fabrica` executable: runs the built program (path
+// in FABRICA_EXE) as a child process and checks exit codes (docs/cli.md:
+// 0 ok, 1 internal, 2 bad input, 3 output not writable, 4 facility
+// unavailable, 5 batch partly failed), one-line error messages naming the
+// file, atomic outputs (no partial or temporary file left), the geometry CSV
+// (complete, finite, in file vertex order), `info --json`, `extract` on a real
+// label volume, the drawing commands, and that README / scripts/run only use
+// commands that exist. Only the sub-commands compiled in are tested
+// (FABRICA_E2E_COMMANDS, from the cmd_*.cpp files present).
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "test_support.hpp"
+
+extern char** environ;
+
+namespace fs = std::filesystem;
+using namespace fabrica;
+
+namespace {
+
+// ---------------------------------------------------------------- helpers
+
+std::vector<std::string> split(const std::string& s, char sep) {
+  std::vector<std::string> out;
+  std::string item;
+  std::istringstream in(s);
+  while (std::getline(in, item, sep))
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
+/// The sub-commands compiled into this build of fabrica.
+const std::vector<std::string>& present_commands() {
+  static const std::vector<std::string> commands = split(FABRICA_E2E_COMMANDS, ',');
+  return commands;
+}
+
+bool has_command(const std::string& name) {
+  const auto& c = present_commands();
+  return std::find(c.begin(), c.end(), name) != c.end();
+}
+
+/// Of `wanted`, those compiled in (at least one entry so that parameterised
+/// suites always instantiate; "none" marks an empty list and is skipped).
+std::vector<std::string> present_of(const std::vector<std::string>& wanted) {
+  std::vector<std::string> out;
+  for (const auto& w : wanted)
+    if (has_command(w)) out.push_back(w);
+  if (out.empty()) out.push_back("none");
+  return out;
+}
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+void write_bytes(const fs::path& p, const std::string& bytes) {
+  std::ofstream out(p, std::ios::binary);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+/// One folder per test process under the system temp folder, removed at exit:
+/// work folders for the tests, captured output, and XDG_CACHE_HOME.
+struct ProcessTemp {
+  fs::path root = test::temp_dir("e2e-" + std::to_string(::getpid()));
+  ProcessTemp() {
+    fs::create_directories(root / "logs");
+    fs::create_directories(root / "cache");
+  }
+  ~ProcessTemp() {
+    std::error_code ec;
+    fs::remove_all(root, ec);
+  }
+};
+
+ProcessTemp& process_temp() {
+  static ProcessTemp t;
+  return t;
+}
+
+/// A fresh empty folder for the current test.
+fs::path work_dir() {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  std::string name = std::string(info->test_suite_name()) + "." + info->name();
+  std::replace(name.begin(), name.end(), '/', '_');
+  const fs::path dir = process_temp().root / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+struct Outcome {
+  int code = -1;  ///< exit status, or 128 + signal number when killed by a signal
+  std::string out, err;
+  std::string command;
+};
+
+std::string describe(const Outcome& r) {
+  return "command: " + r.command + "\nexit " + std::to_string(r.code) + "\nstderr:\n" + r.err +
+         "stdout (first 2000 chars):\n" + r.out.substr(0, 2000);
+}
+
+/// Runs fabrica with `args`; stdin is /dev/null, stdout and stderr captured,
+/// XDG_CACHE_HOME set to a private folder. Killed after `timeout`.
+Outcome run_fabrica(const std::vector<std::string>& args,
+                    std::chrono::seconds timeout = std::chrono::seconds(60)) {
+  static int counter = 0;
+  const int n = counter++;
+  const fs::path out_path = process_temp().root / "logs" / ("out-" + std::to_string(n));
+  const fs::path err_path = process_temp().root / "logs" / ("err-" + std::to_string(n));
+  Outcome r;
+  r.command = FABRICA_EXE;
+  for (const auto& a : args) r.command += " '" + a + "'";
+
+  std::vector<std::string> argv_s{FABRICA_EXE};
+  argv_s.insert(argv_s.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (auto& a : argv_s) argv.push_back(a.data());
+  argv.push_back(nullptr);
+
+  std::vector<std::string> env_s;
+  for (char** e = environ; *e != nullptr; ++e)
+    if (std::strncmp(*e, "XDG_CACHE_HOME=", 15) != 0) env_s.emplace_back(*e);
+  env_s.push_back("XDG_CACHE_HOME=" + (process_temp().root / "cache").string());
+  std::vector<char*> envp;
+  for (auto& e : env_s) envp.push_back(e.data());
+  envp.push_back(nullptr);
+
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, 1, out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                   0644);
+  posix_spawn_file_actions_addopen(&actions, 2, err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                   0644);
+  pid_t pid = 0;
+  const int spawned = posix_spawn(&pid, FABRICA_EXE, &actions, nullptr, argv.data(), envp.data());
+  posix_spawn_file_actions_destroy(&actions);
+  if (spawned != 0) {
+    ADD_FAILURE() << "cannot start " << FABRICA_EXE << ": " << std::strerror(spawned);
+    return r;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  int status = 0;
+  for (;;) {
+    const pid_t w = ::waitpid(pid, &status, WNOHANG);
+    if (w == pid) break;
+    if (w < 0 && errno != EINTR) {
+      ADD_FAILURE() << "waitpid failed: " << std::strerror(errno);
+      return r;
+    }
+    if (std::chrono::steady_clock::now() - start > timeout) {
+      ::kill(pid, SIGKILL);
+      ::waitpid(pid, &status, 0);
+      ADD_FAILURE() << "timed out after " << timeout.count() << " s: " << r.command;
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  r.out = read_text(out_path);
+  r.err = read_text(err_path);
+  return r;
+}
+
+/// Exactly one non-empty line, ending in a newline.
+bool one_line(const std::string& s) {
+  return s.size() > 1 && s.back() == '\n' && std::count(s.begin(), s.end(), '\n') == 1;
+}
+
+/// Names of the entries of a folder (sorted).
+std::vector<std::string> list_dir(const fs::path& dir) {
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(dir)) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+/// Entries that look like a temporary file left by write_file_atomically.
+std::vector<std::string> temporaries(const fs::path& dir) {
+  std::vector<std::string> out;
+  for (const auto& name : list_dir(dir))
+    if (name.find(".tmp-") != std::string::npos || name.find(".tmp") == name.size() - 4)
+      out.push_back(name);
+  return out;
+}
+
+std::string joined(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
+  return s;
+}
+
+fs::path aneurysm() {
+  return test::shared_data() / "meshes" / "anatomy" / "vessels" / "sofa_aneurysm3D_1.off";
+}
+
+fs::path totalseg() {
+  return test::shared_data() / "meshes" / "volumes" / "totalseg_example_seg.nii.gz";
+}
+
+/// The output file extension a command writes with -o.
+std::string output_extension(const std::string& command) {
+  if (command == "info") return ".off";
+  if (command == "geometry") return ".csv";
+  if (command == "render") return ".png";
+  return ".svg";  // lines, hatch
+}
+
+/// Arguments running `command` on `mesh`, writing `output` (empty: info
+/// without -o). Drawing commands get --view anterior.
+std::vector<std::string> mesh_command_args(const std::string& command, const fs::path& mesh,
+                                           const fs::path& output) {
+  std::vector<std::string> args{command, mesh.string()};
+  if (!output.empty()) {
+    args.push_back("-o");
+    args.push_back(output.string());
+  }
+  if (command == "lines" || command == "render" || command == "hatch") {
+    args.push_back("--view");
+    args.push_back("anterior");
+  }
+  return args;
+}
+
+// Mesh commands (take a mesh file as their input).
+const std::vector<std::string> kMeshCommands{"info", "geometry", "lines", "render", "hatch"};
+// Commands with a file output given by -o.
+const std::vector<std::string> kOutputCommands{"info", "geometry", "lines", "render", "hatch"};
+// Drawing commands (--view, --camera).
+const std::vector<std::string> kDrawingCommands{"lines", "render", "hatch"};
+
+#define SKIP_IF_NONE(cmd)                                               \
+  if ((cmd) == "none") GTEST_SKIP() << "no such command in this build"; \
+  static_assert(true)
+
+// ------------------------------------------------------------ bad meshes
+
+std::string le32(std::uint32_t v) {
+  std::string s(4, '\0');
+  for (int i = 0; i < 4; ++i) s[i] = static_cast<char>((v >> (8 * i)) & 0xff);
+  return s;
+}
+
+std::string le_float(float f) {
+  std::uint32_t u = 0;
+  std::memcpy(&u, &f, 4);
+  return le32(u);
+}
+
+/// A valid-looking small PNG (signature, IHDR, IDAT, IEND), 207 bytes.
+std::string png_bytes() {
+  std::string s("\x89PNG\r\n\x1a\n", 8);
+  auto chunk = [&s](const std::string& type, const std::string& data) {
+    const auto n = static_cast<std::uint32_t>(data.size());
+    s += std::string{static_cast<char>(n >> 24), static_cast<char>(n >> 16),
+                     static_cast<char>(n >> 8), static_cast<char>(n)};
+    s += type + data + std::string("\x12\x34\x56\x78", 4);
+  };
+  chunk("IHDR", std::string("\0\0\0\x10\0\0\0\x10\x08\x02\0\0\0", 13));
+  std::string idat;
+  std::uint32_t x = 12345;
+  for (int i = 0; i < 150; ++i) {
+    x = x * 1664525u + 1013904223u;
+    idat.push_back(static_cast<char>(x >> 24));
+  }
+  chunk("IDAT", idat);
+  chunk("IEND", "");
+  return s;
+}
+
+/// Binary STL announcing `announced` triangles but holding only `present`.
+std::string truncated_stl(const std::string& header_start, std::uint32_t announced, int present) {
+  std::string s = header_start;
+  s.resize(80, ' ');
+  s += le32(announced);
+  for (int t = 0; t < present; ++t) {
+    for (int k = 0; k < 12; ++k) s += le_float(static_cast<float>(t + k));
+    s += std::string(2, '\0');
+  }
+  return s;
+}
+
+std::string truncated_ply() {
+  std::string s =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\n"
+      "property float y\nproperty float z\nelement face 4\n"
+      "property list uchar int vertex_indices\nend_header\n";
+  const float v[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  for (const auto& p : v)
+    for (float c : p) s += le_float(c);
+  const int f[2][3] = {{0, 2, 1}, {0, 1, 3}};  // 2 of the 4 announced faces
+  for (const auto& t : f) {
+    s.push_back('\x03');
+    for (int i : t) s += le32(static_cast<std::uint32_t>(i));
+  }
+  return s;
+}
+
+const char* kTetraObj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+const char* kTetraOffBody = "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
+
+struct BadMesh {
+  std::string name;
+  std::function<fs::path(const fs::path& dir)> make;  ///< creates the file, returns its path
+};
+
+const std::vector<BadMesh>& bad_meshes() {
+  static const std::vector<BadMesh> cases{
+      {"nonexistent", [](const fs::path& d) { return d / "does_not_exist.obj"; }},
+      {"empty_file",
+       [](const fs::path& d) {
+         write_bytes(d / "empty.off", "");
+         return d / "empty.off";
+       }},
+      {"png_renamed_stl",
+       [](const fs::path& d) {
+         write_bytes(d / "picture.stl", png_bytes());
+         return d / "picture.stl";
+       }},
+      {"truncated_binary_stl",
+       [](const fs::path& d) {
+         write_bytes(d / "cut.stl", truncated_stl("binary STL from a scanner", 20, 5));
+         return d / "cut.stl";
+       }},
+      {"truncated_binary_stl_solid_header",  // many binary STLs start with "solid"
+       [](const fs::path& d) {
+         write_bytes(d / "cut_solid.stl", truncated_stl("solid part", 20, 5));
+         return d / "cut_solid.stl";
+       }},
+      {"truncated_binary_ply",
+       [](const fs::path& d) {
+         write_bytes(d / "cut.ply", truncated_ply());
+         return d / "cut.ply";
+       }},
+      {"off_counts_too_large",
+       [](const fs::path& d) {
+         write_bytes(d / "short.off", std::string("OFF\n8 6 0\n") + kTetraOffBody);
+         return d / "short.off";
+       }},
+      {"off_counts_too_small",
+       [](const fs::path& d) {
+         write_bytes(d / "long.off", std::string("OFF\n3 1 0\n") + kTetraOffBody);
+         return d / "long.off";
+       }},
+      {"obj_nan_coordinate",
+       [](const fs::path& d) {
+         write_bytes(d / "nan.obj", "v 0 0 0\nv 1 0 0\nv nan 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\n");
+         return d / "nan.obj";
+       }},
+      {"obj_inf_coordinate",
+       [](const fs::path& d) {
+         write_bytes(d / "inf.obj", "v 0 0 0\nv 1 0 0\nv 0 inf 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\n");
+         return d / "inf.obj";
+       }},
+      {"obj_huge_coordinates",  // areas and normals would overflow to inf
+       [](const fs::path& d) {
+         write_bytes(d / "huge.obj",
+                     "v 0 0 0\nv 1e300 0 0\nv 0 1e300 0\nv 0 0 1e300\n"
+                     "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+         return d / "huge.obj";
+       }},
+      {"stl_triangle_count_overflow",  // 84 + 50 n wraps to the file size in 32 bits
+       [](const fs::path& d) {
+         write_bytes(d / "wrap.stl", truncated_stl("binary", 2147483650u, 2));
+         return d / "wrap.stl";
+       }},
+      {"ply_huge_vertex_count",
+       [](const fs::path& d) {
+         write_bytes(d / "huge.ply",
+                     "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\n"
+                     "property float x\nproperty float y\nproperty float z\nelement face 1\n"
+                     "property list uchar int vertex_indices\nend_header\n" +
+                         std::string(40, '\0'));
+         return d / "huge.ply";
+       }},
+      {"obj_face_index_out_of_range",
+       [](const fs::path& d) {
+         write_bytes(d / "index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 3 9\n");
+         return d / "index.obj";
+       }},
+      {"obj_negative_index_out_of_range",
+       [](const fs::path& d) {
+         write_bytes(d / "negindex.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -7\n");
+         return d / "negindex.obj";
+       }},
+      {"unknown_extension",
+       [](const fs::path& d) {
+         write_bytes(d / "tetra.xyz", kTetraObj);
+         return d / "tetra.xyz";
+       }},
+      {"directory",
+       [](const fs::path& d) {
+         fs::create_directories(d / "folder.stl");
+         return d / "folder.stl";
+       }},
+  };
+  return cases;
+}
+
+std::vector<std::string> bad_mesh_names() {
+  std::vector<std::string> names;
+  for (const auto& c : bad_meshes()) names.push_back(c.name);
+  return names;
+}
+
+const BadMesh& bad_mesh(const std::string& name) {
+  for (const auto& c : bad_meshes())
+    if (c.name == name) return c;
+  throw std::logic_error("no bad mesh " + name);
+}
+
+// ============================================================ the program
+
+TEST(Cli, NoCommandExits2WithUsage) {
+  const Outcome r = run_fabrica({});
+  EXPECT_EQ(r.code, 2) << describe(r);
+  EXPECT_NE((r.err + r.out).find("Usage"), std::string::npos) << describe(r);
+  for (const auto& c : present_commands())
+    EXPECT_NE((r.err + r.out).find(c), std::string::npos) << "usage does not list " << c;
+}
+
+TEST(Cli, HelpListsEveryCompiledCommand) {
+  const Outcome r = run_fabrica({"--help"});
+  ASSERT_EQ(r.code, 0) << describe(r);
+  ASSERT_FALSE(present_commands().empty());
+  for (const auto& c : present_commands())
+    EXPECT_TRUE(std::regex_search(r.out, std::regex("\\n\\s+" + c + "\\s")))
+        << c << " missing from --help:\n"
+        << r.out;
+}
+
+TEST(Cli, VersionExits0) {
+  const Outcome r = run_fabrica({"--version"});
+  EXPECT_EQ(r.code, 0) << describe(r);
+  EXPECT_NE(r.out.find("fabrica"), std::string::npos) << describe(r);
+}
+
+TEST(Cli, UnknownCommandExits2) {
+  const Outcome r = run_fabrica({"frobnicate", "x.off"});
+  EXPECT_EQ(r.code, 2) << describe(r);
+  EXPECT_FALSE(r.err.empty());
+}
+
+// ------------------------------------------------------- every command
+
+class EveryCommand : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(EveryCommand, HelpExits0AndNamesMainOptions) {
+  const std::string cmd = GetParam();
+  SKIP_IF_NONE(cmd);
+  const Outcome r = run_fabrica({cmd, "--help"});
+  ASSERT_EQ(r.code, 0) << describe(r);
+  std::vector<std::string> options;
+  if (cmd == "info") options = {"--json", "--repair", "--space", "--output"};
+  if (cmd == "geometry") options = {"--output", "--normals", "--smooth"};
+  if (cmd == "extract") options = {"--output", "--labels", "--smooth", "--format"};
+  if (cmd == "lines") options = {"--output", "--camera", "--view", "--types"};
+  if (cmd == "render") options = {"--output", "--camera", "--view", "--style"};
+  if (cmd == "hatch") options = {"--output", "--camera", "--view", "--light"};
+  for (const auto& o : options)
+    EXPECT_NE(r.out.find(o), std::string::npos) << cmd << " --help does not mention " << o;
+}
+
+TEST_P(EveryCommand, UnknownOptionExits2) {
+  const std::string cmd = GetParam();
+  SKIP_IF_NONE(cmd);
+  const fs::path dir = work_dir();
+  const Outcome r =
+      run_fabrica({cmd, aneurysm().string(), "-o", (dir / "x.out").string(), "--no-such-option"});
+  EXPECT_EQ(r.code, 2) << describe(r);
+  EXPECT_NE(r.err.find("--no-such-option"), std::string::npos) << describe(r);
+  EXPECT_TRUE(list_dir(dir).empty()) << joined(list_dir(dir));
+}
+
+TEST_P(EveryCommand, MissingArgumentsExit2) {
+  const std::string cmd = GetParam();
+  SKIP_IF_NONE(cmd);
+  const Outcome r = run_fabrica({cmd});
+  EXPECT_EQ(r.code, 2) << describe(r);
+  EXPECT_FALSE(r.err.empty());
+}
+
+INSTANTIATE_TEST_SUITE_P(Present, EveryCommand, ::testing::ValuesIn(present_commands()),
+                         [](const auto& info) { return info.param; });
+
+// ------------------------------------------------------------ bad inputs
+
+using BadInputParam = std::tuple<std::string, std::string>;  // command, case
+class BadInput : public ::testing::TestWithParam<BadInputParam> {};
+
+TEST_P(BadInput, Exits2WithOneLineNamingTheFile) {
+  const auto& [cmd, case_name] = GetParam();
+  SKIP_IF_NONE(cmd);
+  const fs::path dir = work_dir();
+  const fs::path in_dir = dir / "in", out_dir = dir / "out";
+  fs::create_directories(in_dir);
+  fs::create_directories(out_dir);
+  const fs::path mesh = bad_mesh(case_name).make(in_dir);
+  const fs::path output = cmd == "info" ? fs::path() : out_dir / ("result" + output_extension(cmd));
+  const Outcome r = run_fabrica(mesh_command_args(cmd, mesh, output));
+  EXPECT_LT(r.code, 128) << "killed by a signal\n" << describe(r);
+  EXPECT_EQ(r.code, 2) << describe(r);
+  EXPECT_TRUE(one_line(r.err)) << "expected one line on stderr\n" << describe(r);
+  EXPECT_NE(r.err.find(mesh.string()), std::string::npos)
+      << "the message does not name " << mesh << "\n"
+      << describe(r);
+  EXPECT_TRUE(list_dir(out_dir).empty()) << "left behind: " << joined(list_dir(out_dir));
+  EXPECT_TRUE(temporaries(in_dir).empty()) << joined(temporaries(in_dir));
+}
+
+INSTANTIATE_TEST_SUITE_P(Meshes, BadInput,
+                         ::testing::Combine(::testing::ValuesIn(present_of(kMeshCommands)),
+                                            ::testing::ValuesIn(bad_mesh_names())),
+                         [](const auto& info) {
+                           return std::get<0>(info.param) + "_" + std::get<1>(info.param);
+                         });
+
+// ------------------------------------------------------------ outputs
+
+class Outputs : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(Outputs, MissingOutputFolderExits3AndLeavesNothing) {
+  const std::string cmd = GetParam();
+  SKIP_IF_NONE(cmd);
+  const fs::path dir = work_dir();
+  const fs::path output = dir / "missing" / "deeper" / ("result" + output_extension(cmd));
+  const Outcome r = run_fabrica(mesh_command_args(cmd, aneurysm(), output));
+  if (cmd == "render" && r.code == 4) GTEST_SKIP() << "no headless GL: " << r.err;
+  EXPECT_EQ(r.code, 3) << describe(r);
+  EXPECT_NE(r.err.find("missing"), std::string::npos) << "message does not name the output\n"
+                                                      << describe(r);
+  EXPECT_FALSE(fs::exists(dir / "missing"));
+  EXPECT_TRUE(list_dir(dir).empty()) << joined(list_dir(dir));
+}
+
+TEST_P(Outputs, FailedRunLeavesAnExistingTargetUntouched) {
+  const std::string cmd = GetParam();
+  SKIP_IF_NONE(cmd);
+  const fs::path dir = work_dir();
+  const fs::path bad = dir / "bad.obj";
+  write_bytes(bad, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 5\n");
+  const fs::path output = dir / ("result" + output_extension(cmd));
+  write_bytes(output, "previous contents\n");
+  const Outcome r = run_fabrica(mesh_command_args(cmd, bad, output));
+  EXPECT_EQ(r.code, 2) << describe(r);
+  EXPECT_EQ(read_text(output), "previous contents\n");
+  EXPECT_EQ(list_dir(dir), (std::vector<std::string>{"bad.obj", output.filename().string()}));
+}
+
+TEST_P(Outputs, TargetThatIsAFolderExits3WithoutTemporaries) {
+  const std::string cmd = GetParam();
+  SKIP_IF_NONE(cmd);
+  if (cmd == "render") GTEST_SKIP() << "needs a GL context; covered by the other commands";
+  const fs::path dir = work_dir();
+  const fs::path output = dir / ("result" + output_extension(cmd));
+  fs::create_directories(output);
+  const Outcome r = run_fabrica(mesh_command_args(cmd, aneurysm(), output));
+  EXPECT_EQ(r.code, 3) << describe(r);
+  EXPECT_TRUE(one_line(r.err)) << describe(r);
+  EXPECT_NE(r.err.find(output.filename().string()), std::string::npos) << describe(r);
+  EXPECT_EQ(r.err.find("Success"), std::string::npos) << "the reason is lost\n" << describe(r);
+  EXPECT_EQ(list_dir(dir), (std::vector<std::string>{output.filename().string()}));
+  EXPECT_TRUE(fs::is_empty(output));
+}
+
+INSTANTIATE_TEST_SUITE_P(Present, Outputs, ::testing::ValuesIn(present_of(kOutputCommands)),
+                         [](const auto& info) { return info.param; });
+
+// ------------------------------------------------------------ info
+
+TEST(Info, JsonReportsTheAneurysm) {
+  if (!has_command("info")) GTEST_SKIP() << "no info command in this build";
+  const Outcome r = run_fabrica({"info", aneurysm().string(), "--json"});
+  ASSERT_EQ(r.code, 0) << describe(r);
+  nlohmann::json j;
+  ASSERT_NO_THROW(j = nlohmann::json::parse(r.out)) << r.out.substr(0, 2000);
+  const auto& v = j.at("validation");
+  EXPECT_EQ(v.at("vertices").get<int>(), 7095);
+  EXPECT_EQ(v.at("faces").get<int>(), 14186);
+  EXPECT_EQ(v.at("components").get<int>(), 1);
+  EXPECT_TRUE(v.at("closed").get<bool>());
+  EXPECT_EQ(v.at("boundary_edges").get<int>(), 0);
+  EXPECT_EQ(v.at("euler_characteristic").get<int>(), 2);  // a sphere: V - E + F = 2
+  EXPECT_EQ(j.at("file").at("format").get<std::string>().find("OFF") != std::string::npos ||
+                j.at("file").at("format").get<std::string>().find("off") != std::string::npos,
+            true)
+      << j.at("file").dump();
+}
+
+TEST(Info, RepairWritesAReadableMesh) {
+  if (!has_command("info")) GTEST_SKIP() << "no info command in this build";
+  const fs::path dir = work_dir();
+  const Outcome r = run_fabrica({"info", aneurysm().string(), "-o", (dir / "fixed.ply").string()});
+  ASSERT_EQ(r.code, 0) << describe(r);
+  EXPECT_EQ(list_dir(dir), (std::vector<std::string>{"fixed.ply"}));
+  const Outcome back = run_fabrica({"info", (dir / "fixed.ply").string(), "--json"});
+  ASSERT_EQ(back.code, 0) << describe(back);
+  const auto j = nlohmann::json::parse(back.out);
+  EXPECT_EQ(j.at("validation").at("vertices").get<int>(), 7095);
+  EXPECT_EQ(j.at("validation").at("faces").get<int>(), 14186);
+}
+
+// ------------------------------------------------------------ geometry
+
+/// The vertices of an OFF file, parsed here independently of fabrica.
+std::vector<std::array<double, 3>> read_off_vertices(const fs::path& path) {
+  std::ifstream in(path);
+  std::vector<std::string> tokens;
+  std::string line;
+  std::size_t nv = 0;
+  std::vector<std::array<double, 3>> v;
+  bool header = false, counts = false;
+  while (std::getline(in, line)) {
+    if (const auto h = line.find('#'); h != std::string::npos) line.resize(h);
+    std::istringstream ls(line);
+    if (!header) {
+      std::string off;
+      if (ls >> off) header = true;
+      continue;
+    }
+    if (!counts) {
+      if (ls >> nv) counts = true;
+      continue;
+    }
+    std::array<double, 3> p{};
+    std::string tok[3];
+    if (!(ls >> tok[0] >> tok[1] >> tok[2])) continue;
+    for (int k = 0; k < 3; ++k) p[k] = std::strtod(tok[k].c_str(), nullptr);
+    v.push_back(p);
+    if (v.size() == nv) break;
+  }
+  return v;
+}
+
+TEST(Geometry, CsvIsCompleteFiniteAndInFileVertexOrder) {
+  if (!has_command("geometry")) GTEST_SKIP() << "no geometry command in this build";
+  const fs::path dir = work_dir();
+  const fs::path csv = dir / "aneurysm.csv";
+  const Outcome r = run_fabrica({"geometry", aneurysm().string(), "-o", csv.string()});
+  ASSERT_EQ(r.code, 0) << describe(r);
+  EXPECT_EQ(list_dir(dir), (std::vector<std::string>{"aneurysm.csv"}));
+
+  const auto vertices = read_off_vertices(aneurysm());
+  ASSERT_EQ(vertices.size(), 7095u);
+  const std::string text = read_text(csv);
+  ASSERT_FALSE(text.empty());
+  EXPECT_EQ(text.back(), '\n') << "last row incomplete";
+  const auto lines = split(text, '\n');
+  ASSERT_EQ(lines.size(), vertices.size() + 1) << "expected a header and one row per vertex";
+  const auto header = split(lines[0], ',');
+  ASSERT_GE(header.size(), 4u);
+  EXPECT_EQ(header[0], "x");
+  EXPECT_EQ(header[1], "y");
+  EXPECT_EQ(header[2], "z");
+  std::size_t bad_numbers = 0, misplaced = 0, wrong_width = 0;
+  for (std::size_t i = 1; i < lines.size(); ++i) {
+    const auto fields = split(lines[i], ',');
+    if (fields.size() != header.size()) {
+      ++wrong_width;
+      continue;
+    }
+    for (std::size_t k = 0; k < fields.size(); ++k) {
+      double x = 0.0;
+      const auto& f = fields[k];
+      const auto res = std::from_chars(f.data(), f.data() + f.size(), x);
+      if (res.ec != std::errc() || res.ptr != f.data() + f.size() || !std::isfinite(x)) {
+        if (bad_numbers++ < 5) ADD_FAILURE() << "row " << i - 1 << " column " << k << ": " << f;
+      }
+      if (k < 3 && x != vertices[i - 1][k]) {
+        if (misplaced++ < 5)
+          ADD_FAILURE() << "row " << i - 1 << " column " << header[k] << " is " << f
+                        << ", the file's vertex " << i - 1 << " has " << vertices[i - 1][k];
+      }
+    }
+  }
+  EXPECT_EQ(wrong_width, 0u);
+  EXPECT_EQ(bad_numbers, 0u);
+  EXPECT_EQ(misplaced, 0u);
+}
+
+// ------------------------------------------------------------ extract
+
+TEST(Extract, OneReadableMeshPerLabelIntoANewFolder) {
+  if (!has_command("extract")) GTEST_SKIP() << "no extract command in this build";
+  const fs::path dir = work_dir();
+  const fs::path out = dir / "new" / "surfaces";
+  const Outcome r = run_fabrica({"extract", totalseg().string(), "-o", out.string()});
+  ASSERT_EQ(r.code, 0) << describe(r);
+  ASSERT_TRUE(fs::is_directory(out));
+  const auto manifest = nlohmann::json::parse(read_text(out / "surfaces.json"));
+  const auto& surfaces = manifest.at("surfaces");
+  ASSERT_GE(surfaces.size(), 2u);
+  std::set<std::string> files{"surfaces.json"};
+  std::set<int> labels;
+  for (const auto& s : surfaces) {
+    const std::string file = s.at("file").get<std::string>();
+    files.insert(file);
+    EXPECT_TRUE(labels.insert(s.at("label").get<int>()).second) << "label twice: " << s.dump();
+    const Outcome info = run_fabrica({"info", (out / file).string(), "--json"});
+    ASSERT_EQ(info.code, 0) << describe(info);
+    const auto j = nlohmann::json::parse(info.out);
+    EXPECT_EQ(j.at("validation").at("faces").get<std::size_t>(), s.at("faces").get<std::size_t>())
+        << file;
+    EXPECT_GT(j.at("validation").at("faces").get<std::size_t>(), 0u) << file;
+  }
+  const auto listed = list_dir(out);
+  EXPECT_EQ(std::set<std::string>(listed.begin(), listed.end()), files)
+      << "every written mesh in the manifest, nothing else in the folder";
+  EXPECT_NE(r.out.find(std::to_string(surfaces.size()) + " surface(s) written"), std::string::npos)
+      << r.out;
+}
+
+TEST(Extract, BadVolumesExit2NamingTheFile) {
+  if (!has_command("extract")) GTEST_SKIP() << "no extract command in this build";
+  const fs::path dir = work_dir();
+  const std::string gz = read_text(totalseg());
+  ASSERT_GT(gz.size(), 1000u);
+  write_bytes(dir / "cut.nii.gz", gz.substr(0, gz.size() / 2));
+  write_bytes(dir / "empty.nii", "");
+  write_bytes(dir / "picture.nii.gz", png_bytes());
+  fs::create_directories(dir / "folder.nii");
+  for (const fs::path& volume : {dir / "missing.nii.gz", dir / "cut.nii.gz", dir / "empty.nii",
+                                 dir / "picture.nii.gz", dir / "folder.nii"}) {
+    const fs::path out = dir / ("out-" + volume.filename().string());
+    const Outcome r = run_fabrica({"extract", volume.string(), "-o", out.string()});
+    EXPECT_EQ(r.code, 2) << describe(r);
+    EXPECT_TRUE(one_line(r.err)) << describe(r);
+    EXPECT_NE(r.err.find(volume.string()), std::string::npos) << describe(r);
+    EXPECT_FALSE(fs::exists(out)) << "output folder created for a failing run: " << out;
+  }
+}
+
+TEST(Extract, OutputUnderARegularFileExits3) {
+  if (!has_command("extract")) GTEST_SKIP() << "no extract command in this build";
+  const fs::path dir = work_dir();
+  write_bytes(dir / "a_file", "x");
+  const Outcome r = run_fabrica(
+      {"extract", totalseg().string(), "-o", (dir / "a_file" / "sub").string(), "--labels", "5"});
+  EXPECT_EQ(r.code, 3) << describe(r);
+  EXPECT_NE(r.err.find("a_file"), std::string::npos) << describe(r);
+  EXPECT_EQ(list_dir(dir), (std::vector<std::string>{"a_file"}));
+}
+
+// ------------------------------------------------------------ drawings
+
+class Drawing : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(Drawing, AnteriorViewWritesACompleteFile) {
+  const std::string cmd = GetParam();
+  SKIP_IF_NONE(cmd);
+  const fs::path dir = work_dir();
+  const fs::path output = dir / ("aneurysm" + output_extension(cmd));
+  const Outcome r = run_fabrica(mesh_command_args(cmd, aneurysm(), output));
+  if (cmd == "render" && r.code == 4) GTEST_SKIP() << "no headless GL: " << r.err;
+  ASSERT_EQ(r.code, 0) << describe(r);
+  EXPECT_EQ(list_dir(dir), (std::vector<std::string>{output.filename().string()}));
+  const std::string data = read_text(output);
+  ASSERT_GT(data.size(), 1000u);
+  if (output.extension() == ".png") {
+    EXPECT_EQ(data.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+    EXPECT_EQ(data.substr(data.size() - 8, 4), "IEND") << "PNG not complete";
+  } else {
+    EXPECT_NE(data.find("<svg"), std::string::npos);
+    const auto end = data.find_last_not_of(" \r\n\t");
+    ASSERT_NE(end, std::string::npos);
+    EXPECT_EQ(data.substr(end - 5, 6), "</svg>") << "SVG not complete";
+    EXPECT_TRUE(data.find("<path") != std::string::npos ||
+                data.find("<polyline") != std::string::npos)
+        << "no strokes in the SVG";
+  }
+}
+
+TEST_P(Drawing, BadCameraFileExits2) {
+  const std::string cmd = GetParam();
+  SKIP_IF_NONE(cmd);
+  const fs::path dir = work_dir();
+  const fs::path out_dir = dir / "out";
+  fs::create_directories(out_dir);
+  write_bytes(dir / "broken.json", "{ \"eye\": [0, 0, ");
+  write_bytes(dir / "same.json", R"({"eye": [1, 2, 3], "center": [1, 2, 3], "up": [0, 0, 1]})");
+  write_bytes(dir / "words.json", R"({"eye": "front", "center": [0, 0, 0]})");
+  for (const fs::path& camera :
+       {dir / "broken.json", dir / "same.json", dir / "words.json", dir / "missing.json"}) {
+    const Outcome r = run_fabrica({cmd, aneurysm().string(), "-o",
+                                   (out_dir / ("x" + output_extension(cmd))).string(), "--camera",
+                                   camera.string()});
+    EXPECT_EQ(r.code, 2) << describe(r);
+    EXPECT_TRUE(one_line(r.err)) << describe(r);
+    EXPECT_NE(r.err.find(camera.filename().string()), std::string::npos) << describe(r);
+    EXPECT_TRUE(list_dir(out_dir).empty()) << joined(list_dir(out_dir));
+  }
+}
+
+TEST_P(Drawing, UnknownViewExits2) {
+  const std::string cmd = GetParam();
+  SKIP_IF_NONE(cmd);
+  const fs::path dir = work_dir();
+  const Outcome r =
+      run_fabrica({cmd, aneurysm().string(), "-o", (dir / ("x" + output_extension(cmd))).string(),
+                   "--view", "sideways"});
+  EXPECT_EQ(r.code, 2) << describe(r);
+  EXPECT_TRUE(one_line(r.err)) << describe(r);
+  EXPECT_NE(r.err.find("sideways"), std::string::npos) << describe(r);
+  EXPECT_TRUE(list_dir(dir).empty()) << joined(list_dir(dir));
+}
+
+INSTANTIATE_TEST_SUITE_P(Present, Drawing, ::testing::ValuesIn(present_of(kDrawingCommands)),
+                         [](const auto& info) { return info.param; });
+
+// ------------------------------------------------------------ docs in step
+
+/// Commands a script calls as `"$fabrica" CMD`.
+std::set<std::string> commands_called_by(const fs::path& script) {
+  std::set<std::string> out;
+  const std::string text = read_text(script);
+  const std::regex call(R"re("\$fabrica"\s+([a-z][a-z0-9_-]*))re");
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), call); it != std::sregex_iterator();
+       ++it)
+    out.insert((*it)[1].str());
+  return out;
+}
+
+TEST(Docs, EveryCommandScriptsRunCallsExists) {
+  const fs::path script = fs::path(FABRICA_SOURCE_DIR) / "scripts" / "run";
+  ASSERT_TRUE(fs::exists(script)) << script;
+  const auto called = commands_called_by(script);
+  ASSERT_FALSE(called.empty()) << "no \"$fabrica\" CMD lines in " << script;
+  const Outcome help = run_fabrica({"--help"});
+  ASSERT_EQ(help.code, 0) << describe(help);
+  for (const auto& c : called) {
+    EXPECT_TRUE(has_command(c)) << "scripts/run calls `fabrica " << c
+                                << "`, which this build does not have";
+    EXPECT_TRUE(std::regex_search(help.out, std::regex("\\n\\s+" + c + "\\s")))
+        << c << " missing from fabrica --help";
+    const Outcome r = run_fabrica({c, "--help"});
+    EXPECT_EQ(r.code, 0) << describe(r);
+  }
+}
+
+TEST(Docs, EveryCommandTheReadmeShowsExists) {
+  const fs::path readme = fs::path(FABRICA_SOURCE_DIR) / "README.md";
+  if (!fs::exists(readme)) GTEST_SKIP() << "no README.md";
+  const std::string text = read_text(readme);
+  // Command lines inside ``` code blocks: "fabrica CMD ..." at the start of a line.
+  std::set<std::string> shown;
+  const std::regex call(R"(^(?:\$ )?fabrica ([a-z][a-z0-9_-]*)\b)");
+  bool in_code = false;
+  std::istringstream lines(text);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("```", 0) == 0) {
+      in_code = !in_code;
+      continue;
+    }
+    std::smatch m;
+    if (in_code && std::regex_search(line, m, call)) shown.insert(m[1].str());
+  }
+  EXPECT_FALSE(shown.empty()) << "README.md shows no fabrica command";
+  for (const auto& c : shown)
+    EXPECT_TRUE(has_command(c)) << "README.md shows `fabrica " << c
+                                << "`, which this build does not have";
+}
+
+}  // namespace
