@@ -5,6 +5,7 @@
 // yields no surface is reported and skipped. Also writes DIR/surfaces.json
 // (name, label, layer, colour, file, counts) so colours survive.
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cctype>
 #include <cstdio>
 #include <filesystem>
@@ -93,8 +94,11 @@ int run_extract(const ExtractCommandOptions& o) {
 
   const std::filesystem::path dir(o.output);
   std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec || !std::filesystem::is_directory(dir))
+  // Only a run with a surface to write creates the folder (a failed run leaves nothing).
+  const bool any = std::any_of(surfaces.begin(), surfaces.end(),
+                               [](const io::ExtractedSurface& s) { return !s.mesh.empty(); });
+  if (any) std::filesystem::create_directories(dir, ec);
+  if (any && (ec || !std::filesystem::is_directory(dir)))
     throw OutputError("cannot create output folder '" + dir.string() +
                       "': " + (ec ? ec.message() : std::string("not a folder")));
 

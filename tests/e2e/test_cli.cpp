@@ -757,6 +757,17 @@ TEST(Extract, BadVolumesExit2NamingTheFile) {
   }
 }
 
+TEST(Extract, NoSurfaceExits2AndCreatesNoFolder) {
+  if (!has_command("extract")) GTEST_SKIP() << "no extract command in this build";
+  const fs::path dir = work_dir();
+  const Outcome r = run_fabrica(
+      {"extract", totalseg().string(), "-o", (dir / "organs").string(), "--labels", "999"});
+  EXPECT_EQ(r.code, 2) << describe(r);
+  EXPECT_TRUE(one_line(r.err)) << describe(r);
+  EXPECT_NE(r.err.find(totalseg().string()), std::string::npos) << describe(r);
+  EXPECT_TRUE(list_dir(dir).empty()) << "left behind: " << joined(list_dir(dir));
+}
+
 TEST(Extract, OutputUnderARegularFileExits3) {
   if (!has_command("extract")) GTEST_SKIP() << "no extract command in this build";
   const fs::path dir = work_dir();
@@ -829,6 +840,17 @@ TEST_P(Drawing, UnknownViewExits2) {
   EXPECT_TRUE(one_line(r.err)) << describe(r);
   EXPECT_NE(r.err.find("sideways"), std::string::npos) << describe(r);
   EXPECT_TRUE(list_dir(dir).empty()) << joined(list_dir(dir));
+}
+
+TEST(Render, SecondOutputInAMissingFolderWritesNothing) {
+  if (!has_command("render")) GTEST_SKIP() << "no render command in this build";
+  const fs::path dir = work_dir();
+  const Outcome r = run_fabrica({"render", aneurysm().string(), "-o", (dir / "a.png").string(),
+                                 "--svg", (dir / "missing" / "a.svg").string()});
+  EXPECT_EQ(r.code, 3) << describe(r);
+  EXPECT_TRUE(one_line(r.err)) << describe(r);
+  EXPECT_NE(r.err.find("missing"), std::string::npos) << describe(r);
+  EXPECT_TRUE(list_dir(dir).empty()) << "left behind: " << joined(list_dir(dir));
 }
 
 INSTANTIATE_TEST_SUITE_P(Present, Drawing, ::testing::ValuesIn(present_of(kDrawingCommands)),
