@@ -24,6 +24,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <regex>
 #include <set>
@@ -533,6 +534,7 @@ TEST_P(BadInput, Exits2WithOneLineNamingTheFile) {
       << describe(r);
   EXPECT_TRUE(list_dir(out_dir).empty()) << "left behind: " << joined(list_dir(out_dir));
   EXPECT_TRUE(temporaries(in_dir).empty()) << joined(temporaries(in_dir));
+  EXPECT_TRUE(r.out.empty()) << "nothing (no partial report) on stdout\n" << describe(r);
 }
 
 INSTANTIATE_TEST_SUITE_P(Meshes, BadInput,
@@ -541,6 +543,91 @@ INSTANTIATE_TEST_SUITE_P(Meshes, BadInput,
                          [](const auto& info) {
                            return std::get<0>(info.param) + "_" + std::get<1>(info.param);
                          });
+
+// ------------------------------------------------------ awkward meshes
+// Valid files with defects the commands must survive (exit 0, finite output).
+
+const std::vector<std::pair<std::string, std::string>>& awkward_meshes() {
+  static const std::vector<std::pair<std::string, std::string>> cases{
+      {"nonmanifold_edge",
+       "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\n"},
+      {"bowtie_vertex",
+       "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv -1 0 0\nv 0 -1 0\nv 0 0 -1\n"
+       "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\nf 1 5 6\nf 1 7 5\nf 1 6 7\nf 5 7 6\n"},
+      {"duplicate_faces_unreferenced_vertex",
+       "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 5 5 5\n"
+       "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\nf 2 3 4\nf 4 3 2\n"},
+      {"inconsistent_orientation",
+       "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 4 2\nf 1 4 3\nf 2 3 4\n"},
+      {"all_degenerate", "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 3 0 0\nf 1 2 3\nf 2 3 4\nf 1 3 4\n"},
+      {"single_triangle", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"},
+      {"tiny_coordinates",
+       "v 0 0 0\nv 1e-300 0 0\nv 0 1e-300 0\nv 0 0 1e-300\n"
+       "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"},
+  };
+  return cases;
+}
+
+std::vector<std::string> awkward_names() {
+  std::vector<std::string> names;
+  for (const auto& c : awkward_meshes()) names.push_back(c.first);
+  return names;
+}
+
+using AwkwardParam = std::tuple<std::string, std::string>;  // command, case
+class Awkward : public ::testing::TestWithParam<AwkwardParam> {};
+
+TEST_P(Awkward, SucceedsWithACompleteFiniteOutput) {
+  const auto& [cmd, case_name] = GetParam();
+  SKIP_IF_NONE(cmd);
+  const fs::path dir = work_dir();
+  std::string text;
+  for (const auto& c : awkward_meshes())
+    if (c.first == case_name) text = c.second;
+  const fs::path mesh = dir / (case_name + ".obj");
+  write_bytes(mesh, text);
+  const fs::path output = cmd == "info" ? fs::path() : dir / ("result" + output_extension(cmd));
+  const Outcome r = run_fabrica(mesh_command_args(cmd, mesh, output));
+  if (cmd == "render" && r.code == 4) GTEST_SKIP() << "no headless GL: " << r.err;
+  ASSERT_EQ(r.code, 0) << describe(r);
+  if (output.empty()) return;
+  ASSERT_TRUE(fs::exists(output));
+  EXPECT_TRUE(temporaries(dir).empty()) << joined(temporaries(dir));
+  const std::string data = read_text(output);
+  if (cmd == "geometry") {
+    const auto lines = split(data, '\n');
+    const std::size_t nv = static_cast<std::size_t>(std::count(text.begin(), text.end(), 'v'));
+    EXPECT_EQ(lines.size(), nv + 1) << data;
+  }
+  if (output.extension() != ".png") {
+    for (const char* bad : {"nan", "inf", "NaN", "Inf"})
+      EXPECT_EQ(data.find(bad), std::string::npos) << bad << " in " << output << ":\n"
+                                                   << data.substr(0, 3000);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Meshes, Awkward,
+                         ::testing::Combine(::testing::ValuesIn(present_of(kMeshCommands)),
+                                            ::testing::ValuesIn(awkward_names())),
+                         [](const auto& info) {
+                           return std::get<0>(info.param) + "_" + std::get<1>(info.param);
+                         });
+
+TEST(Paths, SpacesAndNonAsciiCharacters) {
+  if (!has_command("geometry")) GTEST_SKIP() << "no geometry command in this build";
+  const fs::path dir = work_dir() / "a folder \xc3\xa9";
+  fs::create_directories(dir);
+  const fs::path mesh = dir / "my mesh \xc3\xa9.off";
+  fs::copy_file(aneurysm(), mesh);
+  const fs::path csv = dir / "out put \xc3\xa9.csv";
+  const Outcome r = run_fabrica({"geometry", mesh.string(), "-o", csv.string()});
+  ASSERT_EQ(r.code, 0) << describe(r);
+  EXPECT_EQ(split(read_text(csv), '\n').size(), 7096u);
+  fs::remove(mesh);
+  const Outcome missing = run_fabrica({"geometry", mesh.string(), "-o", csv.string()});
+  EXPECT_EQ(missing.code, 2) << describe(missing);
+  EXPECT_NE(missing.err.find(mesh.string()), std::string::npos) << describe(missing);
+}
 
 // ------------------------------------------------------------ outputs
 
@@ -840,6 +927,55 @@ TEST_P(Drawing, UnknownViewExits2) {
   EXPECT_TRUE(one_line(r.err)) << describe(r);
   EXPECT_NE(r.err.find("sideways"), std::string::npos) << describe(r);
   EXPECT_TRUE(list_dir(dir).empty()) << joined(list_dir(dir));
+}
+
+TEST(Lines, SegCountsMatchItsHeaderAndItsHeaderIsACamera) {
+  if (!has_command("lines")) GTEST_SKIP() << "no lines command in this build";
+  const fs::path dir = work_dir();
+  const fs::path seg = dir / "all.seg";
+  const Outcome r = run_fabrica({"lines", aneurysm().string(), "-o", seg.string(), "--view", "left",
+                                 "--types", "all", "--no-visibility", "-q"});
+  ASSERT_EQ(r.code, 0) << describe(r);
+  EXPECT_TRUE(r.err.empty()) << "-q prints nothing\n" << describe(r);
+  const auto lines = split(read_text(seg), '\n');
+  ASSERT_GE(lines.size(), 2u);
+  ASSERT_EQ(lines[0].rfind("# {", 0), 0u) << lines[0].substr(0, 200);
+  const auto header = nlohmann::json::parse(lines[0].substr(2));
+  EXPECT_EQ(header.at("nv").get<int>(), 7095);
+  EXPECT_EQ(header.at("nf").get<int>(), 14186);
+  std::map<std::string, std::size_t> counted;
+  for (std::size_t i = 1; i < lines.size(); ++i) {
+    std::istringstream in(lines[i]);
+    std::string type;
+    double c[6];
+    ASSERT_TRUE(in >> type >> c[0] >> c[1] >> c[2] >> c[3] >> c[4] >> c[5]) << lines[i];
+    for (double x : c) ASSERT_TRUE(std::isfinite(x)) << lines[i];
+    ++counted[type];
+  }
+  std::size_t total = 0;
+  for (const auto& [type, n] : header.at("segments").items()) {
+    EXPECT_EQ(counted[type], n.get<std::size_t>()) << type;
+    total += n.get<std::size_t>();
+  }
+  EXPECT_EQ(total, lines.size() - 1);
+  EXPECT_GT(total, 1000u);
+
+  // The .seg header is a camera file: the same view again, the same segments.
+  const fs::path again = dir / "again.seg";
+  const Outcome r2 = run_fabrica({"lines", aneurysm().string(), "-o", again.string(), "--camera",
+                                  seg.string(), "--types", "all", "--no-visibility", "-q"});
+  ASSERT_EQ(r2.code, 0) << describe(r2);
+  const auto lines2 = split(read_text(again), '\n');
+  EXPECT_TRUE(std::equal(lines.begin() + 1, lines.end(), lines2.begin() + 1, lines2.end()))
+      << "a camera read from a .seg header differs from the view that wrote it";
+
+  const fs::path json = dir / "lines.json";
+  const Outcome r3 = run_fabrica({"lines", aneurysm().string(), "-o", json.string(), "-q"});
+  ASSERT_EQ(r3.code, 0) << describe(r3);
+  nlohmann::json j;
+  ASSERT_NO_THROW(j = nlohmann::json::parse(read_text(json)));
+  EXPECT_EQ(j.at("nv").get<int>(), 7095);
+  EXPECT_FALSE(j.at("polylines").empty());
 }
 
 TEST(Render, SecondOutputInAMissingFolderWritesNothing) {
