@@ -1,5 +1,7 @@
-# Mesh file reading and writing (OBJ, PLY, STL, OFF, legacy VTK parsed here;
-# VTP read through VTK, which stays private to fabrica_io).
+# Mesh file reading and writing (OBJ, PLY, STL, OFF, legacy VTK, GIfTI, MNI
+# .obj, FreeSurfer parsed here; VTP read through VTK, which stays private to
+# fabrica_io). GIfTI needs pugixml and zlib.
+find_package(ZLIB REQUIRED)
 target_sources(fabrica_io PRIVATE
   ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io.cpp
   ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_obj.cpp
@@ -8,6 +10,10 @@ target_sources(fabrica_io PRIVATE
   ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_stl.cpp
   ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_vtk.cpp
   ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_vtk_legacy.cpp
+  ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_gifti.cpp
+  ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_mni.cpp
+  ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_freesurfer.cpp
 )
+target_link_libraries(fabrica_io PRIVATE ZLIB::ZLIB pugixml::pugixml)
 target_link_libraries(fabrica_io PRIVATE VTK::IOXML VTK::CommonDataModel VTK::CommonCore)
 vtk_module_autoinit(TARGETS fabrica_io MODULES VTK::IOXML VTK::CommonDataModel VTK::CommonCore)

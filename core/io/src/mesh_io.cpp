@@ -129,7 +129,9 @@ std::string lower_extension(const std::filesystem::path& path) {
   return ext;
 }
 
-const char* kKnownRead = ".obj, .ply, .stl, .off, .vtp or .vtk";
+const char* kKnownRead =
+    ".obj (Wavefront or MNI), .ply, .stl, .off, .vtp, .vtk, .gii, .gii.gz or FreeSurfer "
+    "surfaces (lh.pial, rh.white, *.inflated, *.sphere, ...)";
 const char* kKnownWrite = ".obj, .ply, .stl or .off";
 
 using FilePtr = std::unique_ptr<std::FILE, int (*)(std::FILE*)>;
@@ -166,6 +168,15 @@ std::string read_whole_file(const std::filesystem::path& path, const std::string
   return data;
 }
 
+/// FreeSurfer surfaces often have names that say nothing (lh.pial.T1): look
+/// for the magic bytes.
+bool starts_with_freesurfer_magic(const std::filesystem::path& path, const std::string& name) {
+  FilePtr file = open_for_reading(path, name);
+  char head[3] = {};
+  const std::size_t got = std::fread(head, 1, sizeof head, file.get());
+  return detail::has_freesurfer_magic(std::string_view(head, got));
+}
+
 }  // namespace
 
 LoadedMesh read_mesh(const std::filesystem::path& path, const ReadOptions& options) {
@@ -178,14 +189,21 @@ LoadedMesh read_mesh(const std::filesystem::path& path, const ReadOptions& optio
     (void)open_for_reading(path, name);
     detail::read_vtp(path, name, options, out);
   } else {
-    if (ext != ".obj" && ext != ".ply" && ext != ".stl" && ext != ".off" && ext != ".vtk")
+    const bool gifti = ext == ".gii" || (ext == ".gz" && lower_extension(path.stem()) == ".gii");
+    const bool known = gifti || detail::is_freesurfer_surface_extension(ext) || ext == ".obj" ||
+                       ext == ".ply" || ext == ".stl" || ext == ".off" || ext == ".vtk";
+    if (!known && !starts_with_freesurfer_magic(path, name))
       detail::fail(name,
                    "unknown mesh file extension '" + ext + "' (fabrica reads " + kKnownRead + ")");
     const std::string bytes = read_whole_file(path, name);
     std::string_view data = bytes;
     // Text written by some Windows tools starts with a UTF-8 byte-order mark.
     if (ext != ".stl" && data.substr(0, 3) == "\xEF\xBB\xBF") data.remove_prefix(3);
-    if (ext == ".obj")
+    if (gifti)
+      detail::read_gifti(data, name, options, out);
+    else if (ext == ".obj" && detail::looks_like_mni_obj(data))
+      detail::read_mni_obj(data, name, options, out);
+    else if (ext == ".obj")
       detail::read_obj(data, name, options, out);
     else if (ext == ".ply")
       detail::read_ply(data, name, options, out);
@@ -193,8 +211,10 @@ LoadedMesh read_mesh(const std::filesystem::path& path, const ReadOptions& optio
       detail::read_stl(data, name, options, out);
     else if (ext == ".off")
       detail::read_off(data, name, options, out);
-    else
+    else if (ext == ".vtk")
       detail::read_vtk_legacy(data, name, options, out);
+    else
+      detail::read_freesurfer(data, name, options, out);
   }
   if (out.mesh.faces.empty())
     detail::fail(name, "the file has no faces (" + std::to_string(out.mesh.positions.size()) +

@@ -207,6 +207,31 @@ void read_vtk_legacy(std::string_view data, const std::string& name, const ReadO
 void read_vtp(const std::filesystem::path& path, const std::string& name,
               const ReadOptions& options, LoadedMesh& out);
 
+// Neuroimaging surfaces: GIfTI (.gii, .gii.gz), MNI BIC .obj, FreeSurfer
+// binary triangle surfaces. Their coordinates are RAS by the format's
+// convention: the readers set info.tagged_space = Space::ras.
+void read_gifti(std::string_view data, const std::string& name, const ReadOptions& options,
+                LoadedMesh& out);
+void read_mni_obj(std::string_view data, const std::string& name, const ReadOptions& options,
+                  LoadedMesh& out);
+void read_freesurfer(std::string_view data, const std::string& name, const ReadOptions& options,
+                     LoadedMesh& out);
+/// An .obj file that starts with an MNI object letter and a number (`P 0.3 ...`),
+/// or a binary MNI object, rather than Wavefront records.
+bool looks_like_mni_obj(std::string_view data);
+/// Starts with FF FF FE (triangle surface) or FF FF FF / FF FF FD (quadrangle
+/// surface or per-vertex data, refused by read_freesurfer with a message).
+bool has_freesurfer_magic(std::string_view data);
+/// Extensions of FreeSurfer surface names (lh.pial -> ".pial"), lower case.
+bool is_freesurfer_surface_extension(std::string_view lower_ext);
+/// gzip magic bytes 1F 8B.
+bool is_gzip(std::string_view data);
+/// Inflates zlib or gzip data (concatenated gzip members joined). With
+/// `expected` (not SIZE_MAX), the result must have exactly that size.
+/// InputError "<name>: <what>: ..." on corrupt or truncated data.
+std::string inflate_zlib_or_gzip(std::string_view compressed, std::size_t expected,
+                                 const std::string& name, const std::string& what);
+
 // Writers (the mesh has been checked; streams are opened by write_mesh).
 void write_obj(const TriangleMesh& mesh, std::ostream& out, const WriteOptions& options);
 void write_off(const TriangleMesh& mesh, std::ostream& out, const WriteOptions& options);
