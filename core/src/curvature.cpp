@@ -252,24 +252,20 @@ PrincipalCurvatures estimate_curvature(const CurvatureInputs& in, FaceFitScratch
 
   if (scratch.corner_slot.size() != nf) fill_corner_slots(topo, scratch.corner_slot);
   scratch.slots.resize(3 * nf);
-  scratch.axis.resize(nf);
+  scratch.vertices.resize(nv);
 
-  // Per vertex: normal and tangent frame axis u (v = n x u).
-  struct VertexFrame {
-    Vec3 n;
-    Vec3 u;
-    Vec3 v;  // n x u
-  };
-  ScratchArray<VertexFrame> frames;
-  frames.resize(nv);
+  // Per vertex: normal and reference tangent frame (x = u, y = v = n x u).
+  auto& frames = scratch.vertices;
   parallel_chunks(nv, kVertexGrain, [&](std::size_t begin, std::size_t end) {
     for (std::size_t vi = begin; vi < end; ++vi) {
-      frames[vi].n = in.vertex_normals[vi];
+      VertexRecord& F = frames[vi];
+      F.n = in.vertex_normals[vi];
+      F.k1 = F.k2 = 0.0;
       if (!in.normal_valid[vi]) {
-        frames[vi].u = frames[vi].v = Vec3::Zero();
+        F.x = F.y = Vec3::Zero();
         continue;
       }
-      vertex_frame(mesh, topo, vi, frames[vi].n, frames[vi].u, frames[vi].v);
+      vertex_frame(mesh, topo, vi, F.n, F.x, F.y);
     }
   });
 
@@ -284,15 +280,11 @@ PrincipalCurvatures estimate_curvature(const CurvatureInputs& in, FaceFitScratch
       const Vec3& p1 = mesh.positions[face[1]];
       const Vec3& p2 = mesh.positions[face[2]];
       const Vec3 e[3] = {p2 - p1, p0 - p2, p1 - p0};
-      if (nT.isZero()) {
-        scratch.axis[fi] = Vec3::Zero();
-        continue;
-      }
+      if (nT.isZero()) continue;
       const Vec3 t = e[0].normalized();
-      scratch.axis[fi] = t;
       if (!in.normal_valid[face[0]] || !in.normal_valid[face[1]] || !in.normal_valid[face[2]])
         continue;
-      const VertexFrame* V[3] = {&frames[face[0]], &frames[face[1]], &frames[face[2]]};
+      const VertexRecord* V[3] = {&frames[face[0]], &frames[face[1]], &frames[face[2]]};
       const Vec3* const n[3] = {&V[0]->n, &V[1]->n, &V[2]->n};
       const Vec3 b = nT.cross(t);
       double x[3];
@@ -301,7 +293,7 @@ PrincipalCurvatures estimate_curvature(const CurvatureInputs& in, FaceFitScratch
       for (int k = 0; k < 3; ++k) {
         const double w = ca[k];
         if (!(w > 0.0)) continue;
-        const FrameInFace r = frame_in_face(V[k]->u, V[k]->v, V[k]->n, nT, t, b);
+        const FrameInFace r = frame_in_face(V[k]->x, V[k]->y, V[k]->n, nT, t, b);
         const double a1 = r.x1, b1 = r.x2, a2 = r.y1, b2 = r.y2;
         slots[slot[k]] = {w * (a1 * a1 * x[0] + 2.0 * a1 * b1 * x[1] + b1 * b1 * x[2]),
                           w * (a1 * a2 * x[0] + (a1 * b2 + a2 * b1) * x[1] + b1 * b2 * x[2]),
@@ -333,8 +325,8 @@ PrincipalCurvatures estimate_curvature(const CurvatureInputs& in, FaceFitScratch
       }
       if (!(wsum > 0.0)) continue;
       const double inv = 1.0 / wsum;
-      const VertexFrame& F = frames[vi];
-      const PrincipalFrame pf = diagonalize({ku * inv, kuv * inv, kv * inv}, F.u, F.v, F.n);
+      const VertexRecord& F = frames[vi];
+      const PrincipalFrame pf = diagonalize({ku * inv, kuv * inv, kv * inv}, F.x, F.y, F.n);
       if (!std::isfinite(pf.k1) || !std::isfinite(pf.k2)) continue;
       out.k1[vi] = pf.k1;
       out.k2[vi] = pf.k2;
@@ -354,14 +346,9 @@ CurvatureDerivatives estimate_curvature_derivatives(const CurvatureInputs& in,
   const std::size_t nf = mesh.faces.size();
   const std::size_t nv = mesh.positions.size();
 
-  // Per vertex, what the face pass reads, packed together.
-  struct VertexRecord {
-    Vec3 n;
-    Vec3 e1;
-    Vec3 e2;
-    double k1, k2;
-  };
-  ScratchArray<VertexRecord> vrec;
+  // Per vertex, what the face pass reads (x = e1, y = e2), in the buffer the
+  // II fit used for its frames.
+  auto& vrec = scratch.vertices;
   vrec.resize(nv);
   parallel_chunks(nv, 8192, [&](std::size_t begin, std::size_t end) {
     for (std::size_t v = begin; v < end; ++v)
@@ -383,13 +370,13 @@ CurvatureDerivatives estimate_curvature_derivatives(const CurvatureInputs& in,
       const Vec3& p1 = mesh.positions[face[1]];
       const Vec3& p2 = mesh.positions[face[2]];
       const Vec3 e[3] = {p2 - p1, p0 - p2, p1 - p0};
-      const Vec3& t = scratch.axis[fi];
+      const Vec3 t = e[0].normalized();  // the same frame as the II fit
       const Vec3 b = nT.cross(t);
       const VertexRecord* V[3] = {&vrec[face[0]], &vrec[face[1]], &vrec[face[2]]};
       FrameInFace r[3];
       TangentTensor2 II[3];
       for (int k = 0; k < 3; ++k) {
-        r[k] = frame_in_face(V[k]->e1, V[k]->e2, V[k]->n, nT, t, b);
+        r[k] = frame_in_face(V[k]->x, V[k]->y, V[k]->n, nT, t, b);
         II[k] = tensor_from_principal(V[k]->k1, V[k]->k2, r[k].x1, r[k].x2);
       }
       double x[4];

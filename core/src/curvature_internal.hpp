@@ -22,15 +22,26 @@ struct CurvatureInputs {
   const std::vector<std::uint8_t>& normal_valid;
 };
 
-/// Buffers shared by the two fits (allocated once per Surface): the face
-/// frame axis t = e0/|e0| of each face (the frame is (t, n x t)), each
-/// (face, corner)'s position in the vertex -> faces CSR list, and one slot
-/// per such position holding that corner's weighted, re-expressed tensor
-/// (II: 3 values, C: 4) and its weight (last entry; 0 = not used).
+/// Per-vertex data a face pass reads, packed together: the normal n and a
+/// tangent frame (x, y = n x x): the reference frame (u, v) for the II fit,
+/// the principal frame (e1, e2) and k1, k2 for the derivative fit.
+struct VertexRecord {
+  Vec3 n;
+  Vec3 x;
+  Vec3 y;
+  double k1, k2;
+};
+
+/// Buffers shared by the passes of one Surface (allocated once, reused, so
+/// that fresh memory, whose first touch is expensive, is touched once): each
+/// (face, corner)'s position in the vertex -> faces CSR list, one slot per
+/// such position holding that corner's weighted, re-expressed quantity
+/// (normal: 3 values + weight + area; II: 3 values; C: 4) and its weight
+/// (entry 4 for the fits; 0 = not used), and one record per vertex.
 struct FaceFitScratch {
-  ScratchArray<Vec3> axis;
   ScratchArray<std::array<std::int32_t, 3>> corner_slot;
   ScratchArray<std::array<double, 5>> slots;
+  ScratchArray<VertexRecord> vertices;
 };
 
 /// For every (face, corner), its position in the vertex -> faces CSR list
