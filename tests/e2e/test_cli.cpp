@@ -127,19 +127,19 @@ std::string describe(const Outcome& r) {
          "stdout (first 2000 chars):\n" + r.out.substr(0, 2000);
 }
 
-/// Runs fabrica with `args`; stdin is /dev/null, stdout and stderr captured,
-/// XDG_CACHE_HOME set to a private folder. Killed after `timeout`.
-Outcome run_fabrica(const std::vector<std::string>& args,
+/// Runs `program` with `args`; stdin is /dev/null, stdout and stderr
+/// captured, XDG_CACHE_HOME set to a private folder. Killed after `timeout`.
+Outcome run_program(const std::string& program, const std::vector<std::string>& args,
                     std::chrono::seconds timeout = std::chrono::seconds(60)) {
   static int counter = 0;
   const int n = counter++;
   const fs::path out_path = process_temp().root / "logs" / ("out-" + std::to_string(n));
   const fs::path err_path = process_temp().root / "logs" / ("err-" + std::to_string(n));
   Outcome r;
-  r.command = FABRICA_EXE;
+  r.command = program;
   for (const auto& a : args) r.command += " '" + a + "'";
 
-  std::vector<std::string> argv_s{FABRICA_EXE};
+  std::vector<std::string> argv_s{program};
   argv_s.insert(argv_s.end(), args.begin(), args.end());
   std::vector<char*> argv;
   for (auto& a : argv_s) argv.push_back(a.data());
@@ -161,10 +161,11 @@ Outcome run_fabrica(const std::vector<std::string>& args,
   posix_spawn_file_actions_addopen(&actions, 2, err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
                                    0644);
   pid_t pid = 0;
-  const int spawned = posix_spawn(&pid, FABRICA_EXE, &actions, nullptr, argv.data(), envp.data());
+  const int spawned =
+      posix_spawn(&pid, program.c_str(), &actions, nullptr, argv.data(), envp.data());
   posix_spawn_file_actions_destroy(&actions);
   if (spawned != 0) {
-    ADD_FAILURE() << "cannot start " << FABRICA_EXE << ": " << std::strerror(spawned);
+    ADD_FAILURE() << "cannot start " << program << ": " << std::strerror(spawned);
     return r;
   }
   const auto start = std::chrono::steady_clock::now();
@@ -188,6 +189,11 @@ Outcome run_fabrica(const std::vector<std::string>& args,
   r.out = read_text(out_path);
   r.err = read_text(err_path);
   return r;
+}
+
+Outcome run_fabrica(const std::vector<std::string>& args,
+                    std::chrono::seconds timeout = std::chrono::seconds(60)) {
+  return run_program(FABRICA_EXE, args, timeout);
 }
 
 /// Exactly one non-empty line, ending in a newline.
@@ -978,6 +984,26 @@ TEST(Lines, SegCountsMatchItsHeaderAndItsHeaderIsACamera) {
   EXPECT_FALSE(j.at("polylines").empty());
 }
 
+TEST(Pipeline, ExtractedSurfaceThroughEveryMeshCommand) {
+  if (!has_command("extract")) GTEST_SKIP() << "no extract command in this build";
+  const fs::path dir = work_dir();
+  const Outcome r = run_fabrica({"extract", totalseg().string(), "-o", (dir / "organs").string(),
+                                 "--labels", "2", "--format", "ply", "--space", "ras"});
+  ASSERT_EQ(r.code, 0) << describe(r);
+  const fs::path kidney = dir / "organs" / "kidney_right.ply";
+  ASSERT_TRUE(fs::exists(kidney)) << joined(list_dir(dir / "organs"));
+  for (const auto& cmd : kMeshCommands) {
+    if (!has_command(cmd)) continue;
+    const fs::path output = cmd == "info" ? fs::path() : dir / ("kidney" + output_extension(cmd));
+    const Outcome c = run_fabrica(mesh_command_args(cmd, kidney, output));
+    if (cmd == "render" && c.code == 4) continue;  // no headless GL here
+    EXPECT_EQ(c.code, 0) << describe(c);
+    if (!output.empty()) {
+      EXPECT_GT(fs::exists(output) ? fs::file_size(output) : 0, 500u) << cmd;
+    }
+  }
+}
+
 TEST(Render, SecondOutputInAMissingFolderWritesNothing) {
   if (!has_command("render")) GTEST_SKIP() << "no render command in this build";
   const fs::path dir = work_dir();
@@ -1019,6 +1045,43 @@ TEST(Docs, EveryCommandScriptsRunCallsExists) {
         << c << " missing from fabrica --help";
     const Outcome r = run_fabrica({c, "--help"});
     EXPECT_EQ(r.code, 0) << describe(r);
+  }
+}
+
+TEST(Docs, ScriptsRunFabricaLinesWorkOnTheBundledMesh) {
+  // Runs each `"$fabrica" ...` line of scripts/run (not the script: it would
+  // set up and rebuild) with the script's variables, on data/aneurysm.off.
+  const fs::path root(FABRICA_SOURCE_DIR);
+  const fs::path mesh = root / "data" / "aneurysm.off";
+  if (!fs::exists(mesh)) GTEST_SKIP() << "no bundled mesh " << mesh;
+  const fs::path out = work_dir() / "out";
+  fs::create_directories(out);
+  const std::string text = read_text(root / "scripts" / "run");
+  std::istringstream lines(text);
+  int ran = 0;
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("\"$fabrica\" ", 0) != 0) continue;
+    const std::string script =
+        "set -euo pipefail\nfabrica=\"$1\"\nmesh=\"$2\"\nout=\"$3\"\n"
+        "name=\"$(basename \"${mesh%.*}\")\"\n" +
+        line + "\n";
+    const Outcome r =
+        run_program("/bin/bash", {"-c", script, "bash", FABRICA_EXE, mesh.string(), out.string()});
+    EXPECT_EQ(r.code, 0) << line << "\n" << describe(r);
+    ++ran;
+  }
+  EXPECT_GT(ran, 0);
+  for (const auto& name : list_dir(out)) EXPECT_GT(fs::file_size(out / name), 100u) << name;
+  EXPECT_TRUE(temporaries(out).empty() ||
+              // the script renames its own report .tmp in its next line
+              temporaries(out) == std::vector<std::string>{"aneurysm-report.json.tmp"})
+      << joined(temporaries(out));
+  if (fs::exists(out / "aneurysm-report.json.tmp")) {
+    const auto j = nlohmann::json::parse(read_text(out / "aneurysm-report.json.tmp"));
+    EXPECT_EQ(j.at("validation").at("vertices").get<int>(), 7095);
+  }
+  if (fs::exists(out / "aneurysm-geometry.csv")) {
+    EXPECT_EQ(split(read_text(out / "aneurysm-geometry.csv"), '\n').size(), 7096u);
   }
 }
 
