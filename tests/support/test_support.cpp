@@ -4,6 +4,9 @@
 #include <map>
 #include <numbers>
 #include <random>
+#include <string>
+
+#include <unistd.h>
 
 namespace fabrica::test {
 
@@ -11,7 +14,10 @@ std::filesystem::path shared_data() { return FABRICA_SHARED_DATA; }
 std::filesystem::path shared_reference() { return FABRICA_SHARED_REFERENCE; }
 
 std::filesystem::path temp_dir(const std::string& name) {
-  auto dir = std::filesystem::temp_directory_path() / ("fabrica-test-" + name);
+  // ctest runs every test case as its own process, several at once: the
+  // process id keeps two cases that use the same name apart.
+  auto dir = std::filesystem::temp_directory_path() /
+             ("fabrica-test-" + name + "-" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;

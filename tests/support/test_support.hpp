@@ -13,7 +13,7 @@ namespace fabrica::test {
 std::filesystem::path shared_data();
 /// ../shared/reference.
 std::filesystem::path shared_reference();
-/// A fresh empty temporary folder for one test.
+/// A fresh empty temporary folder for one test (unique per process).
 std::filesystem::path temp_dir(const std::string& name);
 
 /// UV sphere of radius r with `rings` latitude bands and `segments` longitudes.
