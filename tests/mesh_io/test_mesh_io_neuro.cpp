@@ -8,9 +8,11 @@
 
 #include <algorithm>
 #include <charconv>
+#include <chrono>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <iostream>
 #include <string>
 #include <vector>
 
@@ -215,6 +217,21 @@ TEST(MeshIoGifti, Fsaverage5AgreesWithOffConversions) {
   EXPECT_NEAR(box.max.z(), 78.124, 1e-4);
 }
 
+TEST(MeshIoGifti, OtherDataArraysOfAnyTypeAreIgnored) {
+  const TriangleMesh mesh = test_mesh();
+  std::string xml = make_gifti(mesh, GiftiStyle{});
+  const std::string shape =
+      "<DataArray Intent=\"NIFTI_INTENT_SHAPE\" DataType=\"NIFTI_TYPE_INT16\" "
+      "Dimensionality=\"1\" Dim0=\"2\" Encoding=\"ASCII\" Endian=\"LittleEndian\">"
+      "<Data>1 2</Data></DataArray>\n";
+  xml.insert(xml.find("<DataArray"), shape);  // before the point set
+  const auto dir = test::temp_dir("mesh_io_gifti_extra");
+  write_bytes(dir / "with_shape.gii", xml);
+  const auto r = io::read_mesh(dir / "with_shape.gii");
+  expect_same_float_mesh(r.mesh, mesh);
+  EXPECT_TRUE(has_note(r.info, "ignored DataArrays: NIFTI_INTENT_SHAPE"));
+}
+
 TEST(MeshIoGifti, UncompressedCopyAndUserOverride) {
   const auto dir = test::temp_dir("mesh_io_gifti_plain");
   const std::string xml = gunzip(read_bytes(brain("fsaverage5/white_left.gii.gz")));
@@ -325,6 +342,16 @@ TEST_F(MalformedNeuro, Gifti) {
       file("dim0.gii", replaced(good, "Dim0=\"" + std::to_string(mesh.vertex_count()) + "\"",
                                 "Dim0=\"" + std::to_string(mesh.vertex_count() + 1) + "\"")),
       "wrong Dim0/Dim1 or truncated");
+  // Huge declared sizes are refused before anything that large is allocated.
+  for (const char* encoding : {"Base64Binary", "GZipBase64Binary", "ASCII"}) {
+    GiftiStyle st;
+    st.encoding = encoding;
+    expect_input_error(
+        file(std::string("huge_") + encoding + ".gii",
+             replaced(make_gifti(mesh, st), "Dim0=\"" + std::to_string(mesh.vertex_count()) + "\"",
+                      "Dim0=\"2000000000\"")),
+        "2000000000 x 3 values");
+  }
   expect_input_error(file("dim0_text.gii", replaced(good, "Dim0=\"", "Dim0=\"x")),
                      "not a valid size");
   expect_input_error(
@@ -551,6 +578,27 @@ TEST_F(MalformedNeuro, FreeSurfer) {
   const std::string message = expect_input_error(file("mesh.xyz", "1 2 3\n"), "unknown mesh file");
   EXPECT_NE(message.find(".gii"), std::string::npos) << message;
   EXPECT_NE(message.find("FreeSurfer"), std::string::npos) << message;
+}
+
+TEST(MeshIoNeuroSpeed, GiftiMniAndFreeSurferReadQuickly) {
+  // Generous bound for a shared 2-core machine; the measured time is printed.
+  const auto dir = test::temp_dir("mesh_io_neuro_speed");
+  write_bytes(dir / "lh.pial",
+              freesurfer_bytes(io::read_mesh(brain("fsaverage5/pial_left.off")).mesh, true));
+  for (const auto& path : {brain("fsaverage5/pial_left.gii.gz"),
+                           brain("vtkdata_mni-surface-mesh.mni.obj"), dir / "lh.pial"}) {
+    double best = 1e9;
+    for (int repeat = 0; repeat < 3; ++repeat) {
+      const auto start = std::chrono::steady_clock::now();
+      const auto r = io::read_mesh(path);
+      best = std::min(
+          best, std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+                    .count());
+      ASSERT_GT(r.mesh.face_count(), 0u);
+    }
+    std::cout << "[ timing ] read " << path.filename().string() << ": " << best << " ms\n";
+    EXPECT_LT(best, 500.0) << path;
+  }
 }
 
 }  // namespace

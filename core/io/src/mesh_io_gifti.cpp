@@ -18,6 +18,7 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -62,6 +63,8 @@ std::string inflate_zlib_or_gzip(std::string_view compressed, std::size_t expect
           if (rc != Z_OK) break;
           continue;
         }
+        if (out.size() >= (std::size_t{1} << 32))
+          fail(name, what + ": decompresses to more than 4 GiB, more than fabrica reads");
         out.resize(2 * out.size());
       }
       const std::size_t room =
@@ -290,8 +293,25 @@ std::vector<double> decode_values(const DataArray& a, const std::string& name) {
   if (!data_node) fail(name, a.what + " has no <Data> element");
   const std::string text = element_text(data_node);
   const std::size_t count = a.rows * a.columns;
-  std::vector<double> raw(count);
+  // Sizes are checked against the data before anything that large is allocated.
+  const std::size_t bytes_needed = count * element_size(a.type);
+  if (encoding == "ASCII" && count > text.size() / 2 + 1)
+    fail(name, a.what + ": Dim0 x Dim1 = " + std::to_string(a.rows) + " x " +
+                   std::to_string(a.columns) + " values cannot fit in " +
+                   std::to_string(text.size()) + " characters of ASCII data");
+  if (encoding == "Base64Binary" && bytes_needed > text.size())
+    fail(name, a.what + ": Dim0 x Dim1 = " + std::to_string(a.rows) + " x " +
+                   std::to_string(a.columns) + " values need " + std::to_string(bytes_needed) +
+                   " bytes, more than the " + std::to_string(text.size()) +
+                   " characters of base64 data hold (wrong Dim0/Dim1 or truncated data)");
+  // zlib expands at most ~1032:1.
+  if (encoding == "GZipBase64Binary" && bytes_needed / 1100 > text.size())
+    fail(name, a.what + ": Dim0 x Dim1 = " + std::to_string(a.rows) + " x " +
+                   std::to_string(a.columns) + " values need " + std::to_string(bytes_needed) +
+                   " bytes, more than the compressed data can hold (wrong Dim0/Dim1?)");
+  std::vector<double> raw;
   if (encoding == "ASCII") {
+    raw.resize(count);
     TextCursor c(text);
     for (std::size_t i = 0; i < count; ++i) {
       c.skip_blanks();
@@ -323,7 +343,6 @@ std::vector<double> decode_values(const DataArray& a, const std::string& name) {
       fail(name, a.what + ": the ASCII data holds more than Dim0 x Dim1 = " +
                      std::to_string(a.rows) + " x " + std::to_string(a.columns) + " values");
   } else if (encoding == "Base64Binary" || encoding == "GZipBase64Binary") {
-    const std::size_t bytes_needed = count * element_size(a.type);
     std::string bytes = decode_base64(text, name, a.what);
     if (encoding == "GZipBase64Binary")
       bytes = inflate_zlib_or_gzip(bytes, bytes_needed, name, a.what);
@@ -333,6 +352,7 @@ std::vector<double> decode_values(const DataArray& a, const std::string& name) {
                      std::to_string(a.columns) + " values need " + std::to_string(bytes_needed) +
                      " (wrong Dim0/Dim1 or truncated data)");
     const char* p = bytes.data();
+    raw.resize(count);
     for (std::size_t i = 0; i < count; ++i) {
       switch (a.type) {
         case ElementType::uint8:
@@ -421,23 +441,24 @@ void read_gifti(std::string_view data, const std::string& name, const ReadOption
     fail(name, std::string("not a GIfTI file: the root XML element is <") +
                    (first ? first.name() : "") + ">, expected <GIFTI>");
   }
-  std::vector<DataArray> arrays;
-  for (const pugi::xml_node& node : root.children("DataArray"))
-    arrays.push_back(describe(node, arrays.size(), name));
-  const DataArray* points = nullptr;
-  const DataArray* triangles = nullptr;
+  // Only the two arrays used are checked in detail: other arrays (normals,
+  // labels, any data type) do not stop a surface from being read.
+  std::size_t array_count = 0;
+  std::optional<DataArray> points, triangles;
   std::vector<std::string> ignored;
-  for (const DataArray& a : arrays) {
-    if (a.intent == "NIFTI_INTENT_POINTSET" && !points)
-      points = &a;
-    else if (a.intent == "NIFTI_INTENT_TRIANGLE" && !triangles)
-      triangles = &a;
+  for (const pugi::xml_node& node : root.children("DataArray")) {
+    const std::string intent = trimmed(node.attribute("Intent").value());
+    if (intent == "NIFTI_INTENT_POINTSET" && !points)
+      points = describe(node, array_count, name);
+    else if (intent == "NIFTI_INTENT_TRIANGLE" && !triangles)
+      triangles = describe(node, array_count, name);
     else
-      ignored.push_back(a.intent.empty() ? std::string("(no Intent)") : a.intent);
+      ignored.push_back(intent.empty() ? std::string("(no Intent)") : intent);
+    ++array_count;
   }
   if (!points)
     fail(name, "the GIfTI file has no NIFTI_INTENT_POINTSET DataArray (" +
-                   std::to_string(arrays.size()) +
+                   std::to_string(array_count) +
                    " DataArrays): it holds per-vertex data (a .func/.shape/.label.gii?), "
                    "not a surface");
   if (!triangles)

@@ -34,18 +34,12 @@ const char* object_description(char c) {
   switch (c) {
     case 'L':
       return "lines";
-    case 'M':
-      return "a model";
     case 'Q':
       return "a quadmesh";
     case 'T':
       return "text";
-    case 'V':
-      return "a marker";
-    case 'X':
-      return "pixels";
     default:
-      return "an unknown object type";
+      return "a non-polygon object";
   }
 }
 
