@@ -36,6 +36,10 @@ std::string inflate_zlib_or_gzip(std::string_view compressed, std::size_t expect
   const bool known_size = expected != std::numeric_limits<std::size_t>::max();
   if (compressed.size() > std::numeric_limits<uInt>::max())
     fail(name, what + ": compressed data larger than 4 GiB is not supported");
+  if (known_size && expected / 1100 > compressed.size() + 64)  // deflate expands at most ~1032:1
+    fail(name, what + ": " + std::to_string(compressed.size()) +
+                   " bytes of compressed data cannot hold the expected " +
+                   std::to_string(expected) + " bytes");
   std::string out;
   out.resize(known_size ? expected : std::max<std::size_t>(compressed.size() * 4, 1 << 16));
   std::size_t produced = 0;
@@ -44,6 +48,10 @@ std::string inflate_zlib_or_gzip(std::string_view compressed, std::size_t expect
     z_stream zs{};
     if (inflateInit2(&zs, 15 + 32) != Z_OK)  // 15 + 32: zlib or gzip header, auto-detected
       throw Error(ErrorKind::internal, "zlib: inflateInit2 failed");
+    struct End {
+      z_stream* stream;
+      ~End() { inflateEnd(stream); }
+    } end_on_exit{&zs};
     zs.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(rest.data()));
     zs.avail_in = static_cast<uInt>(rest.size());
     int rc = Z_OK;
@@ -55,11 +63,9 @@ std::string inflate_zlib_or_gzip(std::string_view compressed, std::size_t expect
           zs.next_out = reinterpret_cast<Bytef*>(&probe);
           zs.avail_out = 1;
           rc = inflate(&zs, Z_NO_FLUSH);
-          if (zs.avail_out == 0) {
-            inflateEnd(&zs);
+          if (zs.avail_out == 0)
             fail(name, what + ": decompresses to more than the expected " +
                            std::to_string(expected) + " bytes");
-          }
           if (rc != Z_OK) break;
           continue;
         }
@@ -77,7 +83,6 @@ std::string inflate_zlib_or_gzip(std::string_view compressed, std::size_t expect
     }
     const std::string message = zs.msg != nullptr ? std::string(zs.msg) : std::to_string(rc);
     const std::size_t left = zs.avail_in;
-    inflateEnd(&zs);
     if (rc != Z_STREAM_END && rc != Z_OK && rc != Z_BUF_ERROR)
       fail(name, what + ": corrupt compressed data (zlib: " + message + ")");
     if (rc != Z_STREAM_END)
