@@ -417,6 +417,29 @@ const std::vector<BadMesh>& bad_meshes() {
          write_bytes(d / "negindex.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -7\n");
          return d / "negindex.obj";
        }},
+      {"truncated_freesurfer_surface",  // magic FF FF FE, big-endian counts, cut short
+       [](const fs::path& d) {
+         std::string s("\xff\xff\xfe", 3);
+         s += "created by fabrica tests\n\n";
+         s += std::string("\0\0\0\x04\0\0\0\x04", 8);  // 4 vertices, 4 triangles
+         s += std::string(20, '\0');                   // of 96 bytes of data
+         write_bytes(d / "lh.pial", s);
+         return d / "lh.pial";
+       }},
+      {"truncated_gifti",
+       [](const fs::path& d) {
+         write_bytes(d / "cut.gii",
+                     "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<GIFTI Version=\"1.0\" "
+                     "NumberOfDataArrays=\"2\">\n<DataArray Intent=\"NIFTI_INTENT_POINTSET\" "
+                     "DataType=\"NIFTI_TYPE_FLOAT32\" Dimensionality=\"2\" Dim0=\"4\" "
+                     "Dim1=\"3\" Encoding=\"ASCII\">\n<Data>0 0 0 1 0");
+         return d / "cut.gii";
+       }},
+      {"truncated_mni_obj",
+       [](const fs::path& d) {
+         write_bytes(d / "surface_mni.obj", "P 0.3 0.3 0.4 10 1 4\n0 0 0\n1 0 0\n");
+         return d / "surface_mni.obj";
+       }},
       {"unknown_extension",
        [](const fs::path& d) {
          write_bytes(d / "tetra.xyz", kTetraObj);
