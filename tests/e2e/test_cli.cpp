@@ -709,6 +709,50 @@ TEST_P(Outputs, TargetThatIsAFolderExits3WithoutTemporaries) {
 INSTANTIATE_TEST_SUITE_P(Present, Outputs, ::testing::ValuesIn(present_of(kOutputCommands)),
                          [](const auto& info) { return info.param; });
 
+TEST(Outputs, InterruptedWriteLeavesNoTemporary) {
+  // SIGTERM while the CSV is being written (a 56 MB file for igea): the
+  // process dies by the signal and leaves neither the target nor its temporary.
+  if (!has_command("geometry")) GTEST_SKIP() << "no geometry command in this build";
+  const fs::path mesh = test::shared_data() / "meshes" / "classic" / "c3d_igea.ply";
+  if (!fs::exists(mesh)) GTEST_SKIP() << "no " << mesh;
+  const fs::path dir = work_dir();
+  const fs::path csv = dir / "igea.csv";
+  std::vector<std::string> argv_s{FABRICA_EXE, "geometry", mesh.string(), "-o", csv.string()};
+  std::vector<char*> argv;
+  for (auto& a : argv_s) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, 2, "/dev/null", O_WRONLY, 0);
+  pid_t pid = 0;
+  ASSERT_EQ(posix_spawn(&pid, FABRICA_EXE, &actions, nullptr, argv.data(), environ), 0);
+  posix_spawn_file_actions_destroy(&actions);
+  bool interrupted = false, exited = false;
+  int status = 0;
+  const auto start = std::chrono::steady_clock::now();
+  while (std::chrono::steady_clock::now() - start < std::chrono::seconds(60)) {
+    if (::waitpid(pid, &status, WNOHANG) == pid) {
+      exited = true;
+      break;
+    }
+    if (!temporaries(dir).empty()) {
+      ::kill(pid, SIGTERM);
+      interrupted = true;
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::microseconds(300));
+  }
+  if (!exited) {
+    if (!interrupted) ::kill(pid, SIGKILL);
+    ::waitpid(pid, &status, 0);
+  }
+  if (!interrupted) GTEST_SKIP() << "the write was too quick to interrupt";
+  if (WIFEXITED(status)) GTEST_SKIP() << "the write finished before the signal arrived";
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM) << "status " << status;
+  EXPECT_TRUE(list_dir(dir).empty()) << "left behind: " << joined(list_dir(dir));
+}
+
 // ------------------------------------------------------------ info
 
 TEST(Info, JsonReportsTheAneurysm) {
