@@ -580,6 +580,60 @@ TEST_F(MalformedNeuro, FreeSurfer) {
   EXPECT_NE(message.find("FreeSurfer"), std::string::npos) << message;
 }
 
+TEST(MeshIoNeuroRobustness, DamagedFilesGiveInputErrorsOnly) {
+  // Seeded random damage (bytes changed, cut, inserted) to small files of
+  // every new format: each read either succeeds with a valid mesh or throws
+  // InputError naming the file; nothing else (run under ASan/UBSan too).
+  const TriangleMesh mesh = test_mesh();
+  GiftiStyle zipped;
+  zipped.encoding = "GZipBase64Binary";
+  GiftiStyle ascii;
+  ascii.encoding = "ASCII";
+  const std::vector<std::pair<std::string, std::string>> originals = {
+      {"damaged.gii", make_gifti(mesh, GiftiStyle{})},
+      {"damaged_zip.gii", make_gifti(mesh, zipped)},
+      {"damaged_ascii.gii", make_gifti(mesh, ascii)},
+      {"damaged.gii.gz", deflate_bytes(make_gifti(mesh, GiftiStyle{}), 31)},
+      {"damaged.obj", mni_object(" 1 1 0 0 1 0 1 0 1") + mni_object(" 0 1 1 1 1")},
+      {"lh.damaged", freesurfer_bytes(mesh, true)}};
+  const auto dir = test::temp_dir("mesh_io_neuro_damage");
+  std::uint64_t state = 0x9E3779B97F4A7C15ull;
+  auto next = [&](std::uint64_t n) {
+    state ^= state << 13;
+    state ^= state >> 7;
+    state ^= state << 17;
+    return state % n;
+  };
+  std::size_t read_ok = 0, rejected = 0;
+  for (const auto& [name, original] : originals) {
+    for (int trial = 0; trial < 150; ++trial) {
+      std::string bytes = original;
+      const auto kind = next(3);
+      if (kind == 0) {
+        for (std::uint64_t k = 0, n = 1 + next(4); k < n; ++k)
+          bytes[next(bytes.size())] = static_cast<char>(next(256));
+      } else if (kind == 1) {
+        bytes.resize(1 + next(bytes.size() - 1));
+      } else {
+        bytes.insert(next(bytes.size()), std::string(1 + next(8), static_cast<char>(next(256))));
+      }
+      write_bytes(dir / name, bytes);
+      try {
+        const auto r = io::read_mesh(dir / name);
+        check_mesh_indices_and_values(r.mesh, name);
+        ++read_ok;
+      } catch (const InputError& e) {
+        ++rejected;
+        ASSERT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+      } catch (const std::exception& e) {
+        FAIL() << name << " trial " << trial << ": not an InputError: " << e.what();
+      }
+    }
+  }
+  EXPECT_GT(rejected, 300u);  // most damage is detected
+  std::cout << "[ damage ] " << read_ok << " read, " << rejected << " rejected\n";
+}
+
 TEST(MeshIoNeuroSpeed, GiftiMniAndFreeSurferReadQuickly) {
   // Generous bound for a shared 2-core machine; the measured time is printed.
   const auto dir = test::temp_dir("mesh_io_neuro_speed");
