@@ -111,7 +111,7 @@ void add_geometry_command(CLI::App& app, Action& action) {
       "Per-vertex normals, areas, principal curvatures and directions, mean and Gaussian "
       "curvature and curvature derivatives as CSV (docs/geometry.md)");
   auto o = std::make_shared<GeometryOptions>();
-  cmd->add_option("MESH", o->mesh, "mesh file (.obj .ply .stl .off .vtp .vtk)")->required();
+  cmd->add_option("MESH", o->mesh, "mesh file: OBJ, PLY, STL, OFF, VTP, VTK, GIfTI (.gii, .gii.gz), MNI .obj, FreeSurfer surfaces (docs/formats.md)")->required();
   cmd->add_option("-o,--output", o->output, "CSV file to write, one row per vertex in file order")
       ->required();
   cmd->add_option("--normals", o->normals,

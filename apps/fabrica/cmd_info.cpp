@@ -182,7 +182,7 @@ void add_info_command(CLI::App& app, Action& action) {
       "info",
       "Describe a mesh: format, counts, coordinate space, and defects (docs/validation.md)");
   auto o = std::make_shared<InfoOptions>();
-  cmd->add_option("MESH", o->mesh, "mesh file (.obj .ply .stl .off .vtp .vtk)")->required();
+  cmd->add_option("MESH", o->mesh, "mesh file: OBJ, PLY, STL, OFF, VTP, VTK, GIfTI (.gii, .gii.gz), MNI .obj, FreeSurfer surfaces (docs/formats.md)")->required();
   cmd->add_flag("--json", o->json, "print the report as JSON");
   cmd->add_flag("--repair", o->repair,
                 "repair a copy (weld, drop degenerate/duplicate faces, split non-manifold "

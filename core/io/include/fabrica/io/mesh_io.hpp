@@ -62,9 +62,10 @@ struct LoadedMesh {
   MeshFileInfo info;
 };
 
-/// Reads a mesh; the format is chosen by extension (.obj .ply .stl .off .vtp
-/// .vtk, case-insensitive). Throws InputError naming the file on any problem,
-/// including a file with no faces.
+/// Reads a mesh; the format is chosen by extension, case-insensitive (.obj
+/// Wavefront or MNI by content, .ply .stl .off .vtp .vtk .gii .gii.gz, and
+/// FreeSurfer surface names or magic bytes; docs/formats.md). Throws
+/// InputError naming the file on any problem, including a file with no faces.
 LoadedMesh read_mesh(const std::filesystem::path& path, const ReadOptions& options = {});
 
 struct WriteOptions {
