@@ -243,20 +243,21 @@ double Surface::feature_size() const {
 void Surface::precompute() const {
   topology();
   // Two independent chains; the feature size (a selection over all
-  // curvatures) overlaps the derivative pass. No item is asked for by two
-  // concurrent branches before it exists except through std::call_once,
-  // which only makes the later one wait.
-  tbb::this_task_arena::isolate([&] {
-    tbb::parallel_invoke(
-        [&] {
-          curvature();
-          tbb::parallel_invoke([&] { curvature_derivatives(); }, [&] { feature_size(); });
-        },
-        [&] {
-          bounding_sphere_center();
-          median_edge_length();
-        });
-  });
+  // curvatures) overlaps the derivative pass. Deliberately not wrapped in
+  // this_task_arena::isolate: a thread waiting here must be free to help
+  // with the (isolated) parallel loops inside the other branch, or the
+  // second core only spins. Re-entrancy is safe without it: each cached
+  // item's computation runs its loops isolated, so a thread holding an
+  // item's once_flag never picks up outer work that asks for that item.
+  tbb::parallel_invoke(
+      [&] {
+        curvature();
+        tbb::parallel_invoke([&] { curvature_derivatives(); }, [&] { feature_size(); });
+      },
+      [&] {
+        bounding_sphere_center();
+        median_edge_length();
+      });
 }
 
 }  // namespace fabrica
