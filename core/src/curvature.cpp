@@ -54,33 +54,6 @@ bool solve_spd_tridiagonal(const double (&diag)[N], const double (&off)[N - 1],
   return true;
 }
 
-/// An orthonormal tangent frame (u, v = n x u) at vertex `v`: u is the first
-/// incident edge projected onto the tangent plane, or any perpendicular.
-void vertex_frame(const TriangleMesh& mesh, const Topology& topo, std::size_t vtx, const Vec3& n,
-                  Vec3& u, Vec3& v) {
-  const auto faces = topo.vertex_faces(vtx);
-  const auto corners = topo.vertex_face_corners(vtx);
-  for (std::size_t i = 0; i < faces.size(); ++i) {
-    const Face& f = mesh.faces[faces[i]];
-    const Vec3 e = mesh.positions[f[(corners[i] + 1) % 3]] - mesh.positions[vtx];
-    const Vec3 t = e - e.dot(n) * n;
-    const double len = t.norm();
-    if (len > 1e-8 * e.norm() && len > 0.0) {
-      u = t / len;
-      v = n.cross(u);
-      return;
-    }
-  }
-  // Any perpendicular: cross with the axis least aligned with n.
-  Vec3 axis = Vec3::UnitX();
-  if (std::abs(n.y()) < std::abs(n.x()) && std::abs(n.y()) <= std::abs(n.z()))
-    axis = Vec3::UnitY();
-  else if (std::abs(n.z()) < std::abs(n.x()))
-    axis = Vec3::UnitZ();
-  u = n.cross(axis).normalized();
-  v = n.cross(u);
-}
-
 /// Second fundamental form of principal values k1, k2 whose e1 has unit
 /// coordinates (c, s) in some frame: k1 (c,s)(c,s)ᵀ + k2 (-s,c)(-s,c)ᵀ.
 inline TangentTensor2 tensor_from_principal(double k1, double k2, double c, double s) {
@@ -165,6 +138,33 @@ PrincipalFrame diagonalize(const TangentTensor2& t, const Vec3& u, const Vec3& v
 }
 
 namespace detail {
+
+/// An orthonormal tangent frame (u, v = n x u) at vertex `v`: u is the first
+/// incident edge projected onto the tangent plane, or any perpendicular.
+void vertex_frame(const TriangleMesh& mesh, const Topology& topo, std::size_t vtx, const Vec3& n,
+                  Vec3& u, Vec3& v) {
+  const auto faces = topo.vertex_faces(vtx);
+  const auto corners = topo.vertex_face_corners(vtx);
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    const Face& f = mesh.faces[faces[i]];
+    const Vec3 e = mesh.positions[f[(corners[i] + 1) % 3]] - mesh.positions[vtx];
+    const Vec3 t = e - e.dot(n) * n;
+    const double len = t.norm();
+    if (len > 1e-8 * e.norm() && len > 0.0) {
+      u = t / len;
+      v = n.cross(u);
+      return;
+    }
+  }
+  // Any perpendicular: cross with the axis least aligned with n.
+  Vec3 axis = Vec3::UnitX();
+  if (std::abs(n.y()) < std::abs(n.x()) && std::abs(n.y()) <= std::abs(n.z()))
+    axis = Vec3::UnitY();
+  else if (std::abs(n.z()) < std::abs(n.x()))
+    axis = Vec3::UnitZ();
+  u = n.cross(axis).normalized();
+  v = n.cross(u);
+}
 
 namespace {
 
@@ -252,22 +252,25 @@ PrincipalCurvatures estimate_curvature(const CurvatureInputs& in, FaceFitScratch
 
   if (scratch.corner_slot.size() != nf) fill_corner_slots(topo, scratch.corner_slot);
   scratch.slots.resize(3 * nf);
-  scratch.vertices.resize(nv);
 
   // Per vertex: normal and reference tangent frame (x = u, y = v = n x u).
+  // Usually already filled by the vertex-normal pass (surface.cpp).
   auto& frames = scratch.vertices;
-  parallel_chunks(nv, kVertexGrain, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t vi = begin; vi < end; ++vi) {
-      VertexRecord& F = frames[vi];
-      F.n = in.vertex_normals[vi];
-      F.k1 = F.k2 = 0.0;
-      if (!in.normal_valid[vi]) {
-        F.x = F.y = Vec3::Zero();
-        continue;
+  if (!scratch.frames_ready) {
+    frames.resize(nv);
+    parallel_chunks(nv, kVertexGrain, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t vi = begin; vi < end; ++vi) {
+        VertexRecord& F = frames[vi];
+        F.n = in.vertex_normals[vi];
+        F.k1 = F.k2 = 0.0;
+        if (!in.normal_valid[vi]) {
+          F.x = F.y = Vec3::Zero();
+          continue;
+        }
+        vertex_frame(mesh, topo, vi, F.n, F.x, F.y);
       }
-      vertex_frame(mesh, topo, vi, F.n, F.x, F.y);
-    }
-  });
+    });
+  }
 
   auto& slots = scratch.slots;
   parallel_chunks(nf, kFaceGrain, [&](std::size_t begin, std::size_t end) {
@@ -350,6 +353,7 @@ CurvatureDerivatives estimate_curvature_derivatives(const CurvatureInputs& in,
   // II fit used for its frames.
   auto& vrec = scratch.vertices;
   vrec.resize(nv);
+  scratch.frames_ready = false;
   parallel_chunks(nv, 8192, [&](std::size_t begin, std::size_t end) {
     for (std::size_t v = begin; v < end; ++v)
       vrec[v] = VertexRecord{in.vertex_normals[v], curv.e1[v], curv.e2[v],

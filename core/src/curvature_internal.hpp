@@ -42,7 +42,14 @@ struct FaceFitScratch {
   ScratchArray<std::array<std::int32_t, 3>> corner_slot;
   ScratchArray<std::array<double, 5>> slots;
   ScratchArray<VertexRecord> vertices;
+  bool frames_ready = false;  ///< vertices hold (n, u, v) for the II fit
 };
+
+/// An orthonormal tangent frame (u, v = n x u) at vertex `vtx` with unit
+/// normal n: u is its first incident edge projected onto the tangent plane,
+/// or any perpendicular.
+void vertex_frame(const TriangleMesh& mesh, const Topology& topo, std::size_t vtx, const Vec3& n,
+                  Vec3& u, Vec3& v);
 
 /// For every (face, corner), its position in the vertex -> faces CSR list
 /// of `topo`, so a face pass can write per-corner results where a vertex

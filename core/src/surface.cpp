@@ -90,6 +90,7 @@ void compute_face_and_vertex(const TriangleMesh& mesh, const Topology& topo,
   if (vertex_normals) {
     detail::fill_corner_slots(topo, scratch->corner_slot);
     scratch->slots.resize(3 * nf);
+    scratch->vertices.resize(nv);
   }
   detail::parallel_chunks(nf, kFaceGrain, [&](std::size_t begin, std::size_t end) {
     for (std::size_t f = begin; f < end; ++f) {
@@ -107,6 +108,7 @@ void compute_face_and_vertex(const TriangleMesh& mesh, const Topology& topo,
     }
   });
   if (!vertex_normals) return;
+  scratch->frames_ready = true;
   detail::assign_large(*vertex_normals, nv, Vec3(Vec3::Zero()));
   normal_valid->assign(nv, 0);
   detail::assign_large(*vertex_areas, nv, 0.0);
@@ -125,9 +127,18 @@ void compute_face_and_vertex(const TriangleMesh& mesh, const Topology& topo,
       }
       (*vertex_areas)[v] = area;
       const double len = n.norm();
+      // The reference frame of the curvature fit, computed here so its
+      // memory is first touched alongside real work.
+      detail::VertexRecord& frame = scratch->vertices[v];
+      frame.k1 = frame.k2 = 0.0;
       if (wsum > 0.0 && len > 1e-10 * wsum) {
-        (*vertex_normals)[v] = n / len;
+        const Vec3 unit = n / len;
+        (*vertex_normals)[v] = unit;
         (*normal_valid)[v] = 1;
+        frame.n = unit;
+        detail::vertex_frame(mesh, topo, v, unit, frame.x, frame.y);
+      } else {
+        frame.n = frame.x = frame.y = Vec3::Zero();
       }
     }
   });
