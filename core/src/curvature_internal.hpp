@@ -66,9 +66,12 @@ CurvatureDerivatives estimate_curvature_derivatives(const CurvatureInputs& in,
                                                     const PrincipalCurvatures& curvature,
                                                     FaceFitScratch& scratch);
 
-/// Run `body(begin, end)` over [0, n) in parallel chunks, inside an isolated
-/// task region (a thread waiting here never picks up unrelated outer tasks,
-/// which could re-enter a std::call_once it already holds).
+/// Run `body(begin, end)` over [0, n) in parallel chunks. Not isolated by
+/// itself: code that holds a std::once_flag (the Surface cache) runs its
+/// whole computation inside one tbb::this_task_arena::isolate region, so a
+/// thread waiting there never picks up unrelated outer tasks (which could
+/// re-enter the call_once it holds), while all the parallel work spawned in
+/// that region, nested or not, can still be shared by every thread.
 template <class Body>
 void parallel_chunks(std::size_t n, std::size_t grain, const Body& body);
 
@@ -82,10 +85,8 @@ namespace fabrica::detail {
 
 template <class Body>
 void parallel_chunks(std::size_t n, std::size_t grain, const Body& body) {
-  tbb::this_task_arena::isolate([&] {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, grain),
-                      [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
-  });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, grain),
+                    [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
 }
 
 }  // namespace fabrica::detail
