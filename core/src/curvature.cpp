@@ -238,6 +238,85 @@ void fill_corner_slots(const Topology& topo, ScratchArray<std::array<std::int32_
   });
 }
 
+/// Face pass of the II fit over faces [begin, end): fit, then write each
+/// corner's weighted tensor in its vertex's reference frame into its slot.
+FABRICA_MULTIVERSION
+void fit_second_fundamental_forms(const CurvatureInputs& in, FaceFitScratch& scratch,
+                                  std::size_t begin, std::size_t end) {
+  const TriangleMesh& mesh = in.mesh;
+  auto& slots = scratch.slots;
+  const auto& frames = scratch.vertices;
+  for (std::size_t fi = begin; fi < end; ++fi) {
+    const Face& face = mesh.faces[fi];
+    const Vec3& nT = in.face_normals[fi];
+    const auto& slot = scratch.corner_slot[fi];
+    for (int k = 0; k < 3; ++k) slots[slot[k]] = {0.0, 0.0, 0.0, 0.0, 0.0};
+    const Vec3& p0 = mesh.positions[face[0]];
+    const Vec3& p1 = mesh.positions[face[1]];
+    const Vec3& p2 = mesh.positions[face[2]];
+    const Vec3 e[3] = {p2 - p1, p0 - p2, p1 - p0};
+    if (nT.isZero()) continue;
+    const Vec3 t = e[0].normalized();
+    if (!in.normal_valid[face[0]] || !in.normal_valid[face[1]] || !in.normal_valid[face[2]])
+      continue;
+    const VertexRecord* V[3] = {&frames[face[0]], &frames[face[1]], &frames[face[2]]};
+    const Vec3* const n[3] = {&V[0]->n, &V[1]->n, &V[2]->n};
+    const Vec3 b = nT.cross(t);
+    double x[3];
+    if (!fit_second_fundamental_form(e, n, t, b, x)) continue;
+    const Vec3& ca = in.corner_areas[fi];
+    for (int k = 0; k < 3; ++k) {
+      const double w = ca[k];
+      if (!(w > 0.0)) continue;
+      const FrameInFace r = frame_in_face(V[k]->x, V[k]->y, V[k]->n, nT, t, b);
+      const double a1 = r.x1, b1 = r.x2, a2 = r.y1, b2 = r.y2;
+      slots[slot[k]] = {w * (a1 * a1 * x[0] + 2.0 * a1 * b1 * x[1] + b1 * b1 * x[2]),
+                        w * (a1 * a2 * x[0] + (a1 * b2 + a2 * b1) * x[1] + b1 * b2 * x[2]),
+                        w * (a2 * a2 * x[0] + 2.0 * a2 * b2 * x[1] + b2 * b2 * x[2]), 0.0, w};
+    }
+  }
+}
+
+/// Face pass of the C fit over faces [begin, end), as above.
+FABRICA_MULTIVERSION
+void fit_curvature_derivatives(const CurvatureInputs& in, const PrincipalCurvatures& curv,
+                               FaceFitScratch& scratch, std::size_t begin, std::size_t end) {
+  const TriangleMesh& mesh = in.mesh;
+  auto& slots = scratch.slots;
+  const auto& vrec = scratch.vertices;
+  for (std::size_t fi = begin; fi < end; ++fi) {
+    const Face& face = mesh.faces[fi];
+    const Vec3& nT = in.face_normals[fi];
+    const auto& slot = scratch.corner_slot[fi];
+    for (int k = 0; k < 3; ++k) slots[slot[k]] = {0.0, 0.0, 0.0, 0.0, 0.0};
+    if (nT.isZero() || !curv.valid[face[0]] || !curv.valid[face[1]] || !curv.valid[face[2]])
+      continue;
+    const Vec3& p0 = mesh.positions[face[0]];
+    const Vec3& p1 = mesh.positions[face[1]];
+    const Vec3& p2 = mesh.positions[face[2]];
+    const Vec3 e[3] = {p2 - p1, p0 - p2, p1 - p0};
+    const Vec3 t = e[0].normalized();  // the same frame as the II fit
+    const Vec3 b = nT.cross(t);
+    const VertexRecord* V[3] = {&vrec[face[0]], &vrec[face[1]], &vrec[face[2]]};
+    FrameInFace r[3];
+    TangentTensor2 II[3];
+    for (int k = 0; k < 3; ++k) {
+      r[k] = frame_in_face(V[k]->x, V[k]->y, V[k]->n, nT, t, b);
+      II[k] = tensor_from_principal(V[k]->k1, V[k]->k2, r[k].x1, r[k].x2);
+    }
+    double x[4];
+    if (!fit_curvature_derivative(e, II, t, b, x)) continue;
+    const Vec3& ca = in.corner_areas[fi];
+    for (int k = 0; k < 3; ++k) {
+      const double w = ca[k];
+      if (!(w > 0.0)) continue;
+      double C[4];
+      cubic_reexpress(x, Vec2(r[k].x1, r[k].x2), Vec2(r[k].y1, r[k].y2), C);
+      slots[slot[k]] = {w * C[0], w * C[1], w * C[2], w * C[3], w};
+    }
+  }
+}
+
 // Layout (for speed): per-vertex data the face passes need is packed into
 // one record per vertex; each face pass fits its tensor and immediately
 // re-expresses it in the frame of each of its three vertices, writing the
@@ -279,36 +358,7 @@ PrincipalCurvatures estimate_curvature(const CurvatureInputs& in, FaceFitScratch
   tbb::parallel_invoke(
       [&] {
         parallel_chunks(nf, kFaceGrain, [&](std::size_t begin, std::size_t end) {
-          for (std::size_t fi = begin; fi < end; ++fi) {
-            const Face& face = mesh.faces[fi];
-            const Vec3& nT = in.face_normals[fi];
-            const auto& slot = scratch.corner_slot[fi];
-            for (int k = 0; k < 3; ++k) slots[slot[k]] = {0.0, 0.0, 0.0, 0.0, 0.0};
-            const Vec3& p0 = mesh.positions[face[0]];
-            const Vec3& p1 = mesh.positions[face[1]];
-            const Vec3& p2 = mesh.positions[face[2]];
-            const Vec3 e[3] = {p2 - p1, p0 - p2, p1 - p0};
-            if (nT.isZero()) continue;
-            const Vec3 t = e[0].normalized();
-            if (!in.normal_valid[face[0]] || !in.normal_valid[face[1]] || !in.normal_valid[face[2]])
-              continue;
-            const VertexRecord* V[3] = {&frames[face[0]], &frames[face[1]], &frames[face[2]]};
-            const Vec3* const n[3] = {&V[0]->n, &V[1]->n, &V[2]->n};
-            const Vec3 b = nT.cross(t);
-            double x[3];
-            if (!fit_second_fundamental_form(e, n, t, b, x)) continue;
-            const Vec3& ca = in.corner_areas[fi];
-            for (int k = 0; k < 3; ++k) {
-              const double w = ca[k];
-              if (!(w > 0.0)) continue;
-              const FrameInFace r = frame_in_face(V[k]->x, V[k]->y, V[k]->n, nT, t, b);
-              const double a1 = r.x1, b1 = r.x2, a2 = r.y1, b2 = r.y2;
-              slots[slot[k]] = {w * (a1 * a1 * x[0] + 2.0 * a1 * b1 * x[1] + b1 * b1 * x[2]),
-                                w * (a1 * a2 * x[0] + (a1 * b2 + a2 * b1) * x[1] + b1 * b2 * x[2]),
-                                w * (a2 * a2 * x[0] + 2.0 * a2 * b2 * x[1] + b2 * b2 * x[2]), 0.0,
-                                w};
-            }
-          }
+          fit_second_fundamental_forms(in, scratch, begin, end);
         });
       },
       [&] {
@@ -374,37 +424,7 @@ CurvatureDerivatives estimate_curvature_derivatives(const CurvatureInputs& in,
 
         // Face pass: re-uses the slot map of the II fit.
         parallel_chunks(nf, kFaceGrain, [&](std::size_t begin, std::size_t end) {
-          for (std::size_t fi = begin; fi < end; ++fi) {
-            const Face& face = mesh.faces[fi];
-            const Vec3& nT = in.face_normals[fi];
-            const auto& slot = scratch.corner_slot[fi];
-            for (int k = 0; k < 3; ++k) slots[slot[k]] = {0.0, 0.0, 0.0, 0.0, 0.0};
-            if (nT.isZero() || !curv.valid[face[0]] || !curv.valid[face[1]] || !curv.valid[face[2]])
-              continue;
-            const Vec3& p0 = mesh.positions[face[0]];
-            const Vec3& p1 = mesh.positions[face[1]];
-            const Vec3& p2 = mesh.positions[face[2]];
-            const Vec3 e[3] = {p2 - p1, p0 - p2, p1 - p0};
-            const Vec3 t = e[0].normalized();  // the same frame as the II fit
-            const Vec3 b = nT.cross(t);
-            const VertexRecord* V[3] = {&vrec[face[0]], &vrec[face[1]], &vrec[face[2]]};
-            FrameInFace r[3];
-            TangentTensor2 II[3];
-            for (int k = 0; k < 3; ++k) {
-              r[k] = frame_in_face(V[k]->x, V[k]->y, V[k]->n, nT, t, b);
-              II[k] = tensor_from_principal(V[k]->k1, V[k]->k2, r[k].x1, r[k].x2);
-            }
-            double x[4];
-            if (!fit_curvature_derivative(e, II, t, b, x)) continue;
-            const Vec3& ca = in.corner_areas[fi];
-            for (int k = 0; k < 3; ++k) {
-              const double w = ca[k];
-              if (!(w > 0.0)) continue;
-              double C[4];
-              cubic_reexpress(x, Vec2(r[k].x1, r[k].x2), Vec2(r[k].y1, r[k].y2), C);
-              slots[slot[k]] = {w * C[0], w * C[1], w * C[2], w * C[3], w};
-            }
-          }
+          fit_curvature_derivatives(in, curv, scratch, begin, end);
         });
       },
       [&] {

@@ -21,6 +21,17 @@
 #include "fabrica/core/surface.hpp"
 #include "fabrica/core/types.hpp"
 
+/// Hot per-face loops are compiled twice, for x86-64-v3 (AVX2) and the
+/// portable baseline, and the best is picked at load time (GCC function
+/// multiversioning). The sources are compiled with -ffp-contract=off
+/// (core/geometry.cmake), so both versions give the same bits.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) && \
+    !defined(FABRICA_NO_MULTIVERSION)
+#define FABRICA_MULTIVERSION __attribute__((target_clones("arch=x86-64-v3", "default")))
+#else
+#define FABRICA_MULTIVERSION
+#endif
+
 namespace fabrica::detail {
 
 /// Sets v to n copies of `value`. For large arrays (>= 4 MiB) the storage is

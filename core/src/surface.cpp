@@ -78,6 +78,27 @@ const Topology& Surface::topology() const {
 
 namespace {
 
+// Faces [begin, end): normal, area, corner areas and, with a scratch, each
+// corner's weighted normal and area in its CSR slot.
+FABRICA_MULTIVERSION
+void face_geometry_range(const TriangleMesh& mesh, const SurfaceOptions& opt, Vec3* face_normals,
+                         double* face_areas, Vec3* corner_areas, detail::FaceFitScratch* scratch,
+                         std::size_t begin, std::size_t end) {
+  for (std::size_t f = begin; f < end; ++f) {
+    const auto t = detail::triangle_shape(mesh, mesh.faces[f]);
+    face_areas[f] = 0.5 * t.twice_area;
+    const Vec3 n = t.degenerate ? Vec3::Zero() : Vec3(t.cross / t.twice_area);
+    face_normals[f] = n;
+    const Vec3 ca = detail::corner_areas(t, opt.mixed_areas);
+    corner_areas[f] = ca;
+    if (!scratch) continue;
+    const Vec3 w = detail::normal_corner_weights(t, opt.normal_weighting);
+    const auto& slot = scratch->corner_slot[f];
+    for (int c = 0; c < 3; ++c)
+      scratch->slots[slot[c]] = {w[c] * n.x(), w[c] * n.y(), w[c] * n.z(), w[c], ca[c]};
+  }
+}
+
 // One pass over faces (normals, areas, corner areas, normal weights), then
 // one gather per vertex (normals, areas).
 void compute_face_and_vertex(const TriangleMesh& mesh, const Topology& topo,
@@ -104,19 +125,8 @@ void compute_face_and_vertex(const TriangleMesh& mesh, const Topology& topo,
                        });
   auto face_pass = [&] {
     detail::parallel_chunks(nf, kFaceGrain, [&](std::size_t begin, std::size_t end) {
-      for (std::size_t f = begin; f < end; ++f) {
-        const auto t = detail::triangle_shape(mesh, mesh.faces[f]);
-        face_areas[f] = 0.5 * t.twice_area;
-        const Vec3 n = t.degenerate ? Vec3::Zero() : Vec3(t.cross / t.twice_area);
-        face_normals[f] = n;
-        const Vec3 ca = detail::corner_areas(t, opt.mixed_areas);
-        corner_areas[f] = ca;
-        if (!vertex_normals) continue;
-        const Vec3 w = detail::normal_corner_weights(t, opt.normal_weighting);
-        const auto& slot = scratch->corner_slot[f];
-        for (int k = 0; k < 3; ++k)
-          scratch->slots[slot[k]] = {w[k] * n.x(), w[k] * n.y(), w[k] * n.z(), w[k], ca[k]};
-      }
+      face_geometry_range(mesh, opt, face_normals.data(), face_areas.data(), corner_areas.data(),
+                          vertex_normals ? scratch : nullptr, begin, end);
     });
   };
   if (!vertex_normals) {
