@@ -621,9 +621,7 @@ double feature_size(const PrincipalCurvatures& curv, double radius,
   if (samples.empty()) return cap;
   const double p = std::clamp(options.percentile, 0.0, 1.0);
   const auto idx = std::min(samples.size() - 1, static_cast<std::size_t>(p * samples.size()));
-  std::nth_element(samples.begin(), samples.begin() + static_cast<std::ptrdiff_t>(idx),
-                   samples.end());
-  const double kp = samples[idx];
+  const double kp = detail::kth_smallest(samples, idx);
   if (!(kp > 0.0)) return cap;
   return std::min(options.numerator / kp, cap);
 }

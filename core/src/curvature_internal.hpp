@@ -66,6 +66,12 @@ CurvatureDerivatives estimate_curvature_derivatives(const CurvatureInputs& in,
                                                     const PrincipalCurvatures& curvature,
                                                     FaceFitScratch& scratch);
 
+/// The k-th smallest value (0-based) of `values`, which must be finite: the
+/// value std::nth_element would put at position k, found with a parallel
+/// histogram pass and a selection inside one bin (O(n), same result at any
+/// thread count). Precondition: k < values.size().
+double kth_smallest(const std::vector<double>& values, std::size_t k);
+
 /// Run `body(begin, end)` over [0, n) in parallel chunks. Not isolated by
 /// itself: code that holds a std::once_flag (the Surface cache) runs its
 /// whole computation inside one tbb::this_task_arena::isolate region, so a

@@ -23,6 +23,67 @@ void check_field_size(std::size_t got, std::size_t want, const char* what) {
 
 }  // namespace
 
+namespace detail {
+
+double kth_smallest(const std::vector<double>& values, std::size_t k) {
+  const std::size_t n = values.size();
+  if (n < (std::size_t(1) << 16)) {
+    std::vector<double> copy(values);
+    std::nth_element(copy.begin(), copy.begin() + static_cast<std::ptrdiff_t>(k), copy.end());
+    return copy[k];
+  }
+  // Fixed chunks (independent of the thread count), each with its own
+  // min/max and histogram; integer sums and min/max are order-independent.
+  constexpr std::size_t kChunks = 32, kBins = 4096;
+  const std::size_t chunk = (n + kChunks - 1) / kChunks;
+  double lo_c[kChunks], hi_c[kChunks];
+  parallel_chunks(kChunks, 1, [&](std::size_t b, std::size_t e) {
+    for (std::size_t c = b; c < e; ++c) {
+      double lo = values[std::min(n - 1, c * chunk)], hi = lo;
+      for (std::size_t i = c * chunk; i < std::min(n, (c + 1) * chunk); ++i) {
+        lo = std::min(lo, values[i]);
+        hi = std::max(hi, values[i]);
+      }
+      lo_c[c] = lo;
+      hi_c[c] = hi;
+    }
+  });
+  const double lo = *std::min_element(lo_c, lo_c + kChunks);
+  const double hi = *std::max_element(hi_c, hi_c + kChunks);
+  if (!(hi > lo)) return lo;
+  // Monotone binning: every value in a lower bin is <= every value in a
+  // higher one.
+  const double scale = static_cast<double>(kBins) / (hi - lo);
+  auto bin = [&](double x) {
+    return std::min(kBins - 1, static_cast<std::size_t>((x - lo) * scale));
+  };
+  std::vector<std::uint32_t> hist(kChunks * kBins, 0);
+  parallel_chunks(kChunks, 1, [&](std::size_t b, std::size_t e) {
+    for (std::size_t c = b; c < e; ++c) {
+      std::uint32_t* h = hist.data() + c * kBins;
+      for (std::size_t i = c * chunk; i < std::min(n, (c + 1) * chunk); ++i) ++h[bin(values[i])];
+    }
+  });
+  std::size_t target = kBins, before = 0;
+  for (std::size_t b = 0; b < kBins; ++b) {
+    std::size_t count = 0;
+    for (std::size_t c = 0; c < kChunks; ++c) count += hist[c * kBins + b];
+    if (before + count > k) {
+      target = b;
+      break;
+    }
+    before += count;
+  }
+  std::vector<double> in_bin;
+  for (std::size_t i = 0; i < n; ++i)
+    if (bin(values[i]) == target) in_bin.push_back(values[i]);
+  const std::size_t kk = k - before;
+  std::nth_element(in_bin.begin(), in_bin.begin() + static_cast<std::ptrdiff_t>(kk), in_bin.end());
+  return in_bin[kk];
+}
+
+}  // namespace detail
+
 FaceNormalsAndAreas face_normals_and_areas(const TriangleMesh& mesh) {
   FaceNormalsAndAreas out;
   const std::size_t nf = mesh.faces.size();
@@ -214,9 +275,7 @@ EdgeLengthStatistics edge_length_statistics(const TriangleMesh& mesh, const Topo
     st.max = std::max(st.max, l);
   }
   st.mean = sum / static_cast<double>(ne);
-  const auto mid = len.begin() + static_cast<std::ptrdiff_t>(ne / 2);
-  std::nth_element(len.begin(), mid, len.end());
-  st.median = *mid;
+  st.median = detail::kth_smallest(len, ne / 2);
   return st;
 }
 

@@ -517,6 +517,27 @@ TEST(Statistics, EdgesSphereFeatureSize) {
               1e-14);
 }
 
+TEST(Statistics, LargeMeshSelectionsMatchSorting) {
+  // Big enough for the parallel histogram selection (>= 65536 values).
+  Surface s(test::make_torus(16, 4.5, 256, 128, 0.3));
+  const auto& topo = s.topology();
+  std::vector<double> len;
+  for (std::size_t e = 0; e < topo.edge_count(); ++e)
+    len.push_back((s.positions()[topo.edge(e)[0]] - s.positions()[topo.edge(e)[1]]).norm());
+  ASSERT_GT(len.size(), 65536u);
+  std::sort(len.begin(), len.end());
+  EXPECT_EQ(s.median_edge_length(), len[len.size() / 2]);
+  const auto& c = s.curvature();
+  std::vector<double> k;
+  for (std::size_t v = 0; v < s.vertex_count(); ++v) {
+    k.push_back(std::abs(c.k1[v]));
+    k.push_back(std::abs(c.k2[v]));
+  }
+  std::sort(k.begin(), k.end());
+  const double k10 = k[static_cast<std::size_t>(0.1 * k.size())];
+  EXPECT_EQ(s.feature_size(), std::min(0.01 / k10, 0.05 * s.bounding_sphere_radius()));
+}
+
 TEST(Smoothing, KeepsSphereReducesNoise) {
   SurfaceOptions o;
   o.curvature_smoothing_passes = 2;
