@@ -73,7 +73,7 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
         out.push_back(extract_ridges(*precompute_, fields_, fs, options_.ridge));
         break;
       case LineFamily::valley:
-        out.push_back(extract_valleys(*precompute_, fields_, fs, options_.ridge));
+        out.push_back(extract_valleys(*precompute_, fields_, fs, options_.valley));
         break;
       case LineFamily::apparent:
         out.push_back(extract_apparent_ridges(*surface_, fields_, fs, options_.apparent));

@@ -41,3 +41,16 @@ double SegmentSoup::total_length() const {
 }
 
 }  // namespace fabrica
+
+namespace fabrica {
+
+double Polyline::length() const {
+  double sum = 0.0;
+  const std::size_t n = vertices.size();
+  for (std::size_t i = 0; i + 1 < n; ++i)
+    sum += (vertices[i + 1].position - vertices[i].position).norm();
+  if (closed && n > 2) sum += (vertices.front().position - vertices.back().position).norm();
+  return sum;
+}
+
+}  // namespace fabrica

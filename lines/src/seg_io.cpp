@@ -92,7 +92,7 @@ void write_seg(const std::filesystem::path& path, const nlohmann::json& header,
         for (std::size_t i = 0; i < count; ++i) {
           const auto& a = v[i];
           const auto& b = v[(i + 1) % n];
-          if (visible_only && !(a.visible && b.visible)) continue;
+          if (visible_only && !a.visible) continue;
           write_segment(out, name, a.position, b.position);
         }
       }

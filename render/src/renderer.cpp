@@ -554,7 +554,7 @@ Image Renderer::render(const Scene& scene, const Camera& camera, const RenderOpt
   }
   const double line_scale =
       options.scale_lines_with_image
-          ? std::max(camera.width, camera.height) / std::max(1.0, options.line_reference_size)
+          ? std::min(camera.width, camera.height) / std::max(1.0, options.line_reference_size)
           : 1.0;
 
   // Upload meshes; classify structures.

@@ -115,7 +115,8 @@ struct LineOptions {
   CreaseOptions crease;
   SuggestiveOptions suggestive;
   HighlightOptions highlight;
-  RidgeOptions ridge;  ///< ridges and valleys
+  RidgeOptions ridge;
+  RidgeOptions valley;
   ApparentOptions apparent;
   PhoticOptions pel;
   LaplacianOptions laplacian;

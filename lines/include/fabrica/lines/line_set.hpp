@@ -42,6 +42,7 @@ struct LineVertex {
   SurfacePoint anchor;
   Vec3 position = Vec3::Zero();
   float strength = 1.0f;  ///< in [0,1]: fade/width factor
+  /// Visibility of this vertex and of the polyline edge that starts here.
   bool visible = true;
 };
 
@@ -49,6 +50,11 @@ struct Polyline {
   LineFamily family = LineFamily::contour;
   bool closed = false;  ///< last vertex joins the first
   std::vector<LineVertex> vertices;
+  /// Optional: the mesh face each polyline edge (vertex i to i+1, and the
+  /// closing edge of a loop) lies in; empty when unknown.
+  std::vector<std::int32_t> edge_faces;
+  /// Length in space (mm), including the closing edge of a loop.
+  double length() const;
 };
 
 struct LineSet {

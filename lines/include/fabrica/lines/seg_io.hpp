@@ -41,8 +41,8 @@ SegFile read_seg_file(const std::filesystem::path& path);
 std::vector<LineFamily> seg_family_order();
 
 /// Writes header + segments atomically. Each polyline contributes its
-/// consecutive vertex pairs; with `visible_only`, only pairs whose two
-/// vertices are visible.
+/// consecutive vertex pairs; with `visible_only`, only visible edges (an
+/// edge takes the visibility of its first vertex).
 void write_seg(const std::filesystem::path& path, const nlohmann::json& header,
                const LineSet& lines, bool visible_only);
 /// Writes raw segment soups (no chaining).

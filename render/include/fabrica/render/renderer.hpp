@@ -39,7 +39,8 @@ double default_tau(double feature_size);
 
 struct RenderOptions {
   bool transparent_background = false;
-  /// Line widths are given for an image whose larger side is this many pixels.
+  /// Line widths are given for an image whose smaller side is this many pixels
+  /// (as fabrica::lines styles the SVG).
   double line_reference_size = 1024.0;
   bool scale_lines_with_image = true;
   /// Largest tile side in pixels (0 = the backend's limit, at most 4096).

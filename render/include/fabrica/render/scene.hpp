@@ -32,7 +32,7 @@ enum class HiddenLines { omit, dashed, show };
 
 struct LineStyle {
   Color color{0.0f, 0.0f, 0.0f, 1.0f};
-  /// Full width in pixels of an image whose larger side is
+  /// Full width in pixels of an image whose smaller side is
   /// RenderOptions::line_reference_size (1024 by default); scaled with the image.
   double width = 2.0;
   double contour_width_factor = 1.5;  ///< contours and boundaries are drawn wider

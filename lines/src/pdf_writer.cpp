@@ -1,0 +1,93 @@
+#include <string>
+
+#include "fabrica/core/atomic_file.hpp"
+#include "fabrica/core/error.hpp"
+#include "fabrica/lines/writers.hpp"
+
+#ifdef FABRICA_HAVE_CAIRO
+#include <cairo-pdf.h>
+#include <cairo.h>
+#endif
+
+namespace fabrica {
+
+bool pdf_available() {
+#ifdef FABRICA_HAVE_CAIRO
+  return true;
+#else
+  return false;
+#endif
+}
+
+#ifdef FABRICA_HAVE_CAIRO
+namespace {
+cairo_status_t append_to_string(void* closure, const unsigned char* data, unsigned int length) {
+  static_cast<std::string*>(closure)->append(reinterpret_cast<const char*>(data), length);
+  return CAIRO_STATUS_SUCCESS;
+}
+
+void parse_color(const char* hex, double& r, double& g, double& b) {
+  unsigned v = 0;
+  std::sscanf(hex + 1, "%06x", &v);
+  r = ((v >> 16) & 0xff) / 255.0;
+  g = ((v >> 8) & 0xff) / 255.0;
+  b = (v & 0xff) / 255.0;
+}
+}  // namespace
+#endif
+
+void write_pdf(const std::filesystem::path& path, const LineSet& lines, const Camera& camera,
+               const LineStyle& style) {
+#ifdef FABRICA_HAVE_CAIRO
+  std::string data;
+  // One pixel = one PDF point (1/72 inch).
+  cairo_surface_t* surface =
+      cairo_pdf_surface_create_for_stream(append_to_string, &data, camera.width, camera.height);
+  cairo_t* cr = cairo_create(surface);
+  cairo_set_line_cap(cr, CAIRO_LINE_CAP_ROUND);
+  cairo_set_line_join(cr, CAIRO_LINE_JOIN_ROUND);
+  const double scale = std::min(camera.width, camera.height) / std::max(style.reference_size, 1.0);
+  for (const auto& p : stroke_pieces(lines, camera, style)) {
+    double r, g, b;
+    parse_color(family_color(p.family), r, g, b);
+    cairo_set_source_rgba(cr, r, g, b, p.opacity);
+    cairo_set_line_width(cr, p.width);
+    if (p.hidden) {
+      const double dashes[2] = {4.0 * scale, 3.0 * scale};
+      cairo_set_dash(cr, dashes, 2, 0.0);
+    } else {
+      cairo_set_dash(cr, nullptr, 0, 0.0);
+    }
+    cairo_new_path(cr);
+    for (std::size_t i = 0; i < p.points.size(); ++i) {
+      if (i == 0)
+        cairo_move_to(cr, p.points[i].x(), p.points[i].y());
+      else
+        cairo_line_to(cr, p.points[i].x(), p.points[i].y());
+    }
+    if (p.closed) cairo_close_path(cr);
+    cairo_stroke(cr);
+  }
+  cairo_destroy(cr);
+  cairo_surface_finish(surface);
+  const cairo_status_t status = cairo_surface_status(surface);
+  cairo_surface_destroy(surface);
+  if (status != CAIRO_STATUS_SUCCESS)
+    throw OutputError(path.string() +
+                      ": cairo could not produce the PDF: " + cairo_status_to_string(status));
+  write_file_atomically(
+      path,
+      [&](std::ostream& out) { out.write(data.data(), static_cast<std::streamsize>(data.size())); },
+      true);
+#else
+  (void)lines;
+  (void)camera;
+  (void)style;
+  throw Error(ErrorKind::unavailable,
+              path.string() +
+                  ": PDF output needs cairo; this fabrica was built without it "
+                  "(install libcairo2-dev and rebuild, or write .svg)");
+#endif
+}
+
+}  // namespace fabrica
