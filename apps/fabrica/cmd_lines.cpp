@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "cli_common.hpp"
 #include "commands.hpp"
 #include "fabrica/core/camera.hpp"
 #include "fabrica/core/error.hpp"
@@ -38,46 +39,6 @@ struct LinesArgs {
   bool no_visibility = false, mesh_edge_contours = false, no_fade = false, no_taper = false;
   bool keep_normals_orientation = false, quiet = false;
 };
-
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return s;
-}
-
-std::vector<LineFamily> parse_types(const std::string& text) {
-  const std::string t = lower(text);
-  if (t == "default") return LineOptions{}.families;
-  if (t == "all") return all_families();
-  if (t == "reference" || t == "rtsc") return reference_families();
-  std::vector<LineFamily> out;
-  std::stringstream in(t);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    if (item.empty()) continue;
-    const auto f = parse_family(item);
-    if (!f) {
-      std::string names;
-      for (auto g : all_families())
-        names += std::string(names.empty() ? "" : ", ") + family_name(g);
-      throw InputError("--types: unknown line family \"" + item + "\" (known: " + names +
-                       ", or default, reference, all)");
-    }
-    if (std::find(out.begin(), out.end(), *f) == out.end()) out.push_back(*f);
-  }
-  if (out.empty()) throw InputError("--types: no line family given");
-  return out;
-}
-
-std::pair<int, int> parse_size(const std::string& text) {
-  int w = 0, h = 0;
-  char x = 0;
-  std::istringstream in(lower(text));
-  if (!(in >> w >> x >> h) || x != 'x' || w <= 0 || h <= 0 || w > 32768 || h > 32768)
-    throw InputError("--size: expected WIDTHxHEIGHT in pixels, e.g. 1024x768 (got \"" + text +
-                     "\")");
-  return {w, h};
-}
 
 Vec3 parse_vec3(const std::string& text, const std::string& what) {
   Vec3 v;
@@ -174,7 +135,7 @@ int run_lines(const LinesArgs& a) {
 
   Surface surface(std::move(mesh));
   LineOptions opt;
-  opt.families = parse_types(a.types);
+  opt.families = parse_family_list(a.types, "--types", LineOptions{}.families, false);
   opt.feature_size = a.feature_size;
   opt.contour.mesh_edges = a.mesh_edge_contours;
   if (a.suggestive_t) opt.suggestive.threshold = *a.suggestive_t;

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "cli_common.hpp"
 #include "commands.hpp"
 #include "fabrica/core/camera.hpp"
 #include "fabrica/core/error.hpp"
@@ -37,45 +38,6 @@ struct RenderArgs {
   bool hybrid = false, transparent = false, no_fade = false, per_fragment = false,
        sign_free = false, float_target = false, quiet = false;
 };
-
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return s;
-}
-
-std::vector<LineFamily> parse_line_list(const std::string& text) {
-  const std::string t = lower(text);
-  if (t == "none") return {};
-  if (t == "all") return all_families();
-  if (t == "reference" || t == "rtsc") return reference_families();
-  std::vector<LineFamily> out;
-  std::stringstream in(t);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    if (item.empty()) continue;
-    const auto f = parse_family(item);
-    if (!f) {
-      std::string names;
-      for (auto g : all_families())
-        names += std::string(names.empty() ? "" : ", ") + family_name(g);
-      throw InputError("--lines: unknown line family \"" + item + "\" (known: " + names +
-                       ", or none, reference, all)");
-    }
-    if (std::find(out.begin(), out.end(), *f) == out.end()) out.push_back(*f);
-  }
-  return out;
-}
-
-std::pair<int, int> parse_size(const std::string& text) {
-  int w = 0, h = 0;
-  char x = 0;
-  std::istringstream in(lower(text));
-  if (!(in >> w >> x >> h) || x != 'x' || w <= 0 || h <= 0 || w > 16384 || h > 16384)
-    throw InputError("--size: expected WIDTHxHEIGHT in pixels up to 16384x16384, e.g. 2048x2048 (got \"" +
-                     text + "\")");
-  return {w, h};
-}
 
 struct Loaded {
   render::StructureSpec spec;
@@ -136,7 +98,8 @@ int run_render(const RenderArgs& a) {
       if (!sh) throw InputError("--style must be lambert, toon, flat or none (got \"" + a.style + "\")");
       s.style.shading = *sh;
     }
-    if (!a.lines.empty()) s.style.families = parse_line_list(a.lines);
+    if (!a.lines.empty())
+      s.style.families = parse_family_list(a.lines, "--lines", s.style.families, true);
     if (a.hybrid) s.style.hybrid_apparent_ridges = true;
     if (a.line_width) s.style.lines.width = *a.line_width;
     if (!a.hidden.empty()) {

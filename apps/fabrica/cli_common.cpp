@@ -1,0 +1,57 @@
+#include "cli_common.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <sstream>
+
+#include "fabrica/core/error.hpp"
+#include "fabrica/lines/extract.hpp"
+
+namespace fabrica::cli {
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return s;
+}
+
+std::pair<int, int> parse_size(const std::string& text, int max_pixels, const std::string& option) {
+  int w = 0, h = 0;
+  char x = 0;
+  std::istringstream in(lower(text));
+  std::string rest;
+  if (!(in >> w >> x >> h) || x != 'x' || (in >> rest) || w <= 0 || h <= 0 || w > max_pixels ||
+      h > max_pixels)
+    throw InputError(option + ": expected WIDTHxHEIGHT in pixels, each 1 to " +
+                     std::to_string(max_pixels) + ", e.g. 2048x2048 (got \"" + text + "\")");
+  return {w, h};
+}
+
+std::vector<LineFamily> parse_family_list(const std::string& text, const std::string& option,
+                                          const std::vector<LineFamily>& default_set,
+                                          bool allow_none) {
+  const std::string t = lower(text);
+  if (t == "default") return default_set;
+  if (t == "all") return all_families();
+  if (t == "reference" || t == "rtsc") return reference_families();
+  if (allow_none && t == "none") return {};
+  std::vector<LineFamily> out;
+  std::stringstream in(t);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    if (item.empty()) continue;
+    const auto f = parse_family(item);
+    if (!f) {
+      std::string names;
+      for (auto g : all_families())
+        names += std::string(names.empty() ? "" : ", ") + family_name(g);
+      throw InputError(option + ": unknown line family \"" + item + "\" (known: " + names +
+                       ", or default, reference, all" + (allow_none ? ", none)" : ")"));
+    }
+    if (std::find(out.begin(), out.end(), *f) == out.end()) out.push_back(*f);
+  }
+  if (out.empty() && !allow_none) throw InputError(option + ": no line family given");
+  return out;
+}
+
+}  // namespace fabrica::cli

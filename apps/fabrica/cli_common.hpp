@@ -1,0 +1,30 @@
+// Option parsing shared by the drawing commands (lines, render, hatch), so
+// every command accepts the same spellings and reports the same errors.
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "fabrica/lines/line_set.hpp"
+
+namespace fabrica::cli {
+
+/// ASCII lower case (option values are case-insensitive).
+std::string lower(std::string s);
+
+/// "WIDTHxHEIGHT" in pixels, each between 1 and max_pixels; throws
+/// InputError naming `option` otherwise.
+std::pair<int, int> parse_size(const std::string& text, int max_pixels = 16384,
+                               const std::string& option = "--size");
+
+/// A comma-separated list of line family names (docs/lines/), or a keyword:
+/// "default" (= default_set), "reference"/"rtsc" (the families of the rtsc
+/// reference files), "all", and "none" when allow_none. Duplicates are
+/// dropped, order is kept. Throws InputError naming `option` for an unknown
+/// name, or for an empty list unless allow_none.
+std::vector<LineFamily> parse_family_list(const std::string& text, const std::string& option,
+                                          const std::vector<LineFamily>& default_set,
+                                          bool allow_none);
+
+}  // namespace fabrica::cli
