@@ -58,6 +58,9 @@ namespace {
 
 constexpr std::size_t kMaxSteps = 200000;  // faces crossed per direction
 constexpr int kMaxZeroSteps = 64;          // consecutive zero-length steps (vertex fans)
+/// Relative size below which a rate of change counts as round-off (a
+/// direction parallel to an edge).
+constexpr double kParallelTol = 1e-9;
 
 struct TraceState {
   std::int32_t face = -1;
@@ -139,7 +142,7 @@ class Tracer {
     v.anchor.bary = bary;
     v.position = x;
     v.pixel = pixel;
-    v.intensity = static_cast<float>(intensity);
+    v.intensity = intensity;
     return v;
   }
 
@@ -159,11 +162,15 @@ class Tracer {
       const Vec3 g = sign * field_.face_gradient[f];
       Vec3 db;
       for (int k = 0; k < 3; ++k) db[k] = barycentric_gradient(surface_, f, k).dot(g);
-      // Exit: the first barycentric coordinate to reach zero.
+      // Exit: the first barycentric coordinate to reach zero. A coordinate
+      // that is already zero and changes only by round-off means the stroke
+      // runs along that edge (e.g. a seed on a mesh edge parallel to ∇I); it
+      // leaves through the edge's end instead.
+      const double rate_tol = kParallelTol * db.cwiseAbs().maxCoeff();
       double t_exit = std::numeric_limits<double>::infinity();
       int exit = -1;
       for (int k = 0; k < 3; ++k) {
-        if (db[k] < 0.0) {
+        if (db[k] < 0.0 && !(bary[k] <= 0.0 && db[k] >= -rate_tol)) {
           const double t = std::max(bary[k], 0.0) / -db[k];
           if (t < t_exit) {
             t_exit = t;
@@ -254,9 +261,10 @@ class Tracer {
       }
       if (opposite < 0) return StrokeEnd::boundary;  // malformed adjacency
       const Vec3 g_next = sign * field_.face_gradient[static_cast<std::size_t>(next)];
-      // Extremum: the neighbour's direction points back across the edge.
-      if (!(barycentric_gradient(surface_, static_cast<std::size_t>(next), opposite).dot(g_next) >
-            0.0))
+      // Extremum: the neighbour's direction points back across the edge. A
+      // direction along the edge (zero up to round-off) is not a turn back.
+      const Vec3 into = barycentric_gradient(surface_, static_cast<std::size_t>(next), opposite);
+      if (into.dot(g_next) < -kParallelTol * into.norm() * g_next.norm())
         return StrokeEnd::extremum;
       face = next;
       bary = nb / nb.sum();

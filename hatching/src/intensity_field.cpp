@@ -21,6 +21,35 @@ Vec3 barycentric_gradient(const Surface& surface, std::size_t face, int k) {
   return surface.face_normals()[face].cross(e) / (2.0 * area);
 }
 
+std::vector<Vec3> face_gradients(const Surface& surface, const std::vector<double>& values) {
+  const auto& positions = surface.positions();
+  const auto& faces = surface.faces();
+  const auto& face_normals = surface.face_normals();
+  const auto& areas = surface.face_areas();
+  const std::size_t nf = faces.size();
+  if (values.size() != positions.size())
+    throw InputError("hatching: a per-vertex field needs one value per vertex (got " +
+                     std::to_string(values.size()) + " for " + std::to_string(positions.size()) +
+                     " vertices)");
+  std::vector<Vec3> gradients(nf, Vec3::Zero());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nf), [&](const auto& r) {
+    for (std::size_t f = r.begin(); f != r.end(); ++f) {
+      const double area = areas[f];
+      if (!(area > 0.0)) continue;
+      const Face& t = faces[f];
+      Vec3 g = Vec3::Zero();
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 e = positions[static_cast<std::size_t>(t[(k + 2) % 3])] -
+                       positions[static_cast<std::size_t>(t[(k + 1) % 3])];
+        g += values[static_cast<std::size_t>(t[k])] * face_normals[f].cross(e);
+      }
+      g /= 2.0 * area;
+      if (g.allFinite()) gradients[f] = g;
+    }
+  });
+  return gradients;
+}
+
 IntensityField compute_intensity_field(const Surface& surface, const Camera& camera,
                                        const Light& light) {
   if (light.kind == LightKind::direction &&
@@ -33,15 +62,11 @@ IntensityField compute_intensity_field(const Surface& surface, const Camera& cam
 
   const auto& positions = surface.positions();
   const auto& normals = surface.vertex_normals();
-  const auto& faces = surface.faces();
-  const auto& face_normals = surface.face_normals();
-  const auto& areas = surface.face_areas();
-  const std::size_t nv = positions.size(), nf = faces.size();
+  const std::size_t nv = positions.size();
 
   IntensityField field;
   field.vertex_intensity.resize(nv);
   field.vertex_facing.resize(nv);
-  field.face_gradient.resize(nf);
   std::atomic<bool> light_on_vertex{false};
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const auto& r) {
     for (std::size_t v = r.begin(); v != r.end(); ++v) {
@@ -66,24 +91,7 @@ IntensityField compute_intensity_field(const Surface& surface, const Camera& cam
   if (light_on_vertex.load())
     throw InputError("hatching: the point light lies on a mesh vertex; move it off the surface");
 
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nf), [&](const auto& r) {
-    for (std::size_t f = r.begin(); f != r.end(); ++f) {
-      const double area = areas[f];
-      if (!(area > 0.0)) {
-        field.face_gradient[f] = Vec3::Zero();
-        continue;
-      }
-      const Face& t = faces[f];
-      Vec3 g = Vec3::Zero();
-      for (int k = 0; k < 3; ++k) {
-        const Vec3 e = positions[static_cast<std::size_t>(t[(k + 2) % 3])] -
-                       positions[static_cast<std::size_t>(t[(k + 1) % 3])];
-        g += field.vertex_intensity[static_cast<std::size_t>(t[k])] * face_normals[f].cross(e);
-      }
-      g /= 2.0 * area;
-      field.face_gradient[f] = g.allFinite() ? g : Vec3::Zero();
-    }
-  });
+  field.face_gradient = face_gradients(surface, field.vertex_intensity);
   return field;
 }
 

@@ -12,6 +12,9 @@ namespace fabrica::hatching {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+/// |cos| of the angle between a test direction and an edge above which the
+/// direction counts as running along the edge (about 0.8°).
+constexpr double kAlongEdge = 0.9999;
 
 /// Unit tangent basis (t1, t2) of the plane with unit normal n.
 void tangent_basis(const Vec3& n, Vec3& t1, Vec3& t2) {
@@ -156,11 +159,15 @@ IntensityRidges detect_intensity_ridges(const Surface& surface, const IntensityF
       const Vec3& g1 = grad[static_cast<std::size_t>(v1)];
       const Vec3& g2 = grad[static_cast<std::size_t>(v2)];
       const double m1 = g1.norm(), m2 = g2.norm();
-      if (!(m1 > 0.0 && m2 > 0.0)) continue;
-      if (g1.dot(g2) > cos_min * m1 * m2) continue;  // nearly parallel: weak
+      if (!(m1 + m2 > 0.0)) continue;
+      // Nearly parallel gradients: a weak point. A vanishing gradient (the
+      // vertex sits on the ridge) has no direction and is not excluded.
+      const double tiny = 1e-9 * (m1 + m2);
+      if (m1 > tiny && m2 > tiny && g1.dot(g2) > cos_min * m1 * m2) continue;
       const double t = m1 / (m1 + m2);
-      const Vec3 pr = (1.0 - t) * positions[static_cast<std::size_t>(v1)] +
-                      t * positions[static_cast<std::size_t>(v2)];
+      const Vec3& p1 = positions[static_cast<std::size_t>(v1)];
+      const Vec3& p2 = positions[static_cast<std::size_t>(v2)];
+      const Vec3 pr = (1.0 - t) * p1 + t * p2;
       const Vec3 directions[2] = {
           dominant_direction(g1, g2),
           dominant_direction(normals[static_cast<std::size_t>(v1)].cross(g1),
@@ -169,8 +176,15 @@ IntensityRidges detect_intensity_ridges(const Surface& surface, const IntensityF
       for (const Vec3& dir : directions) {
         if (!(dir.squaredNorm() > 0.0)) continue;
         EdgeHit f, b;
-        if (!step_into(static_cast<std::size_t>(ef[0]), v1, v2, t, dir, f)) continue;
-        if (!step_into(static_cast<std::size_t>(ef[1]), v1, v2, t, dir, b)) continue;
+        if (!step_into(static_cast<std::size_t>(ef[0]), v1, v2, t, dir, f) ||
+            !step_into(static_cast<std::size_t>(ef[1]), v1, v2, t, dir, b)) {
+          // A direction along the edge cannot step into a face; as it turns
+          // towards the edge the exit points tend to the edge's end points,
+          // so those are used (an edge crossing the ridge at right angles).
+          if (!(std::abs(dir.dot(p2 - p1)) > kAlongEdge * (p2 - p1).norm())) continue;
+          f = {p2, g2};
+          b = {p1, g1};
+        }
         const double df = f.gradient.dot(f.point - pr);
         const double dback = b.gradient.dot(pr - b.point);
         const double span = (f.point - pr).norm() + (pr - b.point).norm();

@@ -46,6 +46,11 @@ struct IntensityField {
 IntensityField compute_intensity_field(const Surface& surface, const Camera& camera,
                                        const Light& light = {});
 
+/// Piecewise-constant gradients of any per-vertex field with linear
+/// interpolation: ∇f|_T = 1/(2 A_T) Σ_k f_k (n_T × e_k); zero on degenerate
+/// faces. Parallel, deterministic.
+std::vector<Vec3> face_gradients(const Surface& surface, const std::vector<double>& vertex_values);
+
 /// Gradient of the barycentric coordinate of corner k of a face:
 /// (n_T × e_k) / (2 A_T); zero for a degenerate face.
 Vec3 barycentric_gradient(const Surface& surface, std::size_t face, int k);

@@ -37,7 +37,7 @@ struct StrokeVertex {
   SurfacePoint anchor;
   Vec3 position = Vec3::Zero();  ///< mm
   Vec2 pixel = Vec2::Zero();     ///< image position
-  float intensity = 0.0f;        ///< I (unclamped) at the vertex
+  double intensity = 0.0;        ///< I (unclamped) at the vertex
 };
 
 struct Stroke {

@@ -1,0 +1,303 @@
+// `fabrica hatch MESH -o OUT.svg|png`: shading strokes after Singh & Schaefer
+// 2010 ("Suggestive Hatching"), optionally with feature lines on top
+// (docs/hatching.md).
+#include <tbb/global_control.h>
+#include <CLI/CLI.hpp>
+
+#include <algorithm>
+#include <cctype>
+#include <cstdio>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "commands.hpp"
+#include "fabrica/core/camera.hpp"
+#include "fabrica/core/error.hpp"
+#include "fabrica/core/surface.hpp"
+#include "fabrica/hatching/hatching.hpp"
+#include "fabrica/hatching/svg_writer.hpp"
+#include "fabrica/io/mesh_io.hpp"
+
+#if __has_include("fabrica/lines/extract.hpp")
+#include "fabrica/lines/chain.hpp"
+#include "fabrica/lines/extract.hpp"
+#include "fabrica/lines/visibility.hpp"
+#define FABRICA_HATCH_WITH_LINES 1
+#endif
+
+namespace fabrica::cli {
+namespace {
+
+struct HatchArgs {
+  std::string mesh;
+  std::string camera_file;
+  std::string view;
+  std::string light = "eye";
+  std::string size;
+  std::string space;
+  std::string output;
+  std::string with_lines;
+  double threshold = 1.0;
+  int grid_depth = -1;
+  int seed_depth = -1;
+  bool uniform_depth = false;
+  double stroke_width = 1.0;
+  double max_length = 0.0;
+  double min_length = 1.0;
+  bool no_ridge_removal = false;
+  bool draw_ridges = false;
+  double line_width = 1.5;
+  int threads = 0;
+  bool quiet = false;
+};
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return s;
+}
+
+Vec3 parse_vec3(const std::string& text, const std::string& what) {
+  Vec3 v;
+  char comma1 = 0, comma2 = 0;
+  std::istringstream in(text);
+  if (!(in >> v.x() >> comma1 >> v.y() >> comma2 >> v.z()) || comma1 != ',' || comma2 != ',' ||
+      !v.allFinite())
+    throw InputError(what + ": expected three numbers X,Y,Z (got \"" + text + "\")");
+  std::string rest;
+  if (in >> rest) throw InputError(what + ": unexpected \"" + rest + "\" after X,Y,Z");
+  return v;
+}
+
+/// --light eye | dir:X,Y,Z (world, towards the light) | view:X,Y,Z (camera
+/// frame: x right, y up, z towards the viewer) | point:X,Y,Z (world, mm).
+hatching::Light parse_light(const std::string& text, const Camera& camera) {
+  hatching::Light light;
+  const std::string t = lower(text);
+  if (t == "eye" || t == "headlight") return light;
+  const auto colon = t.find(':');
+  if (colon == std::string::npos)
+    throw InputError("--light: use eye, dir:X,Y,Z, view:X,Y,Z or point:X,Y,Z (got \"" + text +
+                     "\")");
+  const std::string kind = t.substr(0, colon);
+  const Vec3 v = parse_vec3(t.substr(colon + 1), "--light " + kind);
+  if (kind == "dir" || kind == "direction") {
+    light.kind = hatching::LightKind::direction;
+    light.vector = v;
+  } else if (kind == "view") {
+    light.kind = hatching::LightKind::direction;
+    light.vector = v.x() * camera.right() + v.y() * camera.true_up() - v.z() * camera.forward();
+  } else if (kind == "point") {
+    light.kind = hatching::LightKind::point;
+    light.vector = v;
+  } else {
+    throw InputError("--light: unknown kind \"" + kind + "\" (use eye, dir, view or point)");
+  }
+  if (light.kind == hatching::LightKind::direction && !(light.vector.norm() > 0.0))
+    throw InputError("--light: the direction must not be zero");
+  return light;
+}
+
+std::pair<int, int> parse_size(const std::string& text) {
+  int w = 0, h = 0;
+  char x = 0;
+  std::istringstream in(lower(text));
+  if (!(in >> w >> x >> h) || x != 'x' || w <= 0 || h <= 0 || w > 16384 || h > 16384)
+    throw InputError("--size: expected WxH with 1..16384 pixels each (got \"" + text + "\")");
+  return {w, h};
+}
+
+#ifdef FABRICA_HATCH_WITH_LINES
+std::vector<hatching::SvgLayer> feature_line_layers(const Surface& surface, const Camera& camera,
+                                                    const std::string& list, double width) {
+  LineOptions options;
+  options.families.clear();
+  std::istringstream in(list);
+  std::string name;
+  while (std::getline(in, name, ',')) {
+    if (name.empty()) continue;
+    const auto family = parse_family(lower(name));
+    if (!family) throw InputError("--with-lines: unknown line family \"" + name + "\"");
+    options.families.push_back(*family);
+  }
+  if (options.families.empty()) return {};
+  LineExtractor extractor(surface, options);
+  const std::vector<SegmentSoup> soups = extractor.extract(camera);
+  ChainOptions chain;
+  chain.camera = camera;
+  LineSet lines = chain_segments(soups, chain);
+  compute_visibility(lines, surface, camera);
+  std::vector<hatching::SvgLayer> layers;
+  for (const LineFamily family : options.families) {
+    hatching::SvgLayer layer;
+    layer.name = std::string("lines-") + family_name(family);
+    layer.width_px = width;
+    for (const Polyline& line : lines.polylines) {
+      if (line.family != family) continue;
+      std::vector<Vec2> run;
+      auto flush = [&] {
+        if (run.size() >= 2) layer.polylines.push_back(run);
+        run.clear();
+      };
+      const std::size_t n = line.vertices.size();
+      for (std::size_t k = 0; k < n + (line.closed ? 1 : 0); ++k) {
+        const LineVertex& v = line.vertices[k % n];
+        if (!v.visible) {
+          flush();
+          continue;
+        }
+        run.push_back(project(camera, v.position).pixel);
+      }
+      flush();
+    }
+    layers.push_back(std::move(layer));
+  }
+  return layers;
+}
+#endif
+
+int run_hatch(const HatchArgs& args) {
+  std::unique_ptr<tbb::global_control> threads;
+  if (args.threads > 0)
+    threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                    static_cast<std::size_t>(args.threads));
+  const std::string ext = lower(std::filesystem::path(args.output).extension().string());
+  if (ext != ".svg" && ext != ".png")
+    throw InputError("-o " + args.output + ": the output must end in .svg or .png");
+  if (ext == ".png")
+    throw Error(ErrorKind::unavailable,
+                "-o " + args.output +
+                    ": PNG output of hatching needs the renderer, which this build does not "
+                    "include yet; write .svg");
+
+  io::ReadOptions read_options;
+  if (!args.space.empty()) {
+    const std::string s = lower(args.space);
+    if (s == "lps")
+      read_options.space = Space::lps;
+    else if (s == "ras")
+      read_options.space = Space::ras;
+    else
+      throw InputError("--space: use lps or ras (got \"" + args.space + "\")");
+  }
+  io::LoadedMesh loaded = io::read_mesh(args.mesh, read_options);
+  const Space space = loaded.mesh.space;
+
+  std::optional<std::pair<int, int>> size;
+  if (!args.size.empty()) size = parse_size(args.size);
+  Camera camera;
+  if (!args.camera_file.empty()) {
+    camera = read_camera(args.camera_file);
+    if (size) std::tie(camera.width, camera.height) = *size;
+  } else {
+    const auto view = parse_anatomical_view(args.view.empty() ? "anterior" : args.view);
+    if (!view)
+      throw InputError("--view: unknown view \"" + args.view +
+                       "\" (anterior, posterior, left, right, superior, inferior)");
+    const auto [w, h] = size.value_or(std::pair<int, int>{800, 800});
+    camera = anatomical_camera(*view, bounding_box(loaded.mesh.positions), space, w, h);
+  }
+  validate_camera(camera, args.camera_file.empty() ? "camera" : args.camera_file);
+
+  Surface surface(std::move(loaded.mesh));
+  hatching::HatchingOptions options;
+  options.light = parse_light(args.light, camera);
+  options.intensity_threshold = args.threshold;
+  options.grid_depth = args.grid_depth;
+  options.seed_depth = args.seed_depth;
+  options.adaptive_depth = !args.uniform_depth;
+  options.stroke_width_px = args.stroke_width;
+  options.max_length_px = args.max_length;
+  options.min_length_px = args.min_length;
+  options.ridge_removal = !args.no_ridge_removal;
+  const hatching::StrokeSet strokes = hatching::hatch(surface, camera, options);
+
+  std::vector<hatching::SvgLayer> layers;
+  if (!args.with_lines.empty()) {
+#ifdef FABRICA_HATCH_WITH_LINES
+    layers = feature_line_layers(surface, camera, args.with_lines, args.line_width);
+#else
+    throw Error(ErrorKind::unavailable,
+                "--with-lines: this build has no line engine (fabrica::lines)");
+#endif
+  }
+  hatching::SvgStyle style;
+  style.stroke_width_px = args.stroke_width;
+  style.draw_ridges = args.draw_ridges;
+  hatching::write_hatching_svg(args.output, strokes, style, layers);
+  if (!args.quiet) {
+    std::size_t vertices = 0;
+    for (const auto& s : strokes.strokes) vertices += s.vertices.size();
+    std::printf(
+        "%s: %zu strokes (%zu vertices), %zu seeds tried of %zu candidates, %zu ridge segments; "
+        "grid depth %d, "
+        "seed depth %d\n",
+        args.output.c_str(), strokes.strokes.size(), vertices, strokes.stats.seeds,
+        strokes.stats.candidates, strokes.ridges.size(), strokes.grid_depth, strokes.seed_depth);
+  }
+  if (!args.quiet) {
+    std::printf("  stroke ends:");
+    for (int k = 0; k < hatching::kStrokeEndCount; ++k)
+      if (strokes.stats.ends[static_cast<std::size_t>(k)] > 0)
+        std::printf(" %s %zu", hatching::to_string(static_cast<hatching::StrokeEnd>(k)),
+                    strokes.stats.ends[static_cast<std::size_t>(k)]);
+    std::printf("\n");
+  }
+  return 0;
+}
+
+}  // namespace
+
+void add_hatch_command(CLI::App& app, Action& action) {
+  auto args = std::make_shared<HatchArgs>();
+  CLI::App* cmd = app.add_subcommand("hatch",
+                                     "Shading strokes (Singh & Schaefer 2010, \"Suggestive "
+                                     "Hatching\") as SVG; see docs/hatching.md");
+  cmd->add_option("mesh", args->mesh, "Input mesh (OBJ, PLY, STL, OFF, VTP, VTK)")->required();
+  cmd->add_option("-o,--output", args->output, "Output OUT.svg (PNG needs the renderer)")
+      ->required();
+  auto* camera =
+      cmd->add_option("--camera", args->camera_file, "Camera JSON file (or a .seg file's header)");
+  cmd->add_option("--view", args->view,
+                  "Anatomical view: anterior (default), posterior, left, right, superior, inferior")
+      ->excludes(camera);
+  cmd->add_option(
+      "--space", args->space,
+      "Coordinate space of the mesh for --view: lps or ras (default: file tag, else LPS)");
+  cmd->add_option("--size", args->size,
+                  "Image size WxH in pixels (default 800x800, or the camera's)");
+  cmd->add_option("--light", args->light,
+                  "Light: eye (default), dir:X,Y,Z (world, towards the light), view:X,Y,Z (x "
+                  "right, y up, z to the "
+                  "viewer), point:X,Y,Z (world mm)");
+  cmd->add_option("--threshold", args->threshold,
+                  "Strokes stop where the intensity exceeds this (1 = no threshold)");
+  cmd->add_option("--grid-depth", args->grid_depth,
+                  "Deepest proximity-grid level (default: 20 at 800 px, +2 per doubling)");
+  cmd->add_option("--seed-depth", args->seed_depth,
+                  "Deepest seeding level (default: grid depth - 2)");
+  cmd->add_flag("--uniform-depth", args->uniform_depth,
+                "Truncate every stroke at the grid depth, whatever the tone");
+  cmd->add_option("--stroke-width", args->stroke_width,
+                  "Stroke width in pixels (also sets the density)");
+  cmd->add_option("--max-length", args->max_length,
+                  "Maximum stroke length in pixels (0 = no limit)");
+  cmd->add_option("--min-length", args->min_length, "Drop strokes shorter than this many pixels");
+  cmd->add_flag("--no-ridge-removal", args->no_ridge_removal,
+                "Do not keep strokes away from intensity ridges");
+  cmd->add_flag("--draw-ridges", args->draw_ridges,
+                "Also draw the detected intensity ridges (red), for inspection");
+  cmd->add_option(
+      "--with-lines", args->with_lines,
+      "Comma-separated feature-line families drawn over the strokes, e.g. contour,suggestive");
+  cmd->add_option("--line-width", args->line_width, "Width of the feature lines in pixels");
+  cmd->add_option("--threads", args->threads,
+                  "Worker threads (0 = all); the output does not depend on it");
+  cmd->add_flag("-q,--quiet", args->quiet, "No summary line");
+  cmd->callback([args, &action] { action = [args] { return run_hatch(*args); }; });
+}
+
+}  // namespace fabrica::cli

@@ -1,0 +1,113 @@
+// Per-frame cost of hatching (Singh & Schaefer 2010) at 800 × 800 on meshes
+// of about 10k, 50k, 270k (igea: 134k vertices) and 330k faces, with and
+// without intensity-ridge detection. The Surface's view-independent
+// geometry (normals, areas, adjacency) is computed once beforehand, as in
+// an interactive session; everything per view (field, depth buffer, ridges,
+// proximity grid, tracing) is timed. Paper: 0.7–2.5 s per frame (2009).
+//
+//   bench_hatching --benchmark_min_time=1
+#include <benchmark/benchmark.h>
+
+#include <map>
+#include <memory>
+#include <string>
+#include <utility>
+
+#include "fabrica/core/camera.hpp"
+#include "fabrica/core/surface.hpp"
+#include "fabrica/hatching/hatching.hpp"
+#include "fabrica/io/mesh_io.hpp"
+
+namespace {
+
+using fabrica::Face;
+using fabrica::TriangleMesh;
+using fabrica::Vec3;
+
+/// 1:4 midpoint subdivision (planar: same shape, four times the faces).
+TriangleMesh subdivide(const TriangleMesh& mesh) {
+  TriangleMesh out = mesh;
+  out.faces.clear();
+  std::map<std::pair<int, int>, int> midpoint;
+  auto mid = [&](int a, int b) {
+    const auto key = std::minmax(a, b);
+    const auto it = midpoint.find(key);
+    if (it != midpoint.end()) return it->second;
+    const int index = static_cast<int>(out.positions.size());
+    out.positions.push_back(0.5 * (mesh.positions[a] + mesh.positions[b]));
+    midpoint.emplace(key, index);
+    return index;
+  };
+  for (const Face& f : mesh.faces) {
+    const int ab = mid(f[0], f[1]), bc = mid(f[1], f[2]), ca = mid(f[2], f[0]);
+    out.faces.push_back({f[0], ab, ca});
+    out.faces.push_back({ab, f[1], bc});
+    out.faces.push_back({ca, bc, f[2]});
+    out.faces.push_back({ab, bc, ca});
+  }
+  return out;
+}
+
+struct Case {
+  const char* name;
+  const char* path;
+  int subdivisions;
+};
+
+const Case kCases[] = {
+    {"teeth_10k", "meshes/anatomy/teeth/sofa_teeth.obj", 0},
+    {"aneurysm_x4_57k", "meshes/anatomy/vessels/sofa_aneurysm3D_1.off", 1},
+    {"igea_269k", "meshes/classic/c3d_igea.ply", 0},
+    {"cortex_x16_328k", "meshes/anatomy/brain/fsaverage5/pial_left.off", 2},
+};
+
+struct Loaded {
+  std::unique_ptr<fabrica::Surface> surface;
+  fabrica::Camera camera;
+};
+
+Loaded& load(int index) {
+  static std::map<int, Loaded> cache;
+  auto it = cache.find(index);
+  if (it != cache.end()) return it->second;
+  const Case& c = kCases[index];
+  TriangleMesh mesh = fabrica::io::read_mesh(std::string(FABRICA_BENCH_DATA) + "/" + c.path).mesh;
+  for (int k = 0; k < c.subdivisions; ++k) mesh = subdivide(mesh);
+  Loaded loaded;
+  loaded.camera =
+      fabrica::anatomical_camera(fabrica::AnatomicalView::anterior,
+                                 fabrica::bounding_box(mesh.positions), mesh.space, 800, 800);
+  loaded.surface = std::make_unique<fabrica::Surface>(std::move(mesh));
+  // View-independent geometry the hatcher reads, computed once.
+  loaded.surface->topology();
+  loaded.surface->vertex_normals();
+  loaded.surface->face_areas();
+  loaded.surface->mean_edge_length();
+  return cache.emplace(index, std::move(loaded)).first->second;
+}
+
+void BM_Hatch(benchmark::State& state) {
+  Loaded& l = load(static_cast<int>(state.range(0)));
+  fabrica::hatching::HatchingOptions options;
+  options.ridge_removal = state.range(1) != 0;
+  std::size_t strokes = 0;
+  for (auto _ : state) {
+    const auto result = fabrica::hatching::hatch(*l.surface, l.camera, options);
+    strokes = result.strokes.size();
+    benchmark::DoNotOptimize(strokes);
+  }
+  state.SetLabel(std::string(kCases[state.range(0)].name) +
+                 (options.ridge_removal ? " ridges" : " no-ridges"));
+  state.counters["faces"] = static_cast<double>(l.surface->face_count());
+  state.counters["strokes"] = static_cast<double>(strokes);
+}
+
+}  // namespace
+
+BENCHMARK(BM_Hatch)
+    ->ArgsProduct({{0, 1, 2, 3}, {0, 1}})
+    ->ArgNames({"mesh", "ridges"})
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(0.5);
+
+BENCHMARK_MAIN();
