@@ -36,16 +36,23 @@ void main() {
     d = ivec2(0, 1);
   else
     d = ivec2(-1, 1);
+  // q >= 0 and (for lambda >= -1/2) w_n >= 0, so v <= (8 + 8 lambda) q4:
+  // pixels that cannot pass skip the neighbour fetches.
   float v = (8.0 + 8.0 * u_lambda) * centre.r;
-  for (int i = 0; i < 9; ++i) {
-    if (i == 4) continue;
-    ivec2 o = offsets[i];
-    float q = texelFetch(u_data, clamp(p + o, ivec2(0), last), 0).r;
-    // cos^2 of the angle between o and d, exact for these integer vectors
-    float c = float(o.x * d.x + o.y * d.y);
-    float cos2 = c * c / float((o.x * o.x + o.y * o.y) * (d.x * d.x + d.y * d.y));
-    v -= (1.0 + 2.0 * u_lambda * cos2) * q;
-  }
+  if (u_lambda >= -0.5 && v <= u_threshold) discard;
+  // The weights in closed form: cos^2 is 1 along d, 0 across it and 1/2 on
+  // the two 45-degree pairs, so sum_n w_n q_n = sum_n q_n + 2 lambda C with
+  // C the pair along d plus half the two pairs at 45 degrees.
+  float qn[9];
+  for (int i = 0; i < 9; ++i)
+    if (i != 4) qn[i] = texelFetch(u_data, clamp(p + offsets[i], ivec2(0), last), 0).r;
+  float h = qn[3] + qn[5], vert = qn[1] + qn[7];  // along x, along y
+  float diag = qn[2] + qn[6], anti = qn[0] + qn[8];  // along (1,1), along (-1,1)
+  float C = d.y == 0 ? h + 0.5 * (diag + anti)
+            : d.x == 0 ? vert + 0.5 * (diag + anti)
+            : d.x == d.y ? diag + 0.5 * (h + vert)
+                         : anti + 0.5 * (h + vert);
+  v -= (h + vert + diag + anti) + 2.0 * u_lambda * C;
   if (v <= u_threshold) discard;
   float ink = u_fade == 1 ? min(v, 1.0) : 1.0;
   float alpha = ink * u_line_color.a;

@@ -1,0 +1,6 @@
+# Rendering: hybrid apparent ridges vs bare passes vs object space (docs/PERFORMANCE.md).
+if(TARGET fabrica_render AND TARGET fabrica_lines)
+  fabrica_add_bench(bench_render
+    SOURCES ${CMAKE_CURRENT_LIST_DIR}/bench_render.cpp
+    LIBS fabrica::render fabrica::lines)
+endif()
