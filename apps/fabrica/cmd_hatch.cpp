@@ -170,8 +170,8 @@ int run_hatch(const HatchArgs& args) {
   if (ext == ".png")
     throw Error(ErrorKind::unavailable,
                 "-o " + args.output +
-                    ": PNG output of hatching needs the renderer, which this build does not "
-                    "include yet; write .svg");
+                    ": PNG output of hatching needs the renderer, and hatching is not wired to "
+                    "it yet; write .svg (and rasterise it, e.g. with rsvg-convert)");
 
   io::ReadOptions read_options;
   if (!args.space.empty()) {
