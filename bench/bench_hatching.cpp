@@ -1,5 +1,5 @@
 // Per-frame cost of hatching (Singh & Schaefer 2010) at 800 × 800 on meshes
-// of about 10k, 50k, 270k (igea: 134k vertices) and 330k faces, with and
+// of about 10k, 57k, 100k, 270k (igea: 134k vertices) and 330k faces, with and
 // without intensity-ridge detection. The Surface's view-independent
 // geometry (normals, areas, adjacency) is computed once beforehand, as in
 // an interactive session; everything per view (field, depth buffer, ridges,
@@ -57,6 +57,7 @@ struct Case {
 const Case kCases[] = {
     {"teeth_10k", "meshes/anatomy/teeth/sofa_teeth.obj", 0},
     {"aneurysm_x4_57k", "meshes/anatomy/vessels/sofa_aneurysm3D_1.off", 1},
+    {"lucy_100k", "meshes/classic/vtkdata_lucy.ply", 0},
     {"igea_269k", "meshes/classic/c3d_igea.ply", 0},
     {"cortex_x16_328k", "meshes/anatomy/brain/fsaverage5/pial_left.off", 2},
 };
@@ -105,7 +106,7 @@ void BM_Hatch(benchmark::State& state) {
 }  // namespace
 
 BENCHMARK(BM_Hatch)
-    ->ArgsProduct({{0, 1, 2, 3}, {0, 1}})
+    ->ArgsProduct({{0, 1, 2, 3, 4}, {0, 1}})
     ->ArgNames({"mesh", "ridges"})
     ->Unit(benchmark::kMillisecond)
     ->MinTime(0.5);
