@@ -13,6 +13,7 @@
 //   bench_render --benchmark_min_time=0.2
 #include <benchmark/benchmark.h>
 
+#include <chrono>
 #include <cmath>
 #include <map>
 #include <memory>
@@ -113,6 +114,33 @@ void BM_HybridBare(benchmark::State& state) {
   run_hybrid(state, true);
 }
 
+// Both in the same iterations, alternating (the machine is shared: separate
+// runs drift): counters hybrid_ms, bare_ms and their ratio.
+void BM_HybridOverBare(benchmark::State& state) {
+  Input& in = input(static_cast<int>(state.range(0)));
+  const auto cam = camera(static_cast<int>(state.range(1)));
+  fr::HybridOptions o;
+  renderer().render_hybrid(in.mesh, cam, o, false, false);
+  renderer().render_hybrid(in.mesh, cam, o, false, true);
+  double hybrid = 0.0, bare = 0.0;
+  using clock = std::chrono::steady_clock;
+  for (auto _ : state) {
+    const auto t0 = clock::now();
+    fr::Image a = renderer().render_hybrid(in.mesh, cam, o, false, false);
+    const auto t1 = clock::now();
+    fr::Image b = renderer().render_hybrid(in.mesh, cam, o, false, true);
+    const auto t2 = clock::now();
+    benchmark::DoNotOptimize(a.rgba.data());
+    benchmark::DoNotOptimize(b.rgba.data());
+    hybrid += std::chrono::duration<double, std::milli>(t1 - t0).count();
+    bare += std::chrono::duration<double, std::milli>(t2 - t1).count();
+  }
+  const double n = static_cast<double>(state.iterations());
+  state.counters["hybrid_ms"] = hybrid / n;
+  state.counters["bare_ms"] = bare / n;
+  state.counters["ratio"] = hybrid / bare;
+}
+
 // Object-space apparent ridges for the same camera: view-dependent fields,
 // zero crossings, chaining (view-independent precomputation done once).
 void BM_ObjectSpaceApparent(benchmark::State& state) {
@@ -139,6 +167,7 @@ void sizes(benchmark::internal::Benchmark* b) {
 
 BENCHMARK(BM_Hybrid)->Apply(sizes)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_HybridBare)->Apply(sizes)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_HybridOverBare)->Apply(sizes)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_ObjectSpaceApparent)
     ->Args({50, 1024})
     ->Args({300, 1024})

@@ -43,11 +43,10 @@ void main() {
   // The weights in closed form: cos^2 is 1 along d, 0 across it and 1/2 on
   // the two 45-degree pairs, so sum_n w_n q_n = sum_n q_n + 2 lambda C with
   // C the pair along d plus half the two pairs at 45 degrees.
-  float qn[9];
-  for (int i = 0; i < 9; ++i)
-    if (i != 4) qn[i] = texelFetch(u_data, clamp(p + offsets[i], ivec2(0), last), 0).r;
-  float h = qn[3] + qn[5], vert = qn[1] + qn[7];  // along x, along y
-  float diag = qn[2] + qn[6], anti = qn[0] + qn[8];  // along (1,1), along (-1,1)
+#define Q(i) texelFetch(u_data, clamp(p + offsets[i], ivec2(0), last), 0).r
+  float h = Q(3) + Q(5), vert = Q(1) + Q(7);     // along x, along y
+  float diag = Q(2) + Q(6), anti = Q(0) + Q(8);  // along (1,1), along (-1,1)
+#undef Q
   float C = d.y == 0 ? h + 0.5 * (diag + anti)
             : d.x == 0 ? vert + 0.5 * (diag + anti)
             : d.x == d.y ? diag + 0.5 * (h + vert)
