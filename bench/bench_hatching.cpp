@@ -15,7 +15,9 @@
 
 #include "fabrica/core/camera.hpp"
 #include "fabrica/core/surface.hpp"
+#include "fabrica/hatching/depth_buffer.hpp"
 #include "fabrica/hatching/hatching.hpp"
+#include "fabrica/hatching/intensity_ridges.hpp"
 #include "fabrica/io/mesh_io.hpp"
 
 namespace {
@@ -103,7 +105,34 @@ void BM_Hatch(benchmark::State& state) {
   state.counters["strokes"] = static_cast<double>(strokes);
 }
 
+/// Stages of one frame, for the breakdown: 0 field, 1 depth buffer, 2 ridges.
+void BM_Stage(benchmark::State& state) {
+  Loaded& l = load(static_cast<int>(state.range(0)));
+  const int stage = static_cast<int>(state.range(1));
+  const auto field = fabrica::hatching::compute_intensity_field(*l.surface, l.camera);
+  for (auto _ : state) {
+    if (stage == 0) {
+      auto f = fabrica::hatching::compute_intensity_field(*l.surface, l.camera);
+      benchmark::DoNotOptimize(f.face_gradient.data());
+    } else if (stage == 1) {
+      auto d = fabrica::hatching::rasterize_depth(l.surface->mesh(), l.camera);
+      benchmark::DoNotOptimize(&d);
+    } else {
+      auto r = fabrica::hatching::detect_intensity_ridges(*l.surface, field);
+      benchmark::DoNotOptimize(r.segments.data());
+    }
+  }
+  static const char* const kStages[] = {"field", "depth", "ridges"};
+  state.SetLabel(std::string(kCases[state.range(0)].name) + " " + kStages[stage]);
+}
+
 }  // namespace
+
+BENCHMARK(BM_Stage)
+    ->ArgsProduct({{0, 1, 2, 3, 4}, {0, 1, 2}})
+    ->ArgNames({"mesh", "stage"})
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(0.2);
 
 BENCHMARK(BM_Hatch)
     ->ArgsProduct({{0, 1, 2, 3, 4}, {0, 1}})
