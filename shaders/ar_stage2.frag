@@ -19,6 +19,10 @@ void main() {
   ivec2 last = textureSize(u_data, 0) - 1;
   vec4 centre = texelFetch(u_data, p, 0);
   if (centre.a < 0.5) discard;  // background or occluder
+  // q >= 0 and (for lambda >= -1/2) w_n >= 0, so v <= (8 + 8 lambda) q4:
+  // pixels that cannot pass skip the rest.
+  float v = (8.0 + 8.0 * u_lambda) * centre.r;
+  if (u_lambda >= -0.5 && v <= u_threshold) discard;
   vec2 t1 = 2.0 * (centre.gb - 0.5);
   if (t1 == vec2(0.0)) discard;  // seed: undefined direction = background
   if (u_sign_free == 1) {
@@ -36,10 +40,6 @@ void main() {
     d = ivec2(0, 1);
   else
     d = ivec2(-1, 1);
-  // q >= 0 and (for lambda >= -1/2) w_n >= 0, so v <= (8 + 8 lambda) q4:
-  // pixels that cannot pass skip the neighbour fetches.
-  float v = (8.0 + 8.0 * u_lambda) * centre.r;
-  if (u_lambda >= -0.5 && v <= u_threshold) discard;
   // The weights in closed form: cos^2 is 1 along d, 0 across it and 1/2 on
   // the two 45-degree pairs, so sum_n w_n q_n = sum_n q_n + 2 lambda C with
   // C the pair along d plus half the two pairs at 45 degrees.
