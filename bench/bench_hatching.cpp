@@ -7,6 +7,7 @@
 //
 //   bench_hatching --benchmark_min_time=1
 #include <benchmark/benchmark.h>
+#include <tbb/global_control.h>
 
 #include <map>
 #include <memory>
@@ -93,6 +94,8 @@ void BM_Hatch(benchmark::State& state) {
   Loaded& l = load(static_cast<int>(state.range(0)));
   fabrica::hatching::HatchingOptions options;
   options.ridge_removal = state.range(1) != 0;
+  const tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
+                                    static_cast<std::size_t>(state.range(2)));
   std::size_t strokes = 0;
   for (auto _ : state) {
     const auto result = fabrica::hatching::hatch(*l.surface, l.camera, options);
@@ -100,7 +103,8 @@ void BM_Hatch(benchmark::State& state) {
     benchmark::DoNotOptimize(strokes);
   }
   state.SetLabel(std::string(kCases[state.range(0)].name) +
-                 (options.ridge_removal ? " ridges" : " no-ridges"));
+                 (options.ridge_removal ? " ridges" : " no-ridges") + " " +
+                 std::to_string(state.range(2)) + "T");
   state.counters["faces"] = static_cast<double>(l.surface->face_count());
   state.counters["strokes"] = static_cast<double>(strokes);
 }
@@ -135,8 +139,8 @@ BENCHMARK(BM_Stage)
     ->MinTime(0.2);
 
 BENCHMARK(BM_Hatch)
-    ->ArgsProduct({{0, 1, 2, 3, 4}, {0, 1}})
-    ->ArgNames({"mesh", "ridges"})
+    ->ArgsProduct({{0, 1, 2, 3, 4}, {0, 1}, {2, 1}})
+    ->ArgNames({"mesh", "ridges", "threads"})
     ->Unit(benchmark::kMillisecond)
     ->MinTime(0.5);
 
