@@ -4,6 +4,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -23,18 +24,40 @@ void tangent_basis(const Vec3& n, Vec3& t1, Vec3& t2) {
   t2 = n.cross(t1);
 }
 
-/// Angle of the dominant eigenvector of the symmetric 2×2 matrix [a b; b c].
-double dominant_angle(double a, double b, double c) {
-  return 0.5 * std::atan2(2.0 * b, a - c);
+/// Dominant eigenvector (not normalised) of the symmetric 2×2 matrix
+/// [a b; b c], in closed form: (λ − c, b) or (b, λ − a), whichever is
+/// longer, λ the larger eigenvalue; (1, 0) when the matrix is isotropic.
+Vec2 dominant_eigenvector(double a, double b, double c) {
+  const double half = 0.5 * (a - c);
+  const double lambda = 0.5 * (a + c) + std::sqrt(half * half + b * b);
+  const Vec2 v1(lambda - c, b), v2(b, lambda - a);
+  const Vec2 v = v1.squaredNorm() >= v2.squaredNorm() ? v1 : v2;
+  return v.squaredNorm() > 0.0 ? v : Vec2(1.0, 0.0);
 }
 
 /// Dominant eigenvector of u uᵀ + w wᵀ (3×3) through the 2×2 Gram matrix;
 /// zero when both vectors vanish.
 Vec3 dominant_direction(const Vec3& u, const Vec3& w) {
-  const double theta = dominant_angle(u.dot(u), u.dot(w), w.dot(w));
-  const Vec3 e = std::cos(theta) * u + std::sin(theta) * w;
+  const Vec2 c = dominant_eigenvector(u.dot(u), u.dot(w), w.dot(w));
+  const Vec3 e = c.x() * u + c.y() * w;
   const double len = e.norm();
   return len > 0.0 ? Vec3(e / len) : Vec3::Zero();
+}
+
+/// atan2(y, x) for y ≥ 0 to about 1e-5 rad (a minimax polynomial for atan on
+/// [0, 1]); enough for angle weights and much cheaper than std::atan2.
+double angle_from(double y, double x) {
+  const double ax = std::abs(x);
+  const double hi = std::max(ax, y), lo = std::min(ax, y);
+  if (!(hi > 0.0)) return 0.0;
+  const double z = lo / hi, z2 = z * z;
+  double r =
+      z * (0.99997726 +
+           z2 * (-0.33262347 +
+                 z2 * (0.19354346 + z2 * (-0.11643287 + z2 * (0.05265332 - z2 * 0.01172120)))));
+  if (y > ax) r = 0.5 * kPi - r;
+  if (x < 0.0) r = kPi - r;
+  return r;
 }
 
 struct EdgeHit {
@@ -66,7 +89,7 @@ std::vector<Vec3> intensity_vertex_gradients(const Surface& surface, const Inten
         const Face& t = faces[f];
         const Vec3 a = positions[static_cast<std::size_t>(t[(c + 1) % 3])] - positions[v];
         const Vec3 b = positions[static_cast<std::size_t>(t[(c + 2) % 3])] - positions[v];
-        const double w = std::atan2(a.cross(b).norm(), a.dot(b));  // angle at the vertex
+        const double w = angle_from(a.cross(b).norm(), a.dot(b));  // angle at the vertex
         if (!(w > 0.0)) continue;
         const Vec3& g = field.face_gradient[f];
         mean += w * g;
@@ -78,8 +101,8 @@ std::vector<Vec3> intensity_vertex_gradients(const Surface& surface, const Inten
       }
       if (!(weight_sum > 0.0)) continue;
       mean /= weight_sum;
-      const double theta = dominant_angle(cxx, cxy, cyy);
-      const Vec3 e = std::cos(theta) * t1 + std::sin(theta) * t2;
+      const Vec2 c = dominant_eigenvector(cxx, cxy, cyy).normalized();
+      const Vec3 e = c.x() * t1 + c.y() * t2;
       result[v] = mean.dot(e) * e;
     }
   });
@@ -95,6 +118,7 @@ IntensityRidges detect_intensity_ridges(const Surface& surface, const IntensityF
   const auto& faces = surface.faces();
   const auto& normals = surface.vertex_normals();
   const auto& face_normals = surface.face_normals();
+  const auto& face_areas = surface.face_areas();
   const Topology& topology = surface.topology();
   const std::size_t ne = topology.edge_count();
   const double cos_min = std::cos(options.min_angle_deg * kPi / 180.0);
@@ -114,10 +138,17 @@ IntensityRidges detect_intensity_ridges(const Surface& surface, const IntensityF
     }
     if (c1 < 0 || c2 < 0) return false;
     const int c0 = 3 - c1 - c2;
-    const Vec3& n = face_normals[face];
-    Vec3 d = dir - dir.dot(n) * n;
+    // Rates of the barycentric coordinates along dir: (n × e_k)·d / (2A) =
+    // e_k · (d × n) / (2A), e_k the edge opposite corner k (the normal part
+    // of dir drops out).
+    const double area = face_areas[face];
+    if (!(area > 0.0)) return false;
+    const Vec3 m = dir.cross(face_normals[face]) / (2.0 * area);
     Vec3 db;
-    for (int k = 0; k < 3; ++k) db[k] = barycentric_gradient(surface, face, k).dot(d);
+    for (int k = 0; k < 3; ++k)
+      db[k] = (positions[static_cast<std::size_t>(tri[(k + 2) % 3])] -
+               positions[static_cast<std::size_t>(tri[(k + 1) % 3])])
+                  .dot(m);
     // Parallel to the edge (or degenerate face): no step into this face.
     if (!(std::abs(db[c0]) > 1e-9 * (std::abs(db[c1]) + std::abs(db[c2])))) return false;
     if (db[c0] < 0.0) db = -db;
