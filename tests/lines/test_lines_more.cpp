@@ -83,7 +83,7 @@ LineSet lines_for(const Surface& s, const Camera& cam, std::vector<LineFamily> f
 
 }  // namespace
 
-TEST(Visibility, BackSphereContourIsHiddenWhereTheFrontSphereCoversIt) {
+TEST(LinesVisibility, BackSphereContourIsHiddenWhereTheFrontSphereCoversIt) {
   const TwoSpheres scene;
   Surface surface(scene.mesh());
   const Camera cam = camera_at(scene.eye);
@@ -173,7 +173,7 @@ SvgSummary parse_svg(const std::string& text) {
 
 }  // namespace
 
-TEST(Svg, ParsesWithOneGroupPerFamilyAndOmitsOrDashesHiddenLines) {
+TEST(LinesSvg, ParsesWithOneGroupPerFamilyAndOmitsOrDashesHiddenLines) {
   const TwoSpheres scene;
   Surface surface(scene.mesh());
   Camera cam = camera_at(scene.eye);
@@ -216,7 +216,7 @@ TEST(Svg, ParsesWithOneGroupPerFamilyAndOmitsOrDashesHiddenLines) {
   EXPECT_EQ(ss.str(), svg_string(lines, cam, style));
 }
 
-TEST(Pdf, StartsWithPdfHeaderAndHoldsTheStrokes) {
+TEST(LinesPdf, StartsWithPdfHeaderAndHoldsTheStrokes) {
   if (!pdf_available()) GTEST_SKIP() << "built without cairo";
   const TwoSpheres scene;
   Surface surface(scene.mesh());
@@ -237,7 +237,7 @@ TEST(Pdf, StartsWithPdfHeaderAndHoldsTheStrokes) {
   EXPECT_GT(pdf.size(), std::filesystem::file_size(dir / "empty.pdf") + 500);
 }
 
-TEST(Seg, WrittenFilesReadBackWithTheSameCounts) {
+TEST(LinesSeg, WrittenFilesReadBackWithTheSameCounts) {
   Surface torus(test::make_torus(2.0, 0.7, 120, 48, 0.05));
   const Camera cam = camera_at(Vec3(0.3, -6.0, 3.0));
   LineOptions o;
@@ -320,7 +320,7 @@ bool same_bits(const Vec3& a, const Vec3& b) {
 
 }  // namespace
 
-TEST(Determinism, SameSegmentsAndLinesAtOneAndTwoThreads) {
+TEST(LinesDeterminism, SameSegmentsAndLinesAtOneAndTwoThreads) {
   const auto path = test::shared_data() / "meshes/anatomy/vessels/sofa_aneurysm3D_1.off";
   TriangleMesh mesh = io::read_mesh(path).mesh;
   const RunOutput one = run_with_threads(1, mesh);
