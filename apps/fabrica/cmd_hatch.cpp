@@ -48,6 +48,7 @@ struct HatchArgs {
   double max_length = 0.0;
   double min_length = 1.0;
   bool no_ridge_removal = false;
+  double ridge_angle = 20.0;
   bool draw_ridges = false;
   double line_width = 1.5;
   int threads = 0;
@@ -213,6 +214,10 @@ int run_hatch(const HatchArgs& args) {
   options.max_length_px = args.max_length;
   options.min_length_px = args.min_length;
   options.ridge_removal = !args.no_ridge_removal;
+  if (!(args.ridge_angle >= 0.0 && args.ridge_angle < 180.0))
+    throw InputError("--ridge-angle: must be in [0, 180) degrees (got " +
+                     std::to_string(args.ridge_angle) + ")");
+  options.ridges.min_angle_deg = args.ridge_angle;
   const hatching::StrokeSet strokes = hatching::hatch(surface, camera, options);
 
   std::vector<hatching::SvgLayer> layers;
@@ -288,6 +293,9 @@ void add_hatch_command(CLI::App& app, Action& action) {
   cmd->add_option("--min-length", args->min_length, "Drop strokes shorter than this many pixels");
   cmd->add_flag("--no-ridge-removal", args->no_ridge_removal,
                 "Do not keep strokes away from intensity ridges");
+  cmd->add_option("--ridge-angle", args->ridge_angle,
+                  "Intensity ridges only where the gradients at an edge's ends differ by at "
+                  "least this many degrees (default 20, the paper's)");
   cmd->add_flag("--draw-ridges", args->draw_ridges,
                 "Also draw the detected intensity ridges (red), for inspection");
   cmd->add_option(
