@@ -14,7 +14,12 @@
 //    the opposite edges (p_f, p_b), interpolate the vertex gradients there,
 //    and accept when the second difference
 //    [∇I(p_f)·(p_f − p_r) − ∇I(p_b)·(p_r − p_b)] / (|p_f − p_r| + |p_r − p_b|) < 0
-//    and the first derivatives change sign. Either direction suffices.
+//    and the first derivatives change sign. Either direction suffices. A
+//    direction along the edge itself (an edge crossing the ridge at right
+//    angles) cannot step into a face; the construction's limit, p_f and p_b
+//    = the edge's end points, is used instead. A ridge running exactly
+//    through vertices (∇I(p_i) = 0 there) gives zero first derivatives, not
+//    a sign change, and is not found; generic meshes do not do that.
 // 4. Ridge points are joined per face (two points: one segment; three: each
 //    to the face centroid). Boundary and non-manifold edges carry none.
 #pragma once
