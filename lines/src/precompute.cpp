@@ -10,7 +10,8 @@
 namespace fabrica {
 
 struct LinePrecompute::Cache {
-  std::once_flag k1_once, ridge_once, demarcating_once, gradient_once, laplacian_once;
+  std::once_flag k1_once, ridge_once, demarcating_once, gradient_once, laplacian_once, ring_once;
+  CornerRing ring;
   std::vector<double> abs_k1;
   std::vector<LineSegment> ridges, valleys, demarcating;
   GradientOperator gradient;
@@ -28,6 +29,31 @@ const std::vector<double>& LinePrecompute::abs_k1() const {
     for (std::size_t i = 0; i < curv.k1.size(); ++i) cache_->abs_k1[i] = std::abs(curv.k1[i]);
   });
   return cache_->abs_k1;
+}
+
+const LinePrecompute::CornerRing& LinePrecompute::corner_ring() const {
+  std::call_once(cache_->ring_once, [&] {
+    const Topology& topo = surface_->topology();
+    const auto& faces = surface_->faces();
+    const std::size_t nv = surface_->vertex_count();
+    CornerRing& r = cache_->ring;
+    r.offset.resize(nv + 1);
+    r.offset[0] = 0;
+    for (std::size_t i = 0; i < nv; ++i)
+      r.offset[i + 1] = r.offset[i] + static_cast<std::int32_t>(topo.vertex_faces(i).size());
+    r.opposite.resize(static_cast<std::size_t>(r.offset[nv]));
+    detail::parallel_range(nv, [&](std::size_t i) {
+      const auto fs = topo.vertex_faces(i);
+      const auto cs = topo.vertex_face_corners(i);
+      std::array<std::int32_t, 2>* o = r.opposite.data() + r.offset[i];
+      for (std::size_t j = 0; j < fs.size(); ++j) {
+        const Face& f = faces[static_cast<std::size_t>(fs[j])];
+        const int c = cs[j];
+        o[j] = {f[(c + 1) % 3], f[(c + 2) % 3]};
+      }
+    });
+  });
+  return cache_->ring;
 }
 
 namespace {

@@ -116,8 +116,12 @@ void update_view_fields(ViewFields& fields, const Surface& surface, const Camera
       // line through p_i in direction t1, find the crossing with the
       // opposite edge of each incident face, and average the (at most two)
       // one-sided differences, measured in projected (screen) distance.
+      // The (i1, i2) corner pairs come from LinePrecompute's CSR ring when
+      // available (no face indirection); the arithmetic is the same either way.
       const Topology& topo = surface.topology();
       const auto& faces = surface.faces();
+      const LinePrecompute::CornerRing* ring = precompute ? &precompute->corner_ring() : nullptr;
+      const double* q1 = fields.q1.data();
       detail::parallel_range(nv, [&](std::size_t i) {
         double result = 0.0;
         const Vec3& t1w = fields.t1_world[i];
@@ -128,29 +132,39 @@ void update_view_fields(ViewFields& fields, const Surface& surface, const Camera
         const Vec3& p0 = pos[i];
         const Vec3 t2w = normals[i].cross(t1w);
         const double p0_t2 = p0.dot(t2w);
-        const double q0 = fields.q1[i];
+        const double q0 = q1[i];
         const double an = std::abs(fields.ndotv[i]);
-        const auto fs = topo.vertex_faces(i);
-        const auto cs = topo.vertex_face_corners(i);
         int n = 0;
-        for (std::size_t j = 0; j < fs.size(); ++j) {
-          const Face& f = faces[static_cast<std::size_t>(fs[j])];
-          const int c = cs[j];
-          const int i1 = f[(c + 1) % 3], i2 = f[(c + 2) % 3];
+        // Returns true when two one-sided differences have been averaged.
+        auto corner = [&](int i1, int i2) {
           const Vec3& p1 = pos[i1];
           const Vec3& p2 = pos[i2];
           const double p1_t2 = p1.dot(t2w), p2_t2 = p2.dot(t2w);
           const double w1 = (p2_t2 - p0_t2) / (p2_t2 - p1_t2);
-          if (!(w1 >= 0.0 && w1 < 1.0)) continue;
+          if (!(w1 >= 0.0 && w1 < 1.0)) return false;
           const double w2 = 1.0 - w1;
           const Vec3 p = w1 * p1 + w2 * p2;
-          const double q = w1 * fields.q1[i1] + w2 * fields.q1[i2];
+          const double q = w1 * q1[i1] + w2 * q1[i2];
           const double dist = (p - p0).dot(t1w) * an;
-          if (dist == 0.0) continue;
+          if (dist == 0.0) return false;
           result += (q - q0) / dist;
           if (++n == 2) {
             result *= 0.5;
-            break;
+            return true;
+          }
+          return false;
+        };
+        if (ring) {
+          const auto* o = ring->opposite.data();
+          for (std::int32_t j = ring->offset[i], e = ring->offset[i + 1]; j < e; ++j)
+            if (corner(o[j][0], o[j][1])) break;
+        } else {
+          const auto fs = topo.vertex_faces(i);
+          const auto cs = topo.vertex_face_corners(i);
+          for (std::size_t j = 0; j < fs.size(); ++j) {
+            const Face& f = faces[static_cast<std::size_t>(fs[j])];
+            const int c = cs[j];
+            if (corner(f[(c + 1) % 3], f[(c + 2) % 3])) break;
           }
         }
         fields.dt1q1[i] = std::isfinite(result) ? result : 0.0;

@@ -6,6 +6,7 @@
 // Laplacian of the normals ΔN (Zhang et al. 2009's shortcut: Δ(n·l) = ΔN·l).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -46,6 +47,15 @@ class LinePrecompute {
   const GradientOperator& gradient_operator() const;
   /// Cotan Laplacian of each normal component (1/mm²), per vertex.
   const std::vector<Vec3>& normal_laplacian() const;
+  /// Per vertex i, the two other vertices (i1, i2) of each incident face in
+  /// Topology::vertex_faces(i) order, corners in face order after i; CSR
+  /// (offset has vertex count + 1 entries). Used by the per-view D_t1 q1
+  /// finite differences so they skip the face indirection.
+  struct CornerRing {
+    std::vector<std::int32_t> offset;
+    std::vector<std::array<std::int32_t, 2>> opposite;
+  };
+  const CornerRing& corner_ring() const;
 
  private:
   struct Cache;
