@@ -140,7 +140,14 @@ void update_view_fields(ViewFields& fields, const Surface& surface, const Camera
           const Vec3& p1 = pos[i1];
           const Vec3& p2 = pos[i2];
           const double p1_t2 = p1.dot(t2w), p2_t2 = p2.dot(t2w);
-          const double w1 = (p2_t2 - p0_t2) / (p2_t2 - p1_t2);
+          const double num = p2_t2 - p0_t2, den = p2_t2 - p1_t2;
+          // Exact early rejections of w1 = num/den outside [0, 1) before the
+          // division: |num| >= |den| (also den == 0 or NaN) gives |w1| >= 1,
+          // and opposite signs give w1 < 0 unless the quotient underflows to
+          // -0 (only possible when |num| <= |den| 2^-900).
+          if (!(std::abs(num) < std::abs(den))) return false;
+          if ((num < 0.0) != (den < 0.0) && std::abs(num) > std::abs(den) * 0x1p-900) return false;
+          const double w1 = num / den;
           if (!(w1 >= 0.0 && w1 < 1.0)) return false;
           const double w2 = 1.0 - w1;
           const Vec3 p = w1 * p1 + w2 * p2;
