@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <optional>
@@ -26,6 +27,11 @@
 #include "fabrica/lines/extract.hpp"
 #include "fabrica/lines/visibility.hpp"
 #define FABRICA_HATCH_WITH_LINES 1
+#endif
+#if __has_include("fabrica/render/renderer.hpp")
+#include "fabrica/render/render_mesh.hpp"
+#include "fabrica/render/renderer.hpp"
+#define FABRICA_HATCH_WITH_RENDER 1
 #endif
 
 namespace fabrica::cli {
@@ -51,6 +57,8 @@ struct HatchArgs {
   double ridge_angle = 20.0;
   bool draw_ridges = false;
   double line_width = 1.5;
+  bool transparent = false;
+  std::string backend;
   int threads = 0;
   bool quiet = false;
 };
@@ -112,8 +120,9 @@ std::pair<int, int> parse_size(const std::string& text) {
 }
 
 #ifdef FABRICA_HATCH_WITH_LINES
-std::vector<hatching::SvgLayer> feature_line_layers(const Surface& surface, const Camera& camera,
-                                                    const std::string& list, double width) {
+/// The feature lines of --with-lines (chained, visibility not yet computed).
+LineSet feature_lines(const Surface& surface, const Camera& camera, const std::string& list,
+                      std::vector<LineFamily>& families) {
   LineOptions options;
   options.families.clear();
   std::istringstream in(list);
@@ -124,15 +133,23 @@ std::vector<hatching::SvgLayer> feature_line_layers(const Surface& surface, cons
     if (!family) throw InputError("--with-lines: unknown line family \"" + name + "\"");
     options.families.push_back(*family);
   }
+  families = options.families;
   if (options.families.empty()) return {};
   LineExtractor extractor(surface, options);
   const std::vector<SegmentSoup> soups = extractor.extract(camera);
   ChainOptions chain;
   chain.camera = camera;
-  LineSet lines = chain_segments(soups, chain);
+  return chain_segments(soups, chain);
+}
+
+std::vector<hatching::SvgLayer> feature_line_layers(const Surface& surface, const Camera& camera,
+                                                    const std::string& list, double width) {
+  std::vector<LineFamily> families;
+  LineSet lines = feature_lines(surface, camera, list, families);
+  if (families.empty()) return {};
   compute_visibility(lines, surface, camera);
   std::vector<hatching::SvgLayer> layers;
-  for (const LineFamily family : options.families) {
+  for (const LineFamily family : families) {
     hatching::SvgLayer layer;
     layer.name = std::string("lines-") + family_name(family);
     layer.width_px = width;
@@ -160,6 +177,75 @@ std::vector<hatching::SvgLayer> feature_line_layers(const Surface& surface, cons
 }
 #endif
 
+#ifdef FABRICA_HATCH_WITH_RENDER
+/// The PNG: the surface as white paper (flat, opaque, so it hides what is
+/// behind it), the strokes in black at the SVG's widths (image pixels), the
+/// ridges (red) and feature lines above them, through the renderer's
+/// line-quad pipeline. Returns the backend's name.
+std::string write_hatching_png(const HatchArgs& args, const Surface& surface, const Camera& camera,
+                               const hatching::StrokeSet& strokes) {
+  render::HeadlessOptions headless;
+  if (!args.backend.empty()) {
+    headless.backend = render::parse_backend(args.backend);
+    if (!headless.backend || *headless.backend == render::Backend::glfw)
+      throw InputError("--backend must be egl or osmesa (got \"" + args.backend + "\")");
+  }
+  render::Structure structure;
+  structure.name = "surface";
+  structure.style.shading = render::Shading::flat;
+  structure.style.color = {1.0f, 1.0f, 1.0f, 1.0f};
+  structure.style.opacity = 1.0;
+  structure.mesh = std::make_shared<render::RenderMesh>(render::make_render_mesh(surface, false));
+  auto plain = [](double width, render::Color color) {
+    render::LineStyle style;
+    style.color = color;
+    style.width = width;
+    style.contour_width_factor = 1.0;
+    style.taper = 0.0;  // the SVG's strokes are not tapered either
+    style.fade_by_strength = false;
+    return style;
+  };
+  render::PolylineLayer stroke_layer{"strokes", plain(args.stroke_width, {0, 0, 0, 1}), {}};
+  for (const hatching::Stroke& stroke : strokes.strokes) {
+    std::vector<Vec3> points;
+    for (const hatching::StrokeVertex& v : stroke.vertices) points.push_back(v.position);
+    stroke_layer.polylines.push_back(std::move(points));
+  }
+  structure.polyline_layers.push_back(std::move(stroke_layer));
+  if (args.draw_ridges) {
+    render::PolylineLayer ridges{"ridges", plain(args.stroke_width, {0.84f, 0.15f, 0.16f, 1}), {}};
+    for (const auto& r : strokes.ridges) ridges.polylines.push_back({r[0].position, r[1].position});
+    structure.polyline_layers.push_back(std::move(ridges));
+  }
+  structure.style.families.clear();
+  structure.style.lines = plain(args.line_width, {0, 0, 0, 1});
+#ifdef FABRICA_HATCH_WITH_LINES
+  if (!args.with_lines.empty())
+    structure.lines = feature_lines(surface, camera, args.with_lines, structure.style.families);
+#endif
+  render::Scene scene;
+  scene.structures.push_back(std::move(structure));
+
+  std::unique_ptr<render::GlContext> context;
+  try {
+    context = render::create_headless_context(headless);
+  } catch (const Error& e) {
+    if (e.kind() != ErrorKind::unavailable) throw;
+    throw Error(ErrorKind::unavailable, "-o " + args.output +
+                                            ": PNG output needs a headless OpenGL backend (EGL "
+                                            "or OSMesa) and none could be created (" +
+                                            e.what() + "); write .svg instead");
+  }
+  render::Renderer renderer(std::move(context));
+  render::RenderOptions options;
+  options.transparent_background = args.transparent;
+  options.scale_lines_with_image = false;  // widths in image pixels, as in the SVG
+  const render::Image image = renderer.render(scene, camera, options);
+  render::write_png(image, args.output);
+  return render::to_string(renderer.context().backend());
+}
+#endif
+
 int run_hatch(const HatchArgs& args) {
   std::unique_ptr<tbb::global_control> threads;
   if (args.threads > 0)
@@ -168,11 +254,15 @@ int run_hatch(const HatchArgs& args) {
   const std::string ext = lower(std::filesystem::path(args.output).extension().string());
   if (ext != ".svg" && ext != ".png")
     throw InputError("-o " + args.output + ": the output must end in .svg or .png");
+#ifndef FABRICA_HATCH_WITH_RENDER
   if (ext == ".png")
     throw Error(ErrorKind::unavailable,
                 "-o " + args.output +
-                    ": PNG output of hatching needs the renderer, and hatching is not wired to "
-                    "it yet; write .svg (and rasterise it, e.g. with rsvg-convert)");
+                    ": PNG output of hatching needs the renderer (fabrica::render), which this "
+                    "build lacks; write .svg (and rasterise it, e.g. with rsvg-convert)");
+#endif
+  if (!(args.line_width > 0.0) || !std::isfinite(args.line_width))
+    throw InputError("--line-width: must be a positive number of pixels");
 
   io::ReadOptions read_options;
   if (!args.space.empty()) {
@@ -220,28 +310,38 @@ int run_hatch(const HatchArgs& args) {
   options.ridges.min_angle_deg = args.ridge_angle;
   const hatching::StrokeSet strokes = hatching::hatch(surface, camera, options);
 
-  std::vector<hatching::SvgLayer> layers;
-  if (!args.with_lines.empty()) {
-#ifdef FABRICA_HATCH_WITH_LINES
-    layers = feature_line_layers(surface, camera, args.with_lines, args.line_width);
-#else
+#ifndef FABRICA_HATCH_WITH_LINES
+  if (!args.with_lines.empty())
     throw Error(ErrorKind::unavailable,
                 "--with-lines: this build has no line engine (fabrica::lines)");
 #endif
+  std::string via;
+  if (ext == ".png") {
+#ifdef FABRICA_HATCH_WITH_RENDER
+    via = write_hatching_png(args, surface, camera, strokes);
+#endif
+  } else {
+    std::vector<hatching::SvgLayer> layers;
+#ifdef FABRICA_HATCH_WITH_LINES
+    if (!args.with_lines.empty())
+      layers = feature_line_layers(surface, camera, args.with_lines, args.line_width);
+#endif
+    hatching::SvgStyle style;
+    style.stroke_width_px = args.stroke_width;
+    style.draw_ridges = args.draw_ridges;
+    style.background = !args.transparent;
+    hatching::write_hatching_svg(args.output, strokes, style, layers);
   }
-  hatching::SvgStyle style;
-  style.stroke_width_px = args.stroke_width;
-  style.draw_ridges = args.draw_ridges;
-  hatching::write_hatching_svg(args.output, strokes, style, layers);
   if (!args.quiet) {
     std::size_t vertices = 0;
     for (const auto& s : strokes.strokes) vertices += s.vertices.size();
     std::printf(
         "%s: %zu strokes (%zu vertices), %zu seeds tried of %zu candidates, %zu ridge segments; "
         "grid depth %d, "
-        "seed depth %d\n",
+        "seed depth %d%s%s\n",
         args.output.c_str(), strokes.strokes.size(), vertices, strokes.stats.seeds,
-        strokes.stats.candidates, strokes.ridges.size(), strokes.grid_depth, strokes.seed_depth);
+        strokes.stats.candidates, strokes.ridges.size(), strokes.grid_depth, strokes.seed_depth,
+        via.empty() ? "" : "; rendered via ", via.c_str());
   }
   if (!args.quiet) {
     std::printf("  stroke ends:");
@@ -260,9 +360,11 @@ void add_hatch_command(CLI::App& app, Action& action) {
   auto args = std::make_shared<HatchArgs>();
   CLI::App* cmd = app.add_subcommand("hatch",
                                      "Shading strokes (Singh & Schaefer 2010, \"Suggestive "
-                                     "Hatching\") as SVG; see docs/hatching.md");
+                                     "Hatching\") as SVG or PNG; see docs/hatching.md");
   cmd->add_option("mesh", args->mesh, "Input mesh (OBJ, PLY, STL, OFF, VTP, VTK)")->required();
-  cmd->add_option("-o,--output", args->output, "Output OUT.svg (PNG needs the renderer)")
+  cmd->add_option("-o,--output", args->output,
+                  "Output OUT.svg, or OUT.png (rendered headless; needs the renderer and EGL or "
+                  "OSMesa)")
       ->required();
   auto* camera =
       cmd->add_option("--camera", args->camera_file, "Camera JSON file (or a .seg file's header)");
@@ -302,6 +404,11 @@ void add_hatch_command(CLI::App& app, Action& action) {
       "--with-lines", args->with_lines,
       "Comma-separated feature-line families drawn over the strokes, e.g. contour,suggestive");
   cmd->add_option("--line-width", args->line_width, "Width of the feature lines in pixels");
+  cmd->add_flag("--transparent", args->transparent,
+                "Transparent background (PNG: alpha 0 off the surface; SVG: no white rectangle)");
+  cmd->add_option("--backend", args->backend,
+                  "PNG only: headless GL backend egl or osmesa (default: FABRICA_GL_BACKEND, "
+                  "else EGL then OSMesa)");
   cmd->add_option("--threads", args->threads,
                   "Worker threads (0 = all); the output does not depend on it");
   cmd->add_flag("-q,--quiet", args->quiet, "No summary line");

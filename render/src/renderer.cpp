@@ -89,6 +89,7 @@ std::vector<Tile> make_tiles(int width, int height, int inner) {
 struct LineBatch {
   std::size_t structure = 0;
   bool wide = false;
+  int layer = -1;                // index into Structure::polyline_layers; -1: the feature lines
   GLsizei first = 0, count = 0;  // in indices
 };
 
@@ -534,16 +535,21 @@ Image Renderer::render(const Scene& scene, const Camera& camera, const RenderOpt
     radius = new_r;
   }
   // Lines may leave the meshes' spheres (e.g. offset strokes): include them.
-  for (const auto& s : scene.structures)
+  auto enclose = [&](const Vec3& p) {
+    const double d = (p - center).norm();
+    if (d > radius) {
+      const double new_r = 0.5 * (d + radius);
+      center += (p - center) / d * (new_r - radius);
+      radius = new_r;
+    }
+  };
+  for (const auto& s : scene.structures) {
     for (const auto& pl : s.lines.polylines)
-      for (const auto& v : pl.vertices) {
-        const double d = (v.position - center).norm();
-        if (d > radius) {
-          const double new_r = 0.5 * (d + radius);
-          center += (v.position - center) / d * (new_r - radius);
-          radius = new_r;
-        }
-      }
+      for (const auto& v : pl.vertices) enclose(v.position);
+    for (const auto& layer : s.polyline_layers)
+      for (const auto& pl : layer.polylines)
+        for (const Vec3& p : pl) enclose(p);
+  }
   const Matrices M = camera_matrices(camera, center, radius);
 
   double tolerance = options.depth_tolerance;
@@ -572,52 +578,68 @@ Image Renderer::render(const Scene& scene, const Camera& camera, const RenderOpt
   }
   auto opaque = [&](const Structure& s) { return s.style.opacity >= 0.999; };
 
-  // Line geometry: one strip per polyline, batched per structure and width class.
+  // Line geometry: one strip per polyline, batched per structure and style:
+  // the polyline layers first (under), then the feature lines per width class.
   std::vector<float> line_vertices;
   std::vector<std::uint32_t> line_indices;
   std::vector<LineBatch> batches;
+  // Appends polyline `n` vertices long; position(i) and strength(i) give its vertices.
+  auto append_polyline = [&](std::size_t n, bool closed, auto position, auto strength) {
+    if (n < 2) return;
+    closed = closed && n >= 3;
+    std::vector<double> arc(n, 0.0);
+    for (std::size_t i = 1; i < n; ++i)
+      arc[i] = arc[i - 1] + (position(i) - position(i - 1)).norm();
+    const double total = closed ? 0.0 : arc.back();
+    const auto base = static_cast<std::uint32_t>(line_vertices.size() / 13);
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec3 p = position(i);
+      const Vec3 prev = i > 0 ? position(i - 1) : (closed ? position(n - 1) : p);
+      const Vec3 next = i + 1 < n ? position(i + 1) : (closed ? position(0) : p);
+      for (float side : {-1.0f, 1.0f}) {
+        for (const Vec3* v : {&p, &prev, &next})
+          for (int c = 0; c < 3; ++c) line_vertices.push_back(static_cast<float>((*v)[c]));
+        line_vertices.push_back(side);
+        line_vertices.push_back(strength(i));
+        line_vertices.push_back(static_cast<float>(arc[i]));
+        line_vertices.push_back(static_cast<float>(total));
+      }
+    }
+    auto segment = [&](std::uint32_t a, std::uint32_t b) {
+      const std::uint32_t a0 = base + 2 * a, a1 = a0 + 1, b0 = base + 2 * b, b1 = b0 + 1;
+      line_indices.insert(line_indices.end(), {a0, a1, b0, a1, b1, b0});
+    };
+    for (std::size_t i = 0; i + 1 < n; ++i)
+      segment(static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(i + 1));
+    if (closed) segment(static_cast<std::uint32_t>(n - 1), 0);
+  };
+  auto close_batch = [&](LineBatch batch) {
+    batch.count = static_cast<GLsizei>(line_indices.size()) - batch.first;
+    if (batch.count > 0) batches.push_back(batch);
+  };
   for (std::size_t si = 0; si < scene.structures.size(); ++si) {
     const Structure& s = scene.structures[si];
+    for (std::size_t li = 0; li < s.polyline_layers.size(); ++li) {
+      const LineBatch batch{si, false, static_cast<int>(li),
+                            static_cast<GLsizei>(line_indices.size()), 0};
+      for (const std::vector<Vec3>& pl : s.polyline_layers[li].polylines)
+        append_polyline(
+            pl.size(), false, [&](std::size_t i) { return pl[i]; },
+            [](std::size_t) { return 1.0f; });
+      close_batch(batch);
+    }
     for (int wide = 0; wide < 2; ++wide) {
-      LineBatch batch{si, wide == 1, static_cast<GLsizei>(line_indices.size()), 0};
+      const LineBatch batch{si, wide == 1, -1, static_cast<GLsizei>(line_indices.size()), 0};
       for (const Polyline& pl : s.lines.polylines) {
         if (is_wide_family(pl.family) != (wide == 1)) continue;
         if (!s.style.families.empty() && std::find(s.style.families.begin(), s.style.families.end(),
                                                    pl.family) == s.style.families.end())
           continue;
-        const std::size_t n = pl.vertices.size();
-        if (n < 2) continue;
-        const bool closed = pl.closed && n >= 3;
-        std::vector<double> arc(n, 0.0);
-        for (std::size_t i = 1; i < n; ++i)
-          arc[i] = arc[i - 1] + (pl.vertices[i].position - pl.vertices[i - 1].position).norm();
-        const double total = closed ? 0.0 : arc.back();
-        const auto base = static_cast<std::uint32_t>(line_vertices.size() / 13);
-        for (std::size_t i = 0; i < n; ++i) {
-          const Vec3& p = pl.vertices[i].position;
-          const Vec3& prev =
-              i > 0 ? pl.vertices[i - 1].position : (closed ? pl.vertices[n - 1].position : p);
-          const Vec3& next =
-              i + 1 < n ? pl.vertices[i + 1].position : (closed ? pl.vertices[0].position : p);
-          for (float side : {-1.0f, 1.0f}) {
-            for (const Vec3* v : {&p, &prev, &next})
-              for (int c = 0; c < 3; ++c) line_vertices.push_back(static_cast<float>((*v)[c]));
-            line_vertices.push_back(side);
-            line_vertices.push_back(pl.vertices[i].strength);
-            line_vertices.push_back(static_cast<float>(arc[i]));
-            line_vertices.push_back(static_cast<float>(total));
-          }
-        }
-        auto segment = [&](std::uint32_t a, std::uint32_t b) {
-          const std::uint32_t a0 = base + 2 * a, a1 = a0 + 1, b0 = base + 2 * b, b1 = b0 + 1;
-          line_indices.insert(line_indices.end(), {a0, a1, b0, a1, b1, b0});
-        };
-        for (std::size_t i = 0; i + 1 < n; ++i)
-          segment(static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(i + 1));
-        if (closed) segment(static_cast<std::uint32_t>(n - 1), 0);
+        append_polyline(
+            pl.vertices.size(), pl.closed, [&](std::size_t i) { return pl.vertices[i].position; },
+            [&](std::size_t i) { return pl.vertices[i].strength; });
       }
-      batch.count = static_cast<GLsizei>(line_indices.size()) - batch.first;
-      if (batch.count > 0) batches.push_back(batch);
+      close_batch(batch);
     }
   }
   bool lines_need_depth_b = false;
@@ -767,7 +789,9 @@ Image Renderer::render(const Scene& scene, const Camera& camera, const RenderOpt
       g.BindVertexArray(I.line_vao);
       for (const auto& b : batches) {
         const Structure& s = scene.structures[b.structure];
-        const LineStyle& ls = s.style.lines;
+        const LineStyle& ls = b.layer < 0
+                                  ? s.style.lines
+                                  : s.polyline_layers[static_cast<std::size_t>(b.layer)].style;
         g.BindTexture(GL_TEXTURE_2D, opaque(s) ? I.depth_a : I.depth_b);
         const double w = ls.width * (b.wide ? ls.contour_width_factor : 1.0) * line_scale;
         p.set("u_width", static_cast<float>(w));

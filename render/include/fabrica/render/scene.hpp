@@ -60,12 +60,25 @@ struct StructureStyle {
 /// pale, opacity 0.25, contours only at half opacity and thinner.
 StructureStyle default_style(Role role);
 
+/// Polylines that are not feature lines (e.g. hatching strokes), drawn with
+/// their own style by the same line-quad pipeline as Structure::lines and
+/// hidden-line tested the same way. Open polylines of points on the surface,
+/// in the mesh's coordinates (mm); every vertex has strength 1.
+/// StructureStyle::families does not filter them.
+struct PolylineLayer {
+  std::string name;
+  LineStyle style;
+  std::vector<std::vector<Vec3>> polylines;
+};
+
 struct Structure {
   std::string name;
   Role role = Role::focus;
   StructureStyle style;
   std::shared_ptr<const RenderMesh> mesh;
   LineSet lines;  ///< already extracted (fabrica::lines), in the mesh's coordinates
+  /// Drawn before (under) `lines`, in order.
+  std::vector<PolylineLayer> polyline_layers;
 };
 
 struct Scene {
