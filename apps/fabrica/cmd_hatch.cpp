@@ -178,18 +178,24 @@ std::vector<hatching::SvgLayer> feature_line_layers(const Surface& surface, cons
 #endif
 
 #ifdef FABRICA_HATCH_WITH_RENDER
+/// --backend egl|osmesa (empty: FABRICA_GL_BACKEND, else automatic).
+render::HeadlessOptions headless_options(const std::string& backend) {
+  render::HeadlessOptions headless;
+  if (!backend.empty()) {
+    headless.backend = render::parse_backend(backend);
+    if (!headless.backend || *headless.backend == render::Backend::glfw)
+      throw InputError("--backend must be egl or osmesa (got \"" + backend + "\")");
+  }
+  return headless;
+}
+
 /// The PNG: the surface as white paper (flat, opaque, so it hides what is
 /// behind it), the strokes in black at the SVG's widths (image pixels), the
 /// ridges (red) and feature lines above them, through the renderer's
 /// line-quad pipeline. Returns the backend's name.
 std::string write_hatching_png(const HatchArgs& args, const Surface& surface, const Camera& camera,
                                const hatching::StrokeSet& strokes) {
-  render::HeadlessOptions headless;
-  if (!args.backend.empty()) {
-    headless.backend = render::parse_backend(args.backend);
-    if (!headless.backend || *headless.backend == render::Backend::glfw)
-      throw InputError("--backend must be egl or osmesa (got \"" + args.backend + "\")");
-  }
+  const render::HeadlessOptions headless = headless_options(args.backend);
   render::Structure structure;
   structure.name = "surface";
   structure.style.shading = render::Shading::flat;
@@ -260,6 +266,8 @@ int run_hatch(const HatchArgs& args) {
                 "-o " + args.output +
                     ": PNG output of hatching needs the renderer (fabrica::render), which this "
                     "build lacks; write .svg (and rasterise it, e.g. with rsvg-convert)");
+#else
+  if (ext == ".png") headless_options(args.backend);  // a bad --backend fails before the work
 #endif
   if (!(args.line_width > 0.0) || !std::isfinite(args.line_width))
     throw InputError("--line-width: must be a positive number of pixels");
