@@ -1,3 +1,6 @@
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 
 #include "fabrica/core/error.hpp"
@@ -50,45 +53,52 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
   update_view_fields(fields_, *surface_, camera, req, precompute_.get());
 
   const double fs = feature_size_;
-  std::vector<SegmentSoup> out;
-  out.reserve(options_.families.size());
-  for (LineFamily f : options_.families) {
+  // The families are independent given the fields: run them concurrently
+  // (each is itself a deterministic parallel loop), one output slot each,
+  // so small families and the tails of large ones share the threads.
+  std::vector<SegmentSoup> out(options_.families.size());
+  auto run = [&](std::size_t k) {
+    const LineFamily f = options_.families[k];
     switch (f) {
       case LineFamily::contour:
-        out.push_back(extract_contours(*surface_, fields_, options_.contour));
+        out[k] = extract_contours(*surface_, fields_, options_.contour);
         break;
       case LineFamily::boundary:
-        out.push_back(extract_boundaries(*surface_));
+        out[k] = extract_boundaries(*surface_);
         break;
       case LineFamily::crease:
-        out.push_back(extract_creases(*surface_, options_.crease));
+        out[k] = extract_creases(*surface_, options_.crease);
         break;
       case LineFamily::suggestive:
-        out.push_back(extract_suggestive_contours(*surface_, fields_, fs, options_.suggestive));
+        out[k] = extract_suggestive_contours(*surface_, fields_, fs, options_.suggestive);
         break;
       case LineFamily::highlight:
-        out.push_back(extract_suggestive_highlights(*surface_, fields_, fs, options_.highlight));
+        out[k] = extract_suggestive_highlights(*surface_, fields_, fs, options_.highlight);
         break;
       case LineFamily::ridge:
-        out.push_back(extract_ridges(*precompute_, fields_, fs, options_.ridge));
+        out[k] = extract_ridges(*precompute_, fields_, fs, options_.ridge);
         break;
       case LineFamily::valley:
-        out.push_back(extract_valleys(*precompute_, fields_, fs, options_.valley));
+        out[k] = extract_valleys(*precompute_, fields_, fs, options_.valley);
         break;
       case LineFamily::apparent:
-        out.push_back(extract_apparent_ridges(*surface_, fields_, fs, options_.apparent));
+        out[k] = extract_apparent_ridges(*surface_, fields_, fs, options_.apparent);
         break;
       case LineFamily::pel:
-        out.push_back(extract_pels(*surface_, fields_, fs, options_.pel));
+        out[k] = extract_pels(*surface_, fields_, fs, options_.pel);
         break;
       case LineFamily::laplacian:
-        out.push_back(extract_laplacian_lines(*surface_, fields_, fs, options_.laplacian));
+        out[k] = extract_laplacian_lines(*surface_, fields_, fs, options_.laplacian);
         break;
       case LineFamily::demarcating:
-        out.push_back(extract_demarcating_curves(*precompute_, fields_, fs, options_.demarcating));
+        out[k] = extract_demarcating_curves(*precompute_, fields_, fs, options_.demarcating);
         break;
     }
-  }
+  };
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.size(), 1),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t k = r.begin(); k != r.end(); ++k) run(k);
+                    });
   return out;
 }
 
