@@ -95,7 +95,8 @@ int run_render(const RenderArgs& a) {
     }
     if (!a.style.empty()) {
       const auto sh = render::parse_shading(a.style);
-      if (!sh) throw InputError("--style must be lambert, toon, flat or none (got \"" + a.style + "\")");
+      if (!sh)
+        throw InputError("--style must be lambert, toon, flat or none (got \"" + a.style + "\")");
       s.style.shading = *sh;
     }
     if (!a.lines.empty())
@@ -217,7 +218,8 @@ int run_render(const RenderArgs& a) {
       if (l.structure.style.opacity >= 0.999) append(opaque, l.surface->mesh());
     }
     const DepthBuffer depth_all = render_depth(all, camera);
-    const DepthBuffer depth_opaque = opaque.faces.empty() ? depth_all : render_depth(opaque, camera);
+    const DepthBuffer depth_opaque =
+        opaque.faces.empty() ? depth_all : render_depth(opaque, camera);
     LineSet merged;
     for (auto& l : loaded) {
       LineSet ls = l.structure.lines;
@@ -226,7 +228,8 @@ int run_render(const RenderArgs& a) {
       merged.polylines.insert(merged.polylines.end(), ls.polylines.begin(), ls.polylines.end());
     }
     fabrica::LineStyle style;
-    if (!a.hidden.empty() && lower(a.hidden) == "dashed") style.hidden = fabrica::HiddenLines::dashed;
+    if (!a.hidden.empty() && lower(a.hidden) == "dashed")
+      style.hidden = fabrica::HiddenLines::dashed;
     write_svg(a.svg, merged, camera, style);
   }
   if (!a.save_scene.empty()) {
@@ -271,12 +274,14 @@ void add_render_command(CLI::App& app, Action& action) {
   cmd->add_flag("--sign-free", args->sign_free, "Hybrid: store t1 as a double angle");
   cmd->add_flag("--float-target", args->float_target, "Hybrid: 32-bit float render target");
   cmd->add_option("--context", args->context, "Context mesh (repeatable): ghosted, silhouettes");
-  cmd->add_option("--context-opacity", args->context_opacity, "Opacity of context structures (0.25)");
+  cmd->add_option("--context-opacity", args->context_opacity,
+                  "Opacity of context structures (0.25)");
   cmd->add_option("--line-width", args->line_width, "Focus line width in pixels at 1024 px (2)");
   cmd->add_option("--hidden", args->hidden, "Hidden lines: omit (default), dashed, show");
   cmd->add_flag("--transparent", args->transparent, "Transparent background");
-  cmd->add_option("--backend", args->backend, "Headless GL backend: egl or osmesa (default: egl, "
-                                              "then osmesa; or FABRICA_GL_BACKEND)");
+  cmd->add_option("--backend", args->backend,
+                  "Headless GL backend: egl or osmesa (default: egl, "
+                  "then osmesa; or FABRICA_GL_BACKEND)");
   cmd->add_option("--svg", args->svg, "Also write the object-space lines as vector SVG");
   cmd->add_option("--space", args->space, "Coordinate space of untagged meshes: lps or ras");
   cmd->add_option("--save-scene", args->save_scene, "Write the scene (with its camera) as JSON");
