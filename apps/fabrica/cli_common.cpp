@@ -27,6 +27,13 @@ std::pair<int, int> parse_size(const std::string& text, int max_pixels, const st
   return {w, h};
 }
 
+Space parse_space(const std::string& text, const std::string& option) {
+  const std::string s = lower(text);
+  if (s == "lps") return Space::lps;
+  if (s == "ras") return Space::ras;
+  throw InputError(option + ": use lps or ras (got \"" + text + "\")");
+}
+
 std::vector<LineFamily> parse_family_list(const std::string& text, const std::string& option,
                                           const std::vector<LineFamily>& default_set,
                                           bool allow_none) {

@@ -6,6 +6,7 @@
 #include <utility>
 #include <vector>
 
+#include "fabrica/core/mesh.hpp"
 #include "fabrica/lines/line_set.hpp"
 
 namespace fabrica::cli {
@@ -17,6 +18,9 @@ std::string lower(std::string s);
 /// InputError naming `option` otherwise.
 std::pair<int, int> parse_size(const std::string& text, int max_pixels = 16384,
                                const std::string& option = "--size");
+
+/// "lps" or "ras" (any case) for --space; throws InputError otherwise.
+Space parse_space(const std::string& text, const std::string& option = "--space");
 
 /// A comma-separated list of line family names (docs/lines/), or a keyword:
 /// "default" (= default_set), "reference"/"rtsc" (the families of the rtsc

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "cli_common.hpp"
 #include "commands.hpp"
 #include "fabrica/core/camera.hpp"
 #include "fabrica/core/error.hpp"
@@ -63,12 +64,6 @@ struct HatchArgs {
   bool quiet = false;
 };
 
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return s;
-}
-
 Vec3 parse_vec3(const std::string& text, const std::string& what) {
   Vec3 v;
   char comma1 = 0, comma2 = 0;
@@ -108,15 +103,6 @@ hatching::Light parse_light(const std::string& text, const Camera& camera) {
   if (light.kind == hatching::LightKind::direction && !(light.vector.norm() > 0.0))
     throw InputError("--light: the direction must not be zero");
   return light;
-}
-
-std::pair<int, int> parse_size(const std::string& text) {
-  int w = 0, h = 0;
-  char x = 0;
-  std::istringstream in(lower(text));
-  if (!(in >> w >> x >> h) || x != 'x' || w <= 0 || h <= 0 || w > 16384 || h > 16384)
-    throw InputError("--size: expected WxH with 1..16384 pixels each (got \"" + text + "\")");
-  return {w, h};
 }
 
 #ifdef FABRICA_HATCH_WITH_LINES
@@ -273,15 +259,7 @@ int run_hatch(const HatchArgs& args) {
     throw InputError("--line-width: must be a positive number of pixels");
 
   io::ReadOptions read_options;
-  if (!args.space.empty()) {
-    const std::string s = lower(args.space);
-    if (s == "lps")
-      read_options.space = Space::lps;
-    else if (s == "ras")
-      read_options.space = Space::ras;
-    else
-      throw InputError("--space: use lps or ras (got \"" + args.space + "\")");
-  }
+  if (!args.space.empty()) read_options.space = parse_space(args.space);
   io::LoadedMesh loaded = io::read_mesh(args.mesh, read_options);
   const Space space = loaded.mesh.space;
 

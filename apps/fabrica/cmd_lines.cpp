@@ -91,15 +91,7 @@ int run_lines(const LinesArgs& a) {
     throw InputError("--feature-size must be a positive length in mesh units");
 
   io::ReadOptions ro;
-  if (!a.space.empty()) {
-    const std::string s = lower(a.space);
-    if (s == "lps")
-      ro.space = Space::lps;
-    else if (s == "ras")
-      ro.space = Space::ras;
-    else
-      throw InputError("--space must be lps or ras");
-  }
+  if (!a.space.empty()) ro.space = parse_space(a.space);
   auto loaded = io::read_mesh(a.mesh, ro);
   TriangleMesh mesh = std::move(loaded.mesh);
   // Mesh preparation the lines need (on by default, reported): STL welding

@@ -82,11 +82,7 @@ int run_render(const RenderArgs& a) {
     spec.structures.push_back(s);
   }
   std::optional<Space> space_override;
-  if (!a.space.empty()) {
-    const std::string s = lower(a.space);
-    if (s != "lps" && s != "ras") throw InputError("--space must be lps or ras");
-    space_override = s == "lps" ? Space::lps : Space::ras;
-  }
+  if (!a.space.empty()) space_override = parse_space(a.space);
   for (auto& s : spec.structures) {
     if (space_override) s.space = space_override;
     if (s.role != render::Role::focus) {
