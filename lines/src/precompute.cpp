@@ -218,25 +218,6 @@ const GradientOperator& LinePrecompute::gradient_operator() const {
   return cache_->gradient;
 }
 
-void GradientOperator::apply(const std::vector<double>& f, std::vector<Vec3>& out) const {
-  const std::size_t nv = offset.empty() ? 0 : offset.size() - 1;
-  out.resize(nv);
-  detail::parallel_range(
-      nv,
-      [&](std::size_t i) {
-        double x = 0.0, y = 0.0, z = 0.0;
-        for (auto k = static_cast<std::size_t>(offset[i]);
-             k < static_cast<std::size_t>(offset[i + 1]); ++k) {
-          const double v = f[static_cast<std::size_t>(column[k])];
-          x += coeff[3 * k] * v;
-          y += coeff[3 * k + 1] * v;
-          z += coeff[3 * k + 2] * v;
-        }
-        out[i] = Vec3(x, y, z);
-      },
-      4096);
-}
-
 const std::vector<Vec3>& LinePrecompute::normal_laplacian() const {
   std::call_once(cache_->laplacian_once, [&] {
     // (ΔN)_i = 1/A_i Σ_j w_ij (n_j - n_i), w_ij = (cot α + cot β)/2 (§1, §7).

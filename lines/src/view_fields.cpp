@@ -5,18 +5,11 @@
 #include "fabrica/core/error.hpp"
 #include "fabrica/lines/precompute.hpp"
 #include "parallel.hpp"
+#include "view_fields_light.hpp"
 
 namespace fabrica {
 
 namespace {
-
-template <class T>
-void resize_or_clear(std::vector<T>& v, bool on, std::size_t n) {
-  if (on)
-    v.resize(n);
-  else
-    v.clear();
-}
 
 // Largest eigenvalue of QᵀQ and its eigenvector, Q = S P⁻¹ in principal
 // coordinates (Judd et al. 2007; ALGORITHMS.md §6.1). u2, uv, w2 are the
@@ -51,13 +44,13 @@ void update_view_fields(ViewFields& fields, const Surface& surface, const Camera
   const std::size_t nv = surface.vertex_count();
   fields.camera = camera;
   const bool radial = request.radial || request.sc_test || request.apparent;
-  resize_or_clear(fields.ndotv, radial || request.light || request.pel, nv);
-  resize_or_clear(fields.kr, radial, nv);
-  resize_or_clear(fields.sc_num, request.sc_test, nv);
-  resize_or_clear(fields.q1, request.apparent, nv);
-  resize_or_clear(fields.t1, request.apparent, nv);
-  resize_or_clear(fields.t1_world, request.apparent, nv);
-  resize_or_clear(fields.dt1q1, request.apparent, nv);
+  detail::resize_or_clear(fields.ndotv, radial || request.light || request.pel, nv);
+  detail::resize_or_clear(fields.kr, radial, nv);
+  detail::resize_or_clear(fields.sc_num, request.sc_test, nv);
+  detail::resize_or_clear(fields.q1, request.apparent, nv);
+  detail::resize_or_clear(fields.t1, request.apparent, nv);
+  detail::resize_or_clear(fields.t1_world, request.apparent, nv);
+  detail::resize_or_clear(fields.dt1q1, request.apparent, nv);
 
   const auto& pos = surface.positions();
   const auto& normals = surface.vertex_normals();
@@ -179,48 +172,7 @@ void update_view_fields(ViewFields& fields, const Surface& surface, const Camera
     }
   }
 
-  // Illumination f = n·l and its derivatives (PELs, Laplacian lines).
-  const bool light = request.light || request.pel;
-  resize_or_clear(fields.light, light, nv);
-  resize_or_clear(fields.light_gradient, light, nv);
-  resize_or_clear(fields.light_laplacian, light, nv);
-  resize_or_clear(fields.pel_g, request.pel, nv);
-  resize_or_clear(fields.pel_h, request.pel, nv);
-  resize_or_clear(fields.pel_s, request.pel, nv);
-  if (light) {
-    if (!precompute)
-      throw Error(ErrorKind::internal, "view fields: light fields need a LinePrecompute");
-    const auto& lap_n = precompute->normal_laplacian();
-    const auto& grad = precompute->gradient_operator();
-    Vec3 fixed = Vec3::Zero();
-    if (request.light_direction) {
-      if (!(request.light_direction->norm() > 0.0) || !request.light_direction->allFinite())
-        throw InputError("light direction must be a non-zero finite vector");
-      fixed = request.light_direction->normalized();
-    }
-    const bool headlight = !request.light_direction.has_value();
-    detail::parallel_range(nv, [&](std::size_t i) {
-      const Vec3 l = headlight ? camera.view_vector(pos[i]) : fixed;
-      const double f = normals[i].dot(l);
-      fields.light[i] = f;
-      if (fields.ndotv.size() == nv && !radial)
-        fields.ndotv[i] = camera.view_vector(pos[i]).dot(normals[i]);
-      fields.light_laplacian[i] = lap_n[i].dot(l);
-    });
-    grad.apply(fields.light, fields.light_gradient);
-    if (request.pel) {
-      std::vector<Vec3> w(nv), gg(nv);
-      detail::parallel_range(nv, [&](std::size_t i) {
-        const double g = fields.light_gradient[i].norm();
-        fields.pel_g[i] = g;
-        w[i] = g > 0.0 ? Vec3(fields.light_gradient[i] / g) : Vec3::Zero();
-      });
-      grad.apply(fields.pel_g, gg);
-      detail::parallel_range(nv, [&](std::size_t i) { fields.pel_h[i] = gg[i].dot(w[i]); });
-      grad.apply(fields.pel_h, gg);
-      detail::parallel_range(nv, [&](std::size_t i) { fields.pel_s[i] = gg[i].dot(w[i]); });
-    }
-  }
+  detail::update_light_fields(fields, surface, camera, request, precompute, radial);
 }
 
 ViewFields compute_view_fields(const Surface& surface, const Camera& camera,

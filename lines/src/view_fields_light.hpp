@@ -1,0 +1,26 @@
+// Private to fabrica::lines: pieces of update_view_fields().
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "fabrica/lines/view_fields.hpp"
+
+namespace fabrica::detail {
+
+template <class T>
+void resize_or_clear(std::vector<T>& v, bool on, std::size_t n) {
+  if (on)
+    v.resize(n);
+  else
+    v.clear();
+}
+
+/// The illumination group (light, light_gradient, light_laplacian, pel_*):
+/// sized or cleared per `request`; `radial` says whether ndotv was already
+/// filled by the radial group.
+void update_light_fields(ViewFields& fields, const Surface& surface, const Camera& camera,
+                         const ViewFieldsRequest& request, const LinePrecompute* precompute,
+                         bool radial);
+
+}  // namespace fabrica::detail
