@@ -11,6 +11,7 @@ target_sources(fabrica_io PRIVATE
   ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_vtk.cpp
   ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_vtk_legacy.cpp
   ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_gifti.cpp
+  ${CMAKE_CURRENT_SOURCE_DIR}/src/inflate.cpp
   ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_mni.cpp
   ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_freesurfer.cpp
 )

@@ -1,7 +1,5 @@
 // Volume reading shared by all formats: file bytes, zlib/gzip inflation,
 // sample decoding into label maps or scalars, format dispatch, label tables.
-#include <zlib.h>
-
 #include <algorithm>
 #include <bit>
 #include <cctype>
@@ -15,6 +13,7 @@
 #include <type_traits>
 
 #include "fabrica/core/error.hpp"
+#include "inflate.hpp"
 #include "label_volume_internal.hpp"
 
 namespace fabrica::io {
@@ -113,57 +112,10 @@ std::string read_file_bytes(const std::filesystem::path& path, const std::string
 
 std::string inflate_bytes(std::string_view compressed, std::size_t expected,
                           const std::string& what) {
-  const bool until_end = expected == std::numeric_limits<std::size_t>::max();
-  std::string out;
-  if (!until_end) out.resize(expected);
-  std::size_t produced = 0;
-  std::size_t consumed = 0;
-  while (consumed < compressed.size() && (until_end || produced < expected)) {
-    z_stream zs{};
-    if (inflateInit2(&zs, 15 + 32) != Z_OK)  // 15 + 32: zlib or gzip, auto-detected
-      throw Error(ErrorKind::internal, "zlib: inflateInit2 failed");
-    zs.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(compressed.data() + consumed));
-    zs.avail_in = static_cast<uInt>(
-        std::min<std::size_t>(compressed.size() - consumed, std::numeric_limits<uInt>::max()));
-    int rc = Z_OK;
-    while (true) {
-      if (until_end && produced == out.size())
-        out.resize(std::max<std::size_t>(1 << 20, 2 * out.size()));
-      if (!until_end && produced == expected) break;
-      const std::size_t room =
-          std::min<std::size_t>(out.size() - produced, std::numeric_limits<uInt>::max());
-      zs.next_out = reinterpret_cast<Bytef*>(out.data() + produced);
-      zs.avail_out = static_cast<uInt>(room);
-      rc = inflate(&zs, Z_NO_FLUSH);
-      produced += room - zs.avail_out;
-      if (rc == Z_STREAM_END) break;
-      if (rc != Z_OK && rc != Z_BUF_ERROR) break;
-      if (rc == Z_BUF_ERROR && zs.avail_in == 0) break;  // input exhausted
-    }
-    const auto used =
-        static_cast<std::size_t>(zs.next_in - reinterpret_cast<const Bytef*>(compressed.data()));
-    const std::string message = zs.msg != nullptr ? std::string(zs.msg) : std::to_string(rc);
-    inflateEnd(&zs);
-    if (rc != Z_STREAM_END && rc != Z_OK && rc != Z_BUF_ERROR)
-      throw InputError(what + ": compressed data is corrupt (zlib: " + message + ")");
-    if (rc != Z_STREAM_END) {
-      if (!until_end && produced >= expected) break;
-      throw InputError(what + ": compressed data ends early (file truncated?): got " +
-                       std::to_string(produced) + " bytes" +
-                       (until_end ? std::string() : " of " + std::to_string(expected)));
-    }
-    consumed = used;
-    // Another gzip member may follow (skip trailing zero padding).
-    while (consumed < compressed.size() && compressed[consumed] == 0) ++consumed;
-  }
-  if (until_end) {
-    out.resize(produced);
-  } else if (produced < expected) {
-    throw InputError(what + ": compressed data holds " + std::to_string(produced) +
-                     " bytes but the header describes " + std::to_string(expected) +
-                     " (file truncated or header wrong)");
-  }
-  return out;
+  // Volume headers give the size of the samples; data after them is ignored.
+  return detail::inflate_zlib_or_gzip(
+      compressed, expected, detail::InflateSize::at_least,
+      [&](const std::string& problem) { throw InputError(what + ": " + problem); });
 }
 
 namespace {

@@ -9,7 +9,6 @@
 // CoordinateSystemTransformMatrix is recorded in the notes, never applied.
 // GIfTI surfaces from FreeSurfer, FSL, HCP and nilearn are in RAS (scanner,
 // tkr-RAS, MNI or Talairach millimetres): the mesh is labelled RAS.
-#include <zlib.h>
 #include <pugixml.hpp>
 
 #include <algorithm>
@@ -22,85 +21,16 @@
 #include <string>
 #include <vector>
 
+#include "inflate.hpp"
 #include "mesh_io_internal.hpp"
 
 namespace fabrica::io::detail {
 
-bool is_gzip(std::string_view data) {
-  return data.size() >= 2 && static_cast<unsigned char>(data[0]) == 0x1f &&
-         static_cast<unsigned char>(data[1]) == 0x8b;
-}
-
 std::string inflate_zlib_or_gzip(std::string_view compressed, std::size_t expected,
                                  const std::string& name, const std::string& what) {
-  const bool known_size = expected != std::numeric_limits<std::size_t>::max();
-  if (compressed.size() > std::numeric_limits<uInt>::max())
-    fail(name, what + ": compressed data larger than 4 GiB is not supported");
-  if (known_size && expected / 1100 > compressed.size() + 64)  // deflate expands at most ~1032:1
-    fail(name, what + ": " + std::to_string(compressed.size()) +
-                   " bytes of compressed data cannot hold the expected " +
-                   std::to_string(expected) + " bytes");
-  std::string out;
-  out.resize(known_size ? expected : std::max<std::size_t>(compressed.size() * 4, 1 << 16));
-  std::size_t produced = 0;
-  std::string_view rest = compressed;
-  for (;;) {
-    z_stream zs{};
-    if (inflateInit2(&zs, 15 + 32) != Z_OK)  // 15 + 32: zlib or gzip header, auto-detected
-      throw Error(ErrorKind::internal, "zlib: inflateInit2 failed");
-    struct End {
-      z_stream* stream;
-      ~End() { inflateEnd(stream); }
-    } end_on_exit{&zs};
-    zs.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(rest.data()));
-    zs.avail_in = static_cast<uInt>(rest.size());
-    int rc = Z_OK;
-    for (;;) {
-      if (produced == out.size()) {
-        if (known_size) {
-          // One more byte tells "exactly the expected size" from "too much".
-          char probe = 0;
-          zs.next_out = reinterpret_cast<Bytef*>(&probe);
-          zs.avail_out = 1;
-          rc = inflate(&zs, Z_NO_FLUSH);
-          if (zs.avail_out == 0)
-            fail(name, what + ": decompresses to more than the expected " +
-                           std::to_string(expected) + " bytes");
-          if (rc != Z_OK) break;
-          continue;
-        }
-        if (out.size() >= (std::size_t{1} << 32))
-          fail(name, what + ": decompresses to more than 4 GiB, more than fabrica reads");
-        out.resize(2 * out.size());
-      }
-      const std::size_t room =
-          std::min<std::size_t>(out.size() - produced, std::numeric_limits<uInt>::max());
-      zs.next_out = reinterpret_cast<Bytef*>(out.data() + produced);
-      zs.avail_out = static_cast<uInt>(room);
-      rc = inflate(&zs, Z_NO_FLUSH);
-      produced += room - zs.avail_out;
-      if (rc != Z_OK) break;  // end, error, or Z_BUF_ERROR: input exhausted
-    }
-    const std::string message = zs.msg != nullptr ? std::string(zs.msg) : std::to_string(rc);
-    const std::size_t left = zs.avail_in;
-    if (rc != Z_STREAM_END && rc != Z_OK && rc != Z_BUF_ERROR)
-      fail(name, what + ": corrupt compressed data (zlib: " + message + ")");
-    if (rc != Z_STREAM_END)
-      fail(name, what + ": compressed data ends early (truncated file?) after " +
-                     std::to_string(produced) + " bytes" +
-                     (known_size ? " of " + std::to_string(expected) : std::string()));
-    rest = rest.substr(rest.size() - left);
-    while (!rest.empty() && rest.front() == '\0') rest.remove_prefix(1);  // gzip padding
-    if (rest.empty()) break;
-    if (!is_gzip(rest))
-      fail(name, what + ": unexpected bytes after the end of the compressed data");
-    // Another gzip member follows (concatenated .gz files are one stream).
-  }
-  if (known_size && produced != expected)
-    fail(name, what + ": decompresses to " + std::to_string(produced) + " bytes, expected " +
-                   std::to_string(expected));
-  out.resize(produced);
-  return out;
+  return inflate_zlib_or_gzip(
+      compressed, expected, InflateSize::exact,
+      [&](const std::string& problem) { fail(name, what + ": " + problem); });
 }
 
 namespace {

@@ -224,8 +224,6 @@ bool looks_like_mni_obj(std::string_view data);
 bool has_freesurfer_magic(std::string_view data);
 /// Extensions of FreeSurfer surface names (lh.pial -> ".pial"), lower case.
 bool is_freesurfer_surface_extension(std::string_view lower_ext);
-/// gzip magic bytes 1F 8B.
-bool is_gzip(std::string_view data);
 /// Inflates zlib or gzip data (concatenated gzip members joined). With
 /// `expected` (not SIZE_MAX), the result must have exactly that size.
 /// InputError "<name>: <what>: ..." on corrupt or truncated data.
