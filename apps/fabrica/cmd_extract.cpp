@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "cli_common.hpp"
 #include "commands.hpp"
 #include "fabrica/core/atomic_file.hpp"
 #include "fabrica/core/error.hpp"
@@ -66,6 +67,7 @@ std::string dims_text(const io::VolumeGeometry& g) {
 }
 
 int run_extract(const ExtractCommandOptions& o) {
+  const Space space = parse_space(o.space);  // a bad value fails before any work
   io::LabelVolume volume = io::read_label_volume(o.volume);
   if (!o.names.empty()) {
     for (const io::LabelInfo& entry : io::read_label_names(o.names)) {
@@ -102,7 +104,6 @@ int run_extract(const ExtractCommandOptions& o) {
     throw OutputError("cannot create output folder '" + dir.string() +
                       "': " + (ec ? ec.message() : std::string("not a folder")));
 
-  const Space space = o.space == "ras" || o.space == "RAS" ? Space::ras : Space::lps;
   std::set<std::string> used;
   nlohmann::json manifest = nlohmann::json::array();
   std::size_t written = 0, skipped = 0, write_failures = 0;
@@ -196,8 +197,7 @@ void add_extract_command(CLI::App& app, Action& action) {
       ->capture_default_str();
   cmd->add_option("--names", o->names,
                   "label table naming labels: lines 'VALUE NAME [R G B]' (Slicer / ITK-SNAP)");
-  cmd->add_option("--space", o->space, "coordinates of the outputs: lps (default) or ras")
-      ->check(CLI::IsMember({"lps", "ras", "LPS", "RAS"}));
+  cmd->add_option("--space", o->space, "coordinates of the outputs: lps (default) or ras");
   cmd->callback([o, &action] { action = [o] { return run_extract(*o); }; });
 }
 

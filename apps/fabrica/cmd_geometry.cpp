@@ -10,6 +10,7 @@
 #include <ostream>
 #include <string>
 
+#include "cli_common.hpp"
 #include "commands.hpp"
 #include "fabrica/core/atomic_file.hpp"
 #include "fabrica/core/surface.hpp"
@@ -41,8 +42,7 @@ void append_number(std::string& out, double v) {
 int run_geometry(const GeometryOptions& o) {
   const auto start = std::chrono::steady_clock::now();
   io::ReadOptions read_options;
-  if (!o.space.empty())
-    read_options.space = (o.space == "ras" || o.space == "RAS") ? Space::ras : Space::lps;
+  if (!o.space.empty()) read_options.space = parse_space(o.space);
   io::LoadedMesh loaded = io::read_mesh(o.mesh, read_options);
 
   SurfaceOptions options;
@@ -111,7 +111,10 @@ void add_geometry_command(CLI::App& app, Action& action) {
       "Per-vertex normals, areas, principal curvatures and directions, mean and Gaussian "
       "curvature and curvature derivatives as CSV (docs/geometry.md)");
   auto o = std::make_shared<GeometryOptions>();
-  cmd->add_option("MESH", o->mesh, "mesh file: OBJ, PLY, STL, OFF, VTP, VTK, GIfTI (.gii, .gii.gz), MNI .obj, FreeSurfer surfaces (docs/formats.md)")->required();
+  cmd->add_option("MESH", o->mesh,
+                  "mesh file: OBJ, PLY, STL, OFF, VTP, VTK, GIfTI (.gii, .gii.gz), MNI .obj, "
+                  "FreeSurfer surfaces (docs/formats.md)")
+      ->required();
   cmd->add_option("-o,--output", o->output, "CSV file to write, one row per vertex in file order")
       ->required();
   cmd->add_option("--normals", o->normals,
@@ -123,8 +126,7 @@ void add_geometry_command(CLI::App& app, Action& action) {
       ->check(CLI::Range(0, 100));
   cmd->add_option("--space", o->space,
                   "coordinate space of the file, overriding its SPACE tag (default: tag, else "
-                  "LPS); only reported, coordinates are written as stored")
-      ->check(CLI::IsMember({"lps", "ras", "LPS", "RAS"}));
+                  "LPS); only reported, coordinates are written as stored");
   cmd->callback([o, &action] { action = [o] { return run_geometry(*o); }; });
 }
 

@@ -11,6 +11,7 @@
 #include <sstream>
 #include <string>
 
+#include "cli_common.hpp"
 #include "commands.hpp"
 #include "fabrica/core/mesh.hpp"
 #include "fabrica/io/mesh_io.hpp"
@@ -95,8 +96,7 @@ void print_validation(std::ostringstream& out, const io::ValidationReport& r, co
 
 int run_info(const InfoOptions& o) {
   io::ReadOptions read_options;
-  if (!o.space.empty())
-    read_options.space = (o.space == "ras" || o.space == "RAS") ? Space::ras : Space::lps;
+  if (!o.space.empty()) read_options.space = parse_space(o.space);
   io::LoadedMesh loaded = io::read_mesh(o.mesh, read_options);
   const TriangleMesh& mesh = loaded.mesh;
   const io::MeshFileInfo& info = loaded.info;
@@ -182,16 +182,19 @@ void add_info_command(CLI::App& app, Action& action) {
       "info",
       "Describe a mesh: format, counts, coordinate space, and defects (docs/validation.md)");
   auto o = std::make_shared<InfoOptions>();
-  cmd->add_option("MESH", o->mesh, "mesh file: OBJ, PLY, STL, OFF, VTP, VTK, GIfTI (.gii, .gii.gz), MNI .obj, FreeSurfer surfaces (docs/formats.md)")->required();
+  cmd->add_option("MESH", o->mesh,
+                  "mesh file: OBJ, PLY, STL, OFF, VTP, VTK, GIfTI (.gii, .gii.gz), MNI .obj, "
+                  "FreeSurfer surfaces (docs/formats.md)")
+      ->required();
   cmd->add_flag("--json", o->json, "print the report as JSON");
   cmd->add_flag("--repair", o->repair,
                 "repair a copy (weld, drop degenerate/duplicate faces, split non-manifold "
                 "vertices and edges, orient outward) and report what changed");
   cmd->add_flag("--self-intersections", o->self_intersections,
                 "also count intersecting face pairs (CGAL; slower)");
-  cmd->add_option("--space", o->space,
-                  "coordinate space of the file, overriding its SPACE tag (default: tag, else LPS)")
-      ->check(CLI::IsMember({"lps", "ras", "LPS", "RAS"}));
+  cmd->add_option(
+      "--space", o->space,
+      "coordinate space of the file, overriding its SPACE tag (default: tag, else LPS)");
   cmd->add_option("-o,--output", o->output,
                   "write the repaired mesh here (.obj .ply .off .stl); implies --repair");
   cmd->callback([o, &action] { action = [o] { return run_info(*o); }; });
