@@ -1,17 +1,122 @@
 #include "fabrica/lines/chain.hpp"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cstdint>
+#include <limits>
+
+#include "projector.hpp"
 
 namespace fabrica {
 
 namespace {
 
-std::uint64_t end_key(const LineSegment& s, int e, std::size_t index) {
-  const SegmentEnd& end = s.end[e];
-  if (end.kind == EndKind::interior || end.element < 0)
-    return (std::uint64_t{3} << 61) | (static_cast<std::uint64_t>(index) * 2 + e);
-  return (static_cast<std::uint64_t>(end.kind) << 61) | static_cast<std::uint64_t>(end.element);
+// Endpoints that can be joined: kind edge, vertex or centroid with an
+// element id >= 0. Interior ends and ends without an element never join.
+bool joinable(const SegmentEnd& end) {
+  return end.kind != EndKind::interior && end.element >= 0;
+}
+
+constexpr std::int32_t kEmpty = -1;
+constexpr std::int32_t kMany = std::numeric_limits<std::int32_t>::min();
+
+// partner[end] (end = 2 * segment + side) = the other end with the same key
+// when exactly two ends of different segments share it, else -1. Keys are
+// (kind, element); a flat table indexed by (kind offset + element) replaces a
+// sort of all keys. slot: kEmpty, the first end seen (>= 0), -2 - first end
+// when two were seen, kMany when three or more. The table is kept per thread
+// between calls (its size is bounded by the mesh's element counts) and only
+// the touched entries are reset, so a call costs O(segments), not O(mesh).
+std::vector<std::int32_t> pair_ends_flat(const std::vector<LineSegment>& segs,
+                                         const std::int64_t table_offset[3],
+                                         std::size_t table_size) {
+  const std::size_t ends = 2 * segs.size();
+  std::vector<std::int32_t> partner(ends, -1);
+  thread_local std::vector<std::int32_t> table;
+  if (table.size() < table_size) table.resize(table_size, kEmpty);
+  auto slot_of = [&](const SegmentEnd& end) -> std::int32_t& {
+    return table[static_cast<std::size_t>(table_offset[static_cast<int>(end.kind)] + end.element)];
+  };
+  for (std::size_t j = 0; j < ends; ++j) {
+    const SegmentEnd& end = segs[j / 2].end[j % 2];
+    if (!joinable(end)) continue;
+    std::int32_t& s = slot_of(end);
+    const auto jj = static_cast<std::int32_t>(j);
+    if (s == kEmpty) {
+      s = jj;
+    } else if (s >= 0) {
+      if (s / 2 != jj / 2) {  // two ends of one segment are never joined
+        partner[static_cast<std::size_t>(s)] = jj;
+        partner[j] = s;
+      }
+      s = -2 - s;
+    } else if (s != kMany) {  // a third end: a branch point, nothing joins here
+      const std::int32_t first = -2 - s;
+      const std::int32_t second = partner[static_cast<std::size_t>(first)];
+      if (second >= 0) {
+        partner[static_cast<std::size_t>(second)] = -1;
+        partner[static_cast<std::size_t>(first)] = -1;
+      }
+      s = kMany;
+    }
+  }
+  for (std::size_t j = 0; j < ends; ++j) {
+    const SegmentEnd& end = segs[j / 2].end[j % 2];
+    if (joinable(end)) slot_of(end) = kEmpty;
+  }
+  return partner;
+}
+
+// The same pairing by sorting the keys: used when element ids are too large
+// for a flat table (not produced by the extractors, but possible for a soup
+// built by hand).
+std::vector<std::int32_t> pair_ends_sorted(const std::vector<LineSegment>& segs) {
+  const std::size_t n = segs.size();
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> keys;
+  keys.reserve(2 * n);
+  for (std::size_t j = 0; j < 2 * n; ++j) {
+    const SegmentEnd& end = segs[j / 2].end[j % 2];
+    if (!joinable(end)) continue;
+    keys.push_back(
+        {(static_cast<std::uint64_t>(end.kind) << 32) | static_cast<std::uint64_t>(end.element),
+         j});
+  }
+  std::sort(keys.begin(), keys.end());
+  std::vector<std::int32_t> partner(2 * n, -1);
+  for (std::size_t a = 0; a < keys.size();) {
+    std::size_t b = a + 1;
+    while (b < keys.size() && keys[b].first == keys[a].first) ++b;
+    if (b - a == 2 && keys[a].second / 2 != keys[a + 1].second / 2) {
+      partner[keys[a].second] = static_cast<std::int32_t>(keys[a + 1].second);
+      partner[keys[a + 1].second] = static_cast<std::int32_t>(keys[a].second);
+    }
+    a = b;
+  }
+  return partner;
+}
+
+std::vector<std::int32_t> pair_ends(const std::vector<LineSegment>& segs) {
+  std::int64_t max_element[3] = {-1, -1, -1};
+  for (const auto& s : segs)
+    for (const auto& end : s.end)
+      if (joinable(end)) {
+        auto& m = max_element[static_cast<int>(end.kind)];
+        m = std::max(m, static_cast<std::int64_t>(end.element));
+      }
+  std::int64_t offset[3];
+  std::int64_t size = 0;
+  for (int k = 0; k < 3; ++k) {
+    offset[k] = size;
+    size += max_element[k] + 1;
+  }
+  // Mesh element ids are bounded by the mesh size; fall back to sorting
+  // when the table would be large in bytes (over 2^23 entries, 32 MB:
+  // meshes with millions of edges) or the end indices overflow 31 bits.
+  if (size > (std::int64_t{1} << 23) || segs.size() >= (std::size_t{1} << 29))
+    return pair_ends_sorted(segs);
+  return pair_ends_flat(segs, offset, static_cast<std::size_t>(size));
 }
 
 LineVertex to_vertex(const SegmentEnd& e) {
@@ -23,16 +128,23 @@ LineVertex to_vertex(const SegmentEnd& e) {
   return v;
 }
 
+// One chain as the segments it walks through and the side each is entered by.
+struct Step {
+  std::uint32_t segment;
+  std::uint8_t entry;
+};
+
 }  // namespace
 
 double projected_length(const Polyline& pl, const Camera& camera) {
   double sum = 0.0;
   const std::size_t n = pl.vertices.size();
   if (n < 2) return 0.0;
-  Vec2 prev = project(camera, pl.vertices[0].position).pixel;
+  const detail::Projector project(camera);
+  Vec2 prev = project(pl.vertices[0].position).pixel;
   const Vec2 first = prev;
   for (std::size_t i = 1; i < n; ++i) {
-    const Vec2 p = project(camera, pl.vertices[i].position).pixel;
+    const Vec2 p = project(pl.vertices[i].position).pixel;
     sum += (p - prev).norm();
     prev = p;
   }
@@ -45,80 +157,122 @@ std::vector<Polyline> chain_segments(const SegmentSoup& soup, const ChainOptions
   const std::size_t n = segs.size();
   std::vector<Polyline> out;
   if (n == 0) return out;
-  // Sort endpoint keys; partner[end] = the other end with the same key when
-  // exactly two ends share it.
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> keys(2 * n);
-  for (std::size_t i = 0; i < n; ++i)
-    for (int e = 0; e < 2; ++e)
-      keys[2 * i + e] = {end_key(segs[i], e, i), static_cast<std::uint32_t>(2 * i + e)};
-  std::sort(keys.begin(), keys.end());
-  std::vector<std::int64_t> partner(2 * n, -1);
-  for (std::size_t a = 0; a < keys.size();) {
-    std::size_t b = a + 1;
-    while (b < keys.size() && keys[b].first == keys[a].first) ++b;
-    if (b - a == 2 && keys[a].second / 2 != keys[a + 1].second / 2) {
-      partner[keys[a].second] = keys[a + 1].second;
-      partner[keys[a + 1].second] = keys[a].second;
-    }
-    a = b;
-  }
+  const std::vector<std::int32_t> partner = pair_ends(segs);
+
+  // 1. Walk every chain (serial, indices only). Chain c is steps[first[c] ..
+  //    first[c + 1]); closed[c] says whether it is a loop. Vertices of a
+  //    chain: the entry end of its first step, then the exit end of every
+  //    step (the last one dropped for a loop).
   std::vector<std::uint8_t> used(n, 0);
+  std::vector<Step> steps;
+  steps.reserve(n);
+  std::vector<std::uint32_t> first;
+  std::vector<std::uint8_t> closed;
   auto walk = [&](std::size_t start, int start_end) {
-    Polyline pl;
-    pl.family = soup.family;
+    first.push_back(static_cast<std::uint32_t>(steps.size()));
     std::size_t s = start;
     int e = start_end;
-    pl.vertices.push_back(to_vertex(segs[s].end[e]));
     while (true) {
       used[s] = 1;
-      pl.vertices.push_back(to_vertex(segs[s].end[1 - e]));
-      pl.edge_faces.push_back(segs[s].face);
-      const std::int64_t p = partner[2 * s + (1 - e)];
+      steps.push_back({static_cast<std::uint32_t>(s), static_cast<std::uint8_t>(e)});
+      const std::int32_t p = partner[2 * s + static_cast<std::size_t>(1 - e)];
       if (p < 0) break;
       const auto ns = static_cast<std::size_t>(p / 2);
       if (ns == start) {  // back at the start: a loop
-        pl.closed = true;
-        pl.vertices.pop_back();
-        break;
+        closed.push_back(1);
+        return;
       }
       if (used[ns]) break;
       s = ns;
       e = static_cast<int>(p % 2);
     }
-    return pl;
-  };
-  auto keep = [&](const Polyline& pl) {
-    if (pl.vertices.size() < 2) return false;
-    if (options.min_length > 0.0 && pl.length() < options.min_length) return false;
-    if (options.min_length_px > 0.0 && options.camera &&
-        projected_length(pl, *options.camera) < options.min_length_px)
-      return false;
-    return true;
+    closed.push_back(0);
   };
   // Open chains first: start at free ends.
   for (std::size_t i = 0; i < n; ++i) {
     if (used[i]) continue;
     for (int e = 0; e < 2; ++e)
-      if (!used[i] && partner[2 * i + e] < 0) {
-        Polyline pl = walk(i, e);
-        if (keep(pl)) out.push_back(std::move(pl));
-      }
+      if (!used[i] && partner[2 * i + static_cast<std::size_t>(e)] < 0) walk(i, e);
   }
   // What remains are loops.
-  for (std::size_t i = 0; i < n; ++i) {
-    if (used[i]) continue;
-    Polyline pl = walk(i, 0);
-    if (keep(pl)) out.push_back(std::move(pl));
-  }
+  for (std::size_t i = 0; i < n; ++i)
+    if (!used[i]) walk(i, 0);
+  const std::size_t chains = first.size();
+  first.push_back(static_cast<std::uint32_t>(steps.size()));
+
+  // 2. Filter and build the polylines (parallel over chains; each chain's
+  //    result depends only on itself), then keep them in chain order.
+  std::optional<detail::Projector> projector;
+  if (options.min_length_px > 0.0 && options.camera) projector.emplace(*options.camera);
+  std::vector<Polyline> built(chains);
+  std::vector<std::uint8_t> keep(chains, 0);
+  auto build = [&](std::size_t c) {
+    const Step* st = steps.data() + first[c];
+    const std::size_t m = first[c + 1] - first[c];
+    const bool loop = closed[c] != 0;
+    const std::size_t nv = loop ? m : m + 1;
+    if (nv < 2) return;
+    auto vertex_end = [&](std::size_t k) -> const SegmentEnd& {
+      if (k == 0) return segs[st[0].segment].end[st[0].entry];
+      return segs[st[k - 1].segment].end[1 - st[k - 1].entry];
+    };
+    if (options.min_length > 0.0) {
+      // Polyline::length(), same terms in the same order.
+      double len = 0.0;
+      for (std::size_t i = 0; i + 1 < nv; ++i)
+        len += (vertex_end(i + 1).position - vertex_end(i).position).norm();
+      if (loop && nv > 2) len += (vertex_end(0).position - vertex_end(nv - 1).position).norm();
+      if (len < options.min_length) return;
+    }
+    if (projector) {
+      // projected_length(), same terms in the same order.
+      double len = 0.0;
+      Vec2 prev = (*projector)(vertex_end(0).position).pixel;
+      const Vec2 start = prev;
+      for (std::size_t i = 1; i < nv; ++i) {
+        const Vec2 p = (*projector)(vertex_end(i).position).pixel;
+        len += (p - prev).norm();
+        prev = p;
+      }
+      if (loop) len += (start - prev).norm();
+      if (len < options.min_length_px) return;
+    }
+    Polyline& pl = built[c];
+    pl.family = soup.family;
+    pl.closed = loop;
+    pl.vertices.resize(nv);
+    for (std::size_t i = 0; i < nv; ++i) pl.vertices[i] = to_vertex(vertex_end(i));
+    pl.edge_faces.resize(m);
+    for (std::size_t i = 0; i < m; ++i) pl.edge_faces[i] = segs[st[i].segment].face;
+    keep[c] = 1;
+  };
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chains, 64),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t c = r.begin(); c != r.end(); ++c) build(c);
+                    });
+  std::size_t kept = 0;
+  for (std::size_t c = 0; c < chains; ++c) kept += keep[c];
+  out.reserve(kept);
+  for (std::size_t c = 0; c < chains; ++c)
+    if (keep[c]) out.push_back(std::move(built[c]));
   return out;
 }
 
 LineSet chain_segments(const std::vector<SegmentSoup>& soups, const ChainOptions& options) {
+  // Each soup is chained on its own (in parallel); the results are
+  // concatenated in soup order, so the output does not depend on threads.
+  std::vector<std::vector<Polyline>> parts(soups.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, soups.size(), 1),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i != r.end(); ++i)
+                        parts[i] = chain_segments(soups[i], options);
+                    });
   LineSet set;
-  for (const auto& soup : soups) {
-    auto pls = chain_segments(soup, options);
-    for (auto& p : pls) set.polylines.push_back(std::move(p));
-  }
+  std::size_t total = 0;
+  for (const auto& p : parts) total += p.size();
+  set.polylines.reserve(total);
+  for (auto& p : parts)
+    for (auto& pl : p) set.polylines.push_back(std::move(pl));
   return set;
 }
 
