@@ -156,6 +156,10 @@ void BM_ViewFields(benchmark::State& state, bool apparent, bool light) {
   req.sc_test = !light;
   req.apparent = apparent;
   req.light = req.pel = light;
+  if (light) {  // as LineExtractor asks for PELs + Laplacian lines (default thresholds)
+    req.light_threshold = f.extractor->options().pel.threshold / f.feature_size;
+    req.light_cull_backfaces = true;
+  }
   ViewFields fields;
   update_view_fields(fields, *f.surface, f.camera, req, &f.extractor->precompute());
   for (auto _ : state) {

@@ -5,6 +5,7 @@
 
 #include "fabrica/core/error.hpp"
 #include "fabrica/lines/extract.hpp"
+#include "view_fields_light.hpp"
 
 namespace fabrica {
 
@@ -50,6 +51,9 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
     throw InputError("PELs and Laplacian lines must use the same light in one extraction");
   req.light_direction =
       has(LineFamily::pel) ? options_.pel.light_direction : options_.laplacian.light_direction;
+  detail::set_light_support(req, has(LineFamily::pel) ? &options_.pel : nullptr,
+                            has(LineFamily::laplacian) ? &options_.laplacian : nullptr,
+                            feature_size_);
   update_view_fields(fields_, *surface_, camera, req, precompute_.get());
 
   const double fs = feature_size_;

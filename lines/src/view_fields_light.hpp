@@ -6,6 +6,11 @@
 
 #include "fabrica/lines/view_fields.hpp"
 
+namespace fabrica {
+struct PhoticOptions;
+struct LaplacianOptions;
+}  // namespace fabrica
+
 namespace fabrica::detail {
 
 template <class T>
@@ -15,6 +20,12 @@ void resize_or_clear(std::vector<T>& v, bool on, std::size_t n) {
   else
     v.clear();
 }
+
+/// Sets request.light_threshold and light_cull_backfaces so the sparse
+/// illumination fields serve the given families (nullptr: not extracted):
+/// the smaller threshold (1/mm), culling only if every family culls.
+void set_light_support(ViewFieldsRequest& request, const PhoticOptions* pel,
+                       const LaplacianOptions* laplacian, double feature_size);
 
 /// The illumination group (light, light_gradient, light_laplacian, pel_*):
 /// sized or cleared per `request`; `radial` says whether ndotv was already

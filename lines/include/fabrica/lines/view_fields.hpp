@@ -23,6 +23,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <vector>
 
@@ -40,10 +41,17 @@ struct ViewFieldsRequest {
   bool sc_test = true;   ///< sc_num (suggestive contours and highlights)
   bool apparent = true;  ///< q1, t1, t1_world, dt1q1
   bool light = false;    ///< light, light_gradient, light_laplacian (PELs, Laplacian lines)
-  bool pel = false;      ///< pel_h, pel_s (PELs): D_w|∇f| and D_w D_w|∇f|
+  bool pel = false;      ///< pel_h, pel_maximum (PELs): D_w|∇f| and -D_w D_w|∇f|
   /// Light direction (towards the light) for PELs / Laplacian lines;
   /// nullopt = headlight (v at each vertex).
   std::optional<Vec3> light_direction;
+  /// Where PELs and Laplacian lines can be kept (the smallest of their
+  /// thresholds, 1/mm, and whether both cull back faces): light_laplacian,
+  /// pel_h and pel_maximum are then only computed on the faces that can
+  /// carry a kept line and are zero elsewhere (see ViewFields). The
+  /// defaults compute them everywhere.
+  double light_threshold = -std::numeric_limits<double>::infinity();
+  bool light_cull_backfaces = false;
 };
 
 struct ViewFields {
@@ -54,7 +62,18 @@ struct ViewFields {
   std::vector<Vec3> t1_world;
   std::vector<double> light, light_laplacian;
   std::vector<Vec3> light_gradient;
-  std::vector<double> pel_g, pel_h, pel_s;  ///< |∇f|, D_w|∇f|, D_w D_w|∇f|
+  /// |∇f| (1/mm; with `light`), D_w|∇f| (1/mm²) and -D_w D_w|∇f| (1/mm³,
+  /// > 0 where |∇f| is a maximum along w = ∇f/|∇f|; with `pel`).
+  /// A face "can carry a line" when some corner has |∇f| > light_threshold
+  /// (less a relative 1e-9 margin) and, with light_cull_backfaces, some
+  /// corner has n·v > 0. light_laplacian and pel_h are exact at the corners
+  /// of such faces (pel_h also at their neighbours), pel_maximum at the
+  /// corners of such faces where pel_h changes sign; all three are 0 at
+  /// vertices that no such face needs. Extraction with a threshold >=
+  /// light_threshold (and culling if light_cull_backfaces) is then exact.
+  std::vector<double> light_gradient_norm, pel_h, pel_maximum;
+  double light_threshold = -std::numeric_limits<double>::infinity();  ///< as requested
+  bool light_cull_backfaces = false;                                   ///< as requested
 };
 
 /// Computes the requested fields for `camera` (validated first; InputError
