@@ -22,6 +22,7 @@
 #include "fabrica/lines/chain.hpp"
 #include "fabrica/lines/extract.hpp"
 #include "fabrica/lines/seg_io.hpp"
+#include "fabrica/lines/smooth.hpp"
 #include "fabrica/lines/visibility.hpp"
 #include "fabrica/lines/writers.hpp"
 
@@ -36,6 +37,7 @@ struct LinesArgs {
       laplacian_t, demarcating_t, crease_angle;
   double min_length_px = -1.0;
   double width = 1.2;
+  int smooth = 0;
   bool no_visibility = false, mesh_edge_contours = false, no_fade = false, no_taper = false;
   bool keep_normals_orientation = false, quiet = false;
 };
@@ -89,6 +91,7 @@ int run_lines(const LinesArgs& a) {
     check_threshold(*t, n);
   if (a.feature_size < 0.0 || !std::isfinite(a.feature_size))
     throw InputError("--feature-size must be a positive length in mesh units");
+  if (a.smooth < 0) throw InputError("--smooth must be >= 0 (iterations; 0 = off)");
 
   io::ReadOptions ro;
   if (!a.space.empty()) ro.space = parse_space(a.space);
@@ -150,6 +153,11 @@ int run_lines(const LinesArgs& a) {
   chain.camera = camera;
   chain.min_length_px = a.min_length_px >= 0.0 ? a.min_length_px : (ext == ".seg" ? 0.0 : 3.0);
   LineSet lines = chain_segments(soups, chain);
+  if (a.smooth > 0) {  // on the surface, before visibility tests the positions
+    LineSmoothingOptions so;
+    so.iterations = a.smooth;
+    smooth_lines(lines, surface, so);
+  }
   if (!a.no_visibility) compute_visibility(lines, surface, camera);
 
   std::size_t segments = 0;
@@ -185,6 +193,7 @@ int run_lines(const LinesArgs& a) {
   header["types"] = types;
   header["segments"] = counts;
   header["visibility"] = !a.no_visibility;
+  if (a.smooth > 0) header["smooth"] = a.smooth;
   header["source"] = "fabrica lines";
 
   LineStyle style;
@@ -256,6 +265,8 @@ void add_lines_command(CLI::App& app, Action& action) {
       ->check(CLI::IsMember({"omit", "dashed"}));
   cmd->add_option("--min-length", args->min_length_px,
                   "Drop chains shorter than this many pixels (default 3; 0 for .seg)");
+  cmd->add_option("--smooth", args->smooth,
+                  "Smooth lines on the surface with N iterations (default 0 = off; try 5)");
   cmd->add_option("--width", args->width, "Stroke width in pixels at 1024 px (default 1.2)");
   cmd->add_flag("--no-fade", args->no_fade, "Do not fade suggestive contours/highlights");
   cmd->add_flag("--no-taper", args->no_taper, "Do not taper line ends");

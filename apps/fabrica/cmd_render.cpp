@@ -23,6 +23,7 @@
 #include "fabrica/io/repair.hpp"
 #include "fabrica/lines/chain.hpp"
 #include "fabrica/lines/extract.hpp"
+#include "fabrica/lines/smooth.hpp"
 #include "fabrica/lines/visibility.hpp"
 #include "fabrica/lines/writers.hpp"
 #include "fabrica/render/renderer.hpp"
@@ -35,6 +36,7 @@ struct RenderArgs {
   std::string save_scene, save_camera;
   std::vector<std::string> context;
   std::optional<double> tau, lambda, threshold, line_width, context_opacity;
+  std::optional<int> smooth;
   bool hybrid = false, transparent = false, no_fade = false, per_fragment = false,
        sign_free = false, float_target = false, quiet = false;
 };
@@ -83,8 +85,10 @@ int run_render(const RenderArgs& a) {
   }
   std::optional<Space> space_override;
   if (!a.space.empty()) space_override = parse_space(a.space);
+  if (a.smooth && *a.smooth < 0) throw InputError("--smooth must be >= 0 (iterations; 0 = off)");
   for (auto& s : spec.structures) {
     if (space_override) s.space = space_override;
+    if (a.smooth) s.style.smooth = *a.smooth;
     if (s.role != render::Role::focus) {
       if (a.context_opacity) s.style.opacity = *a.context_opacity;
       continue;
@@ -176,6 +180,11 @@ int run_render(const RenderArgs& a) {
       chain.camera = camera;
       chain.min_length_px = 3.0;
       st.lines = chain_segments(extractor.extract(camera), chain);
+      if (st.style.smooth > 0) {
+        LineSmoothingOptions so;
+        so.iterations = st.style.smooth;
+        smooth_lines(st.lines, *l.surface, so);
+      }
     }
     st.style.families = families;
     scene.structures.push_back(st);
@@ -272,6 +281,8 @@ void add_render_command(CLI::App& app, Action& action) {
   cmd->add_option("--context", args->context, "Context mesh (repeatable): ghosted, silhouettes");
   cmd->add_option("--context-opacity", args->context_opacity,
                   "Opacity of context structures (0.25)");
+  cmd->add_option("--smooth", args->smooth,
+                  "Smooth every structure's lines on the surface, N iterations (0 = off)");
   cmd->add_option("--line-width", args->line_width, "Focus line width in pixels at 1024 px (2)");
   cmd->add_option("--hidden", args->hidden, "Hidden lines: omit (default), dashed, show");
   cmd->add_flag("--transparent", args->transparent, "Transparent background");

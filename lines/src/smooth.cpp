@@ -46,9 +46,32 @@ bool valid_anchor(const TriangleMesh& mesh, const SurfacePoint& p) {
 }
 
 /// A point strictly inside its face (a centroid join or a clip point): not
-/// movable by the core smoother, so it is kept fixed.
-bool inside_face(const TriangleMesh& mesh, const Topology& topology, const SurfacePoint& p) {
-  return !to_edge_point(mesh, topology, p) && !to_vertex(mesh, p);
+/// movable by the core smoother, so it is kept fixed. Same classification as
+/// to_edge_point / to_vertex (a coordinate within the tolerance of 0 is 0).
+bool inside_face(const SurfacePoint& p) {
+  return p.bary[0] > kBarycentricTolerance && p.bary[1] > kBarycentricTolerance &&
+         p.bary[2] > kBarycentricTolerance;
+}
+
+/// Whether face f holds p (every corner of p's face with nonzero weight is a
+/// corner of f). Precondition: valid_anchor(p), f in range.
+bool holds(const TriangleMesh& mesh, std::int32_t f, const SurfacePoint& p) {
+  if (f == p.face) return true;
+  const Face& F = mesh.faces[static_cast<std::size_t>(f)];
+  const Face& P = mesh.faces[static_cast<std::size_t>(p.face)];
+  for (int k = 0; k < 3; ++k)
+    if (std::abs(p.bary[k]) > kBarycentricTolerance && P[k] != F[0] && P[k] != F[1] && P[k] != F[2])
+      return false;
+  return true;
+}
+
+/// A face holding both points: a's or b's own face when it does (the usual
+/// case, cheap), otherwise common_face (lowest-numbered), or -1.
+std::int32_t shared_face(const TriangleMesh& mesh, const Topology& topology, const SurfacePoint& a,
+                         const SurfacePoint& b) {
+  if (holds(mesh, a.face, b)) return a.face;
+  if (holds(mesh, b.face, a)) return b.face;
+  return common_face(mesh, topology, a, b);
 }
 
 /// Attributes of an old run sampled by arc length: the old points in order
@@ -236,7 +259,7 @@ PolylineReport smooth_polyline(const TriangleMesh& mesh, const Topology& topolog
     }
   const std::size_t pairs = pl.closed ? n : n - 1;
   for (std::size_t i = 0; i < pairs; ++i)
-    if (common_face(mesh, topology, pl.vertices[i].anchor, pl.vertices[(i + 1) % n].anchor) < 0) {
+    if (shared_face(mesh, topology, pl.vertices[i].anchor, pl.vertices[(i + 1) % n].anchor) < 0) {
       report.outcome = Outcome::invalid;
       return report;
     }
@@ -244,7 +267,7 @@ PolylineReport smooth_polyline(const TriangleMesh& mesh, const Topology& topolog
   // Fixed points: points inside a face, and the ends of an open polyline.
   std::vector<std::size_t> fixed;
   for (std::size_t i = 0; i < n; ++i) {
-    const bool inside = inside_face(mesh, topology, pl.vertices[i].anchor);
+    const bool inside = inside_face(pl.vertices[i].anchor);
     report.fixed_points += inside ? 1 : 0;
     if (inside || (!pl.closed && (i == 0 || i + 1 == n))) fixed.push_back(i);
   }
@@ -277,13 +300,13 @@ PolylineReport smooth_polyline(const TriangleMesh& mesh, const Topology& topolog
     report.fixed_points = 0;
     return report;
   }
-  // The segments of the result, each in a common face (guaranteed by the
-  // core; checked so a broken polyline is never returned).
+  // The faces of the result's segments: segment i lies in out[i]'s face
+  // (guaranteed by the core; checked so a broken polyline is never returned).
   const std::size_t m = out.size();
   const std::size_t segments = pl.closed ? m : m - 1;
   std::vector<std::int32_t> edge_faces(segments, -1);
   for (std::size_t i = 0; i < segments; ++i) {
-    edge_faces[i] = common_face(mesh, topology, out[i].anchor, out[(i + 1) % m].anchor);
+    edge_faces[i] = shared_face(mesh, topology, out[i].anchor, out[(i + 1) % m].anchor);
     if (edge_faces[i] < 0) {
       report.outcome = Outcome::invalid;
       report.fixed_points = 0;

@@ -201,6 +201,7 @@ SceneSpec scene_spec_from_json(const nlohmann::json& j, const std::filesystem::p
         st.style.lines.hidden = *h;
       }
       if (s.contains("hybrid")) st.style.hybrid_apparent_ridges = s.at("hybrid").get<bool>();
+      if (s.contains("smooth")) st.style.smooth = static_cast<int>(number(s, "smooth", 0, 1000, w));
       spec.structures.push_back(std::move(st));
     }
   } catch (const nlohmann::json::exception& e) {
@@ -236,6 +237,7 @@ nlohmann::json scene_spec_to_json(const SceneSpec& spec) {
     o["fade"] = s.style.lines.fade_by_strength;
     o["hidden"] = to_string(s.style.lines.hidden);
     o["hybrid"] = s.style.hybrid_apparent_ridges;
+    if (s.style.smooth > 0) o["smooth"] = s.style.smooth;
     list.push_back(o);
   }
   j["structures"] = list;

@@ -1051,6 +1051,65 @@ TEST(Lines, SegCountsMatchItsHeaderAndItsHeaderIsACamera) {
   EXPECT_FALSE(j.at("polylines").empty());
 }
 
+TEST(Lines, SmoothWritesACompleteSvgAndShorterLinesOnTheSameCount) {
+  if (!has_command("lines")) GTEST_SKIP() << "no lines command in this build";
+  const fs::path dir = work_dir();
+  const fs::path svg = dir / "smooth.svg";
+  const Outcome r = run_fabrica({"lines", aneurysm().string(), "-o", svg.string(), "--smooth", "5",
+                                 "--types", "contour,suggestive,ridge,valley,apparent", "-q"});
+  ASSERT_EQ(r.code, 0) << describe(r);
+  const std::string data = read_text(svg);
+  EXPECT_EQ(data.rfind("<?xml", 0) == 0 || data.rfind("<svg", 0) == 0, true) << data.substr(0, 80);
+  const auto end = data.find_last_not_of(" \r\n\t");
+  ASSERT_NE(end, std::string::npos);
+  EXPECT_EQ(data.substr(end - 5, 6), "</svg>") << "SVG not complete";
+  EXPECT_NE(data.find("<path"), std::string::npos) << "no strokes in the SVG";
+  EXPECT_EQ(data.find("nan"), std::string::npos);
+
+  // JSON without visibility: the same polylines, each no longer, header says so.
+  auto lengths = [&](const std::string& smooth) {
+    const fs::path json = dir / ("s" + smooth + ".json");
+    const Outcome o = run_fabrica({"lines", aneurysm().string(), "-o", json.string(), "--smooth",
+                                   smooth, "--no-visibility", "-q"});
+    EXPECT_EQ(o.code, 0) << describe(o);
+    const auto j = nlohmann::json::parse(read_text(json));
+    EXPECT_EQ(j.contains("smooth"), smooth != "0");
+    std::vector<double> out;
+    for (const auto& pl : j.at("polylines")) {
+      double sum = 0.0;
+      const auto& v = pl.at("vertices");
+      const std::size_t n = v.size(), segs = pl.at("closed").get<bool>() ? n : n - 1;
+      for (std::size_t i = 0; i < segs; ++i) {
+        double d2 = 0.0;
+        for (int k = 0; k < 3; ++k) {
+          const double d =
+              v[(i + 1) % n].at("position")[k].get<double>() - v[i].at("position")[k].get<double>();
+          d2 += d * d;
+        }
+        sum += std::sqrt(d2);
+      }
+      out.push_back(sum);
+    }
+    return out;
+  };
+  const auto plain = lengths("0"), smoothed = lengths("5");
+  ASSERT_EQ(plain.size(), smoothed.size());
+  ASSERT_FALSE(plain.empty());
+  double a = 0.0, b = 0.0;
+  for (std::size_t i = 0; i < plain.size(); ++i) {
+    EXPECT_LE(smoothed[i], plain[i] * (1.0 + 1e-9)) << "polyline " << i;
+    a += plain[i];
+    b += smoothed[i];
+  }
+  EXPECT_LT(b, a);
+
+  const Outcome bad =
+      run_fabrica({"lines", aneurysm().string(), "-o", (dir / "x.svg").string(), "--smooth", "-2"});
+  EXPECT_EQ(bad.code, 2) << describe(bad);
+  EXPECT_NE(bad.err.find("--smooth"), std::string::npos) << describe(bad);
+  EXPECT_FALSE(fs::exists(dir / "x.svg"));
+}
+
 TEST(Pipeline, ExtractedSurfaceThroughEveryMeshCommand) {
   if (!has_command("extract")) GTEST_SKIP() << "no extract command in this build";
   const fs::path dir = work_dir();

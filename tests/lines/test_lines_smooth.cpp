@@ -55,6 +55,16 @@ SurfaceCurve to_curve(const Polyline& pl) {
   return c;
 }
 
+/// Whether face f holds p: p's corners with nonzero weight are corners of f.
+bool face_holds(const TriangleMesh& mesh, std::int32_t f, const SurfacePoint& p) {
+  if (f < 0 || static_cast<std::size_t>(f) >= mesh.face_count()) return false;
+  const Face& F = mesh.faces[static_cast<std::size_t>(f)];
+  const Face& P = mesh.faces[static_cast<std::size_t>(p.face)];
+  for (int k = 0; k < 3; ++k)
+    if (std::abs(p.bary[k]) > 1e-9 && std::find(F.begin(), F.end(), P[k]) == F.end()) return false;
+  return true;
+}
+
 /// Every point on the surface (anchor valid, position = anchor's position to
 /// 1e-9), consecutive points in a common face, edge_faces consistent.
 void expect_on_surface(const Surface& s, const LineSet& lines, const char* what) {
@@ -78,9 +88,15 @@ void expect_on_surface(const Surface& s, const LineSet& lines, const char* what)
     if (!pl.edge_faces.empty()) {
       ASSERT_EQ(pl.edge_faces.size(), segs);
     }
-    for (std::size_t i = 0; i < segs; ++i)
+    for (std::size_t i = 0; i < segs; ++i) {
       ASSERT_GE(common_face(mesh, topo, pl.vertices[i].anchor, pl.vertices[(i + 1) % n].anchor), 0)
           << what << " polyline " << p << " segment " << i;
+      if (!pl.edge_faces.empty()) {
+        for (const auto* v : {&pl.vertices[i], &pl.vertices[(i + 1) % n]})
+          ASSERT_TRUE(face_holds(mesh, pl.edge_faces[i], v->anchor))
+              << what << " polyline " << p << " segment " << i << " is not in its edge face";
+      }
+    }
     EXPECT_NO_THROW(validate_surface_curve(mesh, topo, to_curve(pl)));
   }
 }

@@ -54,6 +54,9 @@ struct StructureStyle {
   std::vector<LineFamily> families;
   LineStyle lines;
   bool hybrid_apparent_ridges = false;  ///< image-space apparent ridges (needs curvature)
+  /// Iterations of on-surface smoothing of the object-space lines
+  /// (fabrica/lines/smooth.hpp); 0 = off.
+  int smooth = 0;
 };
 
 /// Defaults: focus = Lambert, opaque, contours + apparent ridges; context =
@@ -114,7 +117,7 @@ std::optional<HiddenLines> parse_hidden_lines(std::string_view s);
 /// Keys (all optional except structures[].mesh): background [r,g,b(,a)],
 /// transparent, camera {...} (camera JSON), view "anterior"|..., structures:
 /// [{name, mesh, role, space, shading, color, opacity, ambient, toon_levels,
-/// lines: [families], line_color, line_width, taper, fade, hidden, hybrid}].
+/// lines: [families], line_color, line_width, taper, fade, hidden, hybrid, smooth}].
 /// Missing style keys take default_style(role). Relative mesh paths are
 /// resolved against `base_dir`. Throws InputError naming `what`.
 SceneSpec scene_spec_from_json(const nlohmann::json& j, const std::filesystem::path& base_dir,
