@@ -266,7 +266,7 @@ void add_lines_command(CLI::App& app, Action& action) {
   cmd->add_option("--min-length", args->min_length_px,
                   "Drop chains shorter than this many pixels (default 3; 0 for .seg)");
   cmd->add_option("--smooth", args->smooth,
-                  "Smooth lines on the surface with N iterations (default 0 = off; try 5)");
+                  "Smooth lines on the surface with N iterations (default 0 = off; try 3)");
   cmd->add_option("--width", args->width, "Stroke width in pixels at 1024 px (default 1.2)");
   cmd->add_flag("--no-fade", args->no_fade, "Do not fade suggestive contours/highlights");
   cmd->add_flag("--no-taper", args->no_taper, "Do not taper line ends");

@@ -55,9 +55,12 @@ std::vector<LineFamily> default_smoothed_families();
 
 struct LineSmoothingOptions {
   /// Sweeps of smooth_surface_curve per polyline (its `iterations`); 0 turns
-  /// smoothing off. A few (3–10) remove the zig-zag of noisy meshes; many
-  /// straighten a line towards a geodesic and shrink closed loops.
-  int iterations = 5;
+  /// smoothing off. One removes most of the zig-zag that zero crossings
+  /// pick up on noisy meshes (on igea, 88% of the total absolute geodesic
+  /// curvature; 3 iterations 94%); many straighten a line towards a
+  /// geodesic and shrink closed loops (about 0.7 h² κ_g per iteration, h the
+  /// edge length, κ_g the geodesic curvature).
+  int iterations = 3;
   /// Damping in (0,1]: fraction of the way to the straightened position per
   /// sweep (CurveSmoothingOptions::step).
   double step = 1.0;
