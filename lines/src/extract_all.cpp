@@ -41,7 +41,11 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
            options_.families.end();
   };
   ViewFieldsRequest req;
-  req.radial = true;
+  // n·v and K_r for contours; n·v for culling ridges, valleys, demarcating
+  // curves (suggestive contours, highlights and apparent ridges imply it;
+  // PELs and Laplacian lines get n·v with the illumination).
+  req.radial = has(LineFamily::contour) || has(LineFamily::ridge) || has(LineFamily::valley) ||
+               has(LineFamily::demarcating);
   req.sc_test = has(LineFamily::suggestive) || has(LineFamily::highlight);
   req.apparent = has(LineFamily::apparent);
   req.light = has(LineFamily::laplacian) || has(LineFamily::pel);
