@@ -48,6 +48,10 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
                has(LineFamily::demarcating);
   req.sc_test = has(LineFamily::suggestive) || has(LineFamily::highlight);
   req.apparent = has(LineFamily::apparent);
+  // t1 and D_t1 q1 only where an apparent ridge can be drawn (the same
+  // threshold expression as extract_apparent_ridges).
+  if (req.apparent)
+    req.apparent_cull_threshold = options_.apparent.threshold / (feature_size_ * feature_size_);
   req.light = has(LineFamily::laplacian) || has(LineFamily::pel);
   req.pel = has(LineFamily::pel);
   if (has(LineFamily::pel) && has(LineFamily::laplacian) &&

@@ -6,6 +6,7 @@
 #include "fabrica/lines/extract.hpp"
 #include "fabrica/lines/zero_crossing.hpp"
 #include "parallel.hpp"
+#include "zero_crossing_internal.hpp"
 
 namespace fabrica {
 
@@ -117,21 +118,15 @@ SegmentSoup suggestive_like(const Surface& surface, const ViewFields& fields, do
   const std::size_t nv = surface.vertex_count();
   require_field(fields.kr, nv, "kr");
   require_field(fields.sc_num, nv, "sc_num");
+  require_field(fields.ndotv, nv, "ndotv");
   if (!(fs > 0.0)) throw InputError("feature size must be positive");
-  const double t = threshold / (fs * fs);
-  std::vector<double> num(nv);
-  detail::parallel_range(nv, [&](std::size_t i) {
-    const double n = highlight ? -fields.sc_num[i] : fields.sc_num[i];
-    num[i] = n - t * fields.ndotv[i];
-  });
   SegmentSoup soup;
   soup.family = highlight ? LineFamily::highlight : LineFamily::suggestive;
-  ScalarCrossingOptions o;
-  o.test_num = num;
-  o.test_den = fields.ndotv;
-  if (cull) o.cull = fields.ndotv;
-  o.fade = fade / (fs * fs);
-  scalar_zero_crossings(surface, fields.kr, o, soup.segments);
+  // Test N/D with N = ±sc_num - t n·v and D = n·v, N evaluated only at the
+  // corners of faces where K_r changes sign.
+  detail::suggestive_zero_crossings(surface, fields.kr, fields.sc_num, highlight,
+                                    threshold / (fs * fs), fields.ndotv, cull, fade / (fs * fs),
+                                    soup.segments);
   return soup;
 }
 

@@ -11,11 +11,14 @@ namespace fabrica {
 
 namespace {
 
-// Largest eigenvalue of QᵀQ and its eigenvector, Q = S P⁻¹ in principal
-// coordinates (Judd et al. 2007; ALGORITHMS.md §6.1). u2, uv, w2 are the
+// QᵀQ for Q = S P⁻¹ in principal coordinates (Judd et al. 2007;
+// ALGORITHMS.md §6.1) and its largest eigenvalue q1. u2, uv, w2 are the
 // components of ŵ (the unit projected view direction) squared/multiplied.
-inline void view_dependent_curvature(double k1, double k2, double ndotv, double u2, double uv,
-                                     double w2, double& q1, Vec2& t1) {
+struct ViewCurvature {
+  double m11, m12, m22, q1;
+};
+inline ViewCurvature view_dependent_curvature(double k1, double k2, double ndotv, double u2,
+                                              double uv, double w2) {
   const double an = std::abs(ndotv);
   const double sec_minus_1 = an > 0.0 ? 1.0 / an - 1.0 : 0.0;
   const double Q11 = k1 * (1.0 + sec_minus_1 * u2);
@@ -27,13 +30,34 @@ inline void view_dependent_curvature(double k1, double k2, double ndotv, double 
   const double m22 = Q12 * Q12 + Q22 * Q22;
   const double mean = 0.5 * (m11 + m22);
   const double lambda = mean + std::sqrt(m12 * m12 + 0.25 * (m22 - m11) * (m22 - m11));
-  q1 = lambda;
-  // Eigenvector: (m22 - λ, -m12) or equivalently (m12, λ - m11); take the
-  // better conditioned one.
-  Vec2 a(m22 - lambda, -m12), b(m12, lambda - m11);
+  return {m11, m12, m22, lambda};
+}
+
+// The unit eigenvector t1 of q1: (m22 - λ, -m12) or equivalently
+// (m12, λ - m11); the better conditioned one.
+inline Vec2 view_dependent_direction(const ViewCurvature& m) {
+  Vec2 a(m.m22 - m.q1, -m.m12), b(m.m12, m.q1 - m.m11);
   const Vec2& e = a.squaredNorm() >= b.squaredNorm() ? a : b;
   const double len = e.norm();
-  t1 = len > 0.0 ? Vec2(e / len) : Vec2(1.0, 0.0);
+  return len > 0.0 ? Vec2(e / len) : Vec2(1.0, 0.0);
+}
+
+// Everything view_dependent_curvature needs at vertex i, from the view
+// vector v: the same expressions in the q1 pass and in the t1 pass, so both
+// see the same bits.
+inline ViewCurvature view_curvature_at(const PrincipalCurvatures& curv, std::size_t i,
+                                       const Vec3& v, double ndotv) {
+  const double u = v.dot(curv.e1[i]), w = v.dot(curv.e2[i]);
+  const double u2 = u * u, w2 = w * w;
+  const double sin2 = u2 + w2;
+  const double csc2 = sin2 > 1e-300 ? 1.0 / sin2 : 0.0;
+  double hu2 = 1.0, huv = 0.0, hw2 = 0.0;
+  if (csc2 > 0.0) {
+    hu2 = u2 * csc2;
+    huv = u * w * csc2;
+    hw2 = w2 * csc2;
+  }
+  return view_dependent_curvature(curv.k1[i], curv.k2[i], ndotv, hu2, huv, hw2);
 }
 
 }  // namespace
@@ -59,6 +83,7 @@ void update_view_fields(ViewFields& fields, const Surface& surface, const Camera
     const auto& dcurv = surface.curvature_derivatives();
     const bool want_sc = request.sc_test;
     const bool want_app = request.apparent;
+    // Pass 1: n·v, K_r, the suggestive-contour numerator and q1.
     detail::parallel_range(nv, [&](std::size_t i) {
       const Vec3 v = camera.view_vector(pos[i]);
       const double ndotv = v.dot(normals[i]);
@@ -66,11 +91,7 @@ void update_view_fields(ViewFields& fields, const Surface& surface, const Camera
       if (!curv.valid[i]) {
         fields.kr[i] = 0.0;
         if (want_sc) fields.sc_num[i] = 0.0;
-        if (want_app) {
-          fields.q1[i] = 0.0;
-          fields.t1[i] = Vec2(1.0, 0.0);
-          fields.t1_world[i] = Vec3::Zero();
-        }
+        if (want_app) fields.q1[i] = 0.0;
         return;
       }
       const double k1 = curv.k1[i], k2 = curv.k2[i];
@@ -91,42 +112,65 @@ void update_view_fields(ViewFields& fields, const Surface& surface, const Camera
           fields.sc_num[i] = 0.0;
         }
       }
-      if (want_app) {
-        double hu2 = 1.0, huv = 0.0, hw2 = 0.0;
-        if (csc2 > 0.0) {
-          hu2 = u2 * csc2;
-          huv = u * w * csc2;
-          hw2 = w2 * csc2;
-        }
-        Vec2 t1;
-        view_dependent_curvature(k1, k2, ndotv, hu2, huv, hw2, fields.q1[i], t1);
-        fields.t1[i] = t1;
-        fields.t1_world[i] = t1[0] * curv.e1[i] + t1[1] * curv.e2[i];
-      }
+      if (want_app) fields.q1[i] = view_curvature_at(curv, i, v, ndotv).q1;
     });
     if (want_app) {
-      // D_t1 q1 by Judd's finite differences (ALGORITHMS.md §6.2): along the
-      // line through p_i in direction t1, find the crossing with the
-      // opposite edge of each incident face, and average the (at most two)
-      // one-sided differences, measured in projected (screen) distance.
-      // The (i1, i2) corner pairs come from LinePrecompute's CSR ring when
-      // available (no face indirection); the arithmetic is the same either way.
+      // Pass 2: t1 and D_t1 q1 by Judd's finite differences (ALGORITHMS.md
+      // §6.2): along the line through p_i in direction t1, find the crossing
+      // with the opposite edge of each incident face, and average the (at
+      // most two) one-sided differences, measured in projected (screen)
+      // distance. The (i1, i2) corner pairs come from LinePrecompute's CSR
+      // ring when available (no face indirection); the arithmetic is the
+      // same either way. With a cull threshold, vertices whose incident
+      // faces all have q1 <= threshold at every corner are skipped (the
+      // apparent-ridge extractor rejects those faces before reading t1 or
+      // D_t1 q1).
       const Topology& topo = surface.topology();
       const auto& faces = surface.faces();
       const LinePrecompute::CornerRing* ring = precompute ? &precompute->corner_ring() : nullptr;
       const double* q1 = fields.q1.data();
+      const bool cull = request.apparent_cull_threshold.has_value();
+      const double cull_t = cull ? *request.apparent_cull_threshold : 0.0;
       detail::parallel_range(nv, [&](std::size_t i) {
+        auto skip = [&] {
+          fields.t1[i] = Vec2(1.0, 0.0);
+          fields.t1_world[i] = Vec3::Zero();
+          fields.dt1q1[i] = 0.0;
+        };
+        if (!curv.valid[i]) return skip();
+        if (cull && q1[i] <= cull_t) {
+          bool active = false;
+          if (ring) {
+            const auto* o = ring->opposite.data();
+            for (std::int32_t j = ring->offset[i], e = ring->offset[i + 1]; j < e && !active; ++j)
+              active = !(q1[o[j][0]] <= cull_t) || !(q1[o[j][1]] <= cull_t);
+          } else {
+            const auto fs = topo.vertex_faces(i);
+            const auto cs = topo.vertex_face_corners(i);
+            for (std::size_t j = 0; j < fs.size() && !active; ++j) {
+              const Face& f = faces[static_cast<std::size_t>(fs[j])];
+              const int c = cs[j];
+              active = !(q1[f[(c + 1) % 3]] <= cull_t) || !(q1[f[(c + 2) % 3]] <= cull_t);
+            }
+          }
+          if (!active) return skip();
+        }
+        const Vec3& p0 = pos[i];
+        const double ndotv = fields.ndotv[i];
+        const Vec2 t1 =
+            view_dependent_direction(view_curvature_at(curv, i, camera.view_vector(p0), ndotv));
+        fields.t1[i] = t1;
+        const Vec3 t1w = t1[0] * curv.e1[i] + t1[1] * curv.e2[i];
+        fields.t1_world[i] = t1w;
         double result = 0.0;
-        const Vec3& t1w = fields.t1_world[i];
         if (t1w.squaredNorm() == 0.0) {
           fields.dt1q1[i] = 0.0;
           return;
         }
-        const Vec3& p0 = pos[i];
         const Vec3 t2w = normals[i].cross(t1w);
         const double p0_t2 = p0.dot(t2w);
         const double q0 = q1[i];
-        const double an = std::abs(fields.ndotv[i]);
+        const double an = std::abs(ndotv);
         int n = 0;
         // Returns true when two one-sided differences have been averaged.
         auto corner = [&](int i1, int i2) {

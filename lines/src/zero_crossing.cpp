@@ -4,23 +4,33 @@
 #include <cmath>
 
 #include "parallel.hpp"
+#include "zero_crossing_internal.hpp"
 
 namespace fabrica {
 
 namespace {
 
+// The mesh arrays every face kernel reads, looked up once per call (not per
+// endpoint: Surface::topology() is a call_once).
+struct MeshArrays {
+  const Face* faces;
+  const Vec3* pos;
+  const Topology* topo;
+  explicit MeshArrays(const Surface& s)
+      : faces(s.faces().data()), pos(s.positions().data()), topo(&s.topology()) {}
+};
+
 // An endpoint on the edge joining corners ca and cb of face f, at fraction
 // t from vertex face[ca] (already canonicalised by the caller).
-inline SegmentEnd edge_end(const Surface& surface, std::size_t f, int ca, int cb, double t) {
-  const Face& face = surface.faces()[f];
-  const auto& pos = surface.positions();
+inline SegmentEnd edge_end(const MeshArrays& m, std::size_t f, int ca, int cb, double t) {
+  const Face& face = m.faces[f];
   SegmentEnd e;
   e.anchor.face = static_cast<std::int32_t>(f);
   e.anchor.bary = Vec3::Zero();
   e.anchor.bary[ca] = 1.0 - t;
   e.anchor.bary[cb] = t;
-  e.position = (1.0 - t) * pos[face[ca]] + t * pos[face[cb]];
-  e.element = surface.topology().face_edge(f, 3 - ca - cb);
+  e.position = (1.0 - t) * m.pos[face[ca]] + t * m.pos[face[cb]];
+  e.element = m.topo->face_edge(f, 3 - ca - cb);
   e.kind = EndKind::edge;
   return e;
 }
@@ -64,28 +74,43 @@ inline EdgeParam scalar_edge(const Face& face, int ca, int cb, double va, double
   return {ca, cb, t};
 }
 
-void scalar_face(const Surface& surface, std::size_t f, std::span<const double> val,
-                 const ScalarCrossingOptions& o, std::vector<LineSegment>& out) {
-  const Face& face = surface.faces()[f];
-  const int i0 = face[0], i1 = face[1], i2 = face[2];
-  if (!o.cull.empty() && o.cull[i0] <= 0.0 && o.cull[i1] <= 0.0 && o.cull[i2] <= 0.0) return;
-  const bool test = !o.test_num.empty();
-  const bool has_den = !o.test_den.empty();
-  if (test) {
-    const auto& n = o.test_num;
-    if (!has_den) {
-      if (n[i0] <= 0.0 && n[i1] <= 0.0 && n[i2] <= 0.0) return;
-    } else {
-      const auto& d = o.test_den;
-      if (n[i0] <= 0.0 && d[i0] >= 0.0 && n[i1] <= 0.0 && d[i1] >= 0.0 && n[i2] <= 0.0 &&
-          d[i2] >= 0.0)
-        return;
-      if (n[i0] >= 0.0 && d[i0] <= 0.0 && n[i1] >= 0.0 && d[i1] <= 0.0 && n[i2] >= 0.0 &&
-          d[i2] <= 0.0)
-        return;
-    }
+// Test numerators: stored per vertex, or N_i = ±sc_i - shift * D_i computed
+// at the few corners that need it (suggestive contours and highlights; the
+// same expression as a stored array would hold, so the same bits).
+struct StoredNum {
+  const double* n;
+  double operator()(std::size_t i) const { return n[i]; }
+};
+struct ShiftedNum {
+  const double* sc;
+  const double* den;
+  bool negate;
+  double shift;
+  double operator()(std::size_t i) const {
+    const double n = negate ? -sc[i] : sc[i];
+    return n - shift * den[i];
   }
-  const double s[3] = {val[i0], val[i1], val[i2]};
+};
+
+struct ScalarInputs {
+  MeshArrays m;
+  const double* val;
+  const double* cull;  // nullptr: no culling
+  const double* den;   // nullptr: denominator 1
+  bool test;
+  double fade;
+};
+
+// One face of the scalar kernel. The rejections (no lone sign, back-facing,
+// test function <= 0 at every corner) are independent predicates, so they
+// are tried cheapest and most selective first.
+// The rest of scalar_face for a face that passed the quick sign test.
+template <class Num>
+[[gnu::noinline]] void scalar_face(const ScalarInputs& in, const Num& num, std::size_t f,
+                                   std::vector<LineSegment>& out) {
+  const Face& face = in.m.faces[f];
+  const int i0 = face[0], i1 = face[1], i2 = face[2];
+  const double s[3] = {in.val[i0], in.val[i1], in.val[i2]};
   int k;
   if (lone_sign(s[0], s[1], s[2]))
     k = 0;
@@ -95,24 +120,42 @@ void scalar_face(const Surface& surface, std::size_t f, std::span<const double> 
     k = 2;
   else
     return;
+  const double* cull = in.cull;
+  if (cull && cull[i0] <= 0.0 && cull[i1] <= 0.0 && cull[i2] <= 0.0) return;
+  const bool test = in.test;
+  const double* den = in.den;
+  double n_at[3] = {1.0, 1.0, 1.0};
+  if (test) {
+    n_at[0] = num(static_cast<std::size_t>(i0));
+    n_at[1] = num(static_cast<std::size_t>(i1));
+    n_at[2] = num(static_cast<std::size_t>(i2));
+    if (!den) {
+      if (n_at[0] <= 0.0 && n_at[1] <= 0.0 && n_at[2] <= 0.0) return;
+    } else {
+      const double* d = den;
+      if (n_at[0] <= 0.0 && d[i0] >= 0.0 && n_at[1] <= 0.0 && d[i1] >= 0.0 && n_at[2] <= 0.0 &&
+          d[i2] >= 0.0)
+        return;
+      if (n_at[0] >= 0.0 && d[i0] <= 0.0 && n_at[1] >= 0.0 && d[i1] <= 0.0 && n_at[2] >= 0.0 &&
+          d[i2] <= 0.0)
+        return;
+    }
+  }
   const int c0 = k, c1 = (k + 1) % 3, c2 = (k + 2) % 3;
   const EdgeParam e1 = scalar_edge(face, c0, c1, s[c0], s[c1]);
   const EdgeParam e2 = scalar_edge(face, c0, c2, s[c0], s[c2]);
-  SegmentEnd p1 = edge_end(surface, f, e1.c_lo, e1.c_hi, e1.t);
-  SegmentEnd p2 = edge_end(surface, f, e2.c_lo, e2.c_hi, e2.t);
+  SegmentEnd p1 = edge_end(in.m, f, e1.c_lo, e1.c_hi, e1.t);
+  SegmentEnd p2 = edge_end(in.m, f, e2.c_lo, e2.c_hi, e2.t);
 
-  auto interp = [&](std::span<const double> a, const EdgeParam& e) {
-    return (1.0 - e.t) * a[face[e.c_lo]] + e.t * a[face[e.c_hi]];
-  };
   double num1 = 1.0, num2 = 1.0, den1 = 1.0, den2 = 1.0;
   double z1 = 0.0, z2 = 0.0;
   bool valid1 = true;
   if (test) {
-    num1 = interp(o.test_num, e1);
-    num2 = interp(o.test_num, e2);
-    if (has_den) {
-      den1 = interp(o.test_den, e1);
-      den2 = interp(o.test_den, e2);
+    num1 = (1.0 - e1.t) * n_at[e1.c_lo] + e1.t * n_at[e1.c_hi];
+    num2 = (1.0 - e2.t) * n_at[e2.c_lo] + e2.t * n_at[e2.c_hi];
+    if (den) {
+      den1 = (1.0 - e1.t) * den[face[e1.c_lo]] + e1.t * den[face[e1.c_hi]];
+      den2 = (1.0 - e2.t) * den[face[e2.c_lo]] + e2.t * den[face[e2.c_hi]];
     }
     valid1 = (num1 >= 0.0) == (den1 >= 0.0);
     if ((num1 >= 0.0) != (num2 >= 0.0)) z1 = num1 / (num1 - num2);
@@ -130,106 +173,148 @@ void scalar_face(const Surface& surface, std::size_t f, std::span<const double> 
   SegmentEnd pts[4];
   int npts = 0;
   if (valid1) {
-    p1.strength = fade_strength(num1, den1, o.fade);
+    p1.strength = fade_strength(num1, den1, in.fade);
     pts[npts++] = p1;
   }
   auto clip = [&](double z) {
     SegmentEnd e = lerp_end(p1, p2, z);
-    e.strength = fade_strength((1.0 - z) * num1 + z * num2, (1.0 - z) * den1 + z * den2, o.fade);
+    e.strength = fade_strength((1.0 - z) * num1 + z * num2, (1.0 - z) * den1 + z * den2, in.fade);
     return e;
   };
   if (z1 != 0.0) pts[npts++] = clip(z1);
   if (z2 != 0.0) pts[npts++] = clip(z2);
   if (npts != 2) {
-    p2.strength = fade_strength(num2, den2, o.fade);
+    p2.strength = fade_strength(num2, den2, in.fade);
     pts[npts++] = p2;
   }
   for (int i = 0; i + 1 < npts; i += 2) {
-    LineSegment seg;
+    LineSegment& seg = out.emplace_back();
     seg.face = static_cast<std::int32_t>(f);
     seg.end[0] = pts[i];
     seg.end[1] = pts[i + 1];
-    out.push_back(seg);
   }
 }
 
-struct VectorFace {
-  const Surface& surface;
-  std::span<const double> delta;
-  std::span<const Vec3> dir;
-  std::span<const double> mag;
+template <class Num>
+void scalar_crossings(const ScalarInputs& in, const Num& num, std::size_t face_count,
+                      std::vector<LineSegment>& out) {
+  detail::parallel_chunks<LineSegment>(
+      face_count,
+      [&](std::size_t b, std::size_t e, std::vector<LineSegment>& part) {
+        const Face* faces = in.m.faces;
+        const double* val = in.val;
+        for (std::size_t f = b; f < e; ++f) {
+          // Quick exact rejection (most faces): a lone sign needs the three
+          // values neither all < 0, nor all > 0, nor all 0 (or NaN).
+          const Face& face = faces[f];
+          const double s0 = val[face[0]], s1 = val[face[1]], s2 = val[face[2]];
+          const int neg = int(s0 < 0.0) + int(s1 < 0.0) + int(s2 < 0.0);
+          const int pos = int(s0 > 0.0) + int(s1 > 0.0) + int(s2 > 0.0);
+          if (neg == 3 || pos == 3 || neg + pos == 0) continue;
+          scalar_face(in, num, f, part);
+        }
+      },
+      out);
+}
+
+struct VectorInputs {
+  MeshArrays m;
+  const double* delta;
+  const Vec3* dir;
+  const double* mag;
   const VectorCrossingOptions& o;
 };
 
 // rtsc's draw_segment_ridge / draw_segment_app_ridge for corners (c0,c1,c2)
-// of face f: crossing on edge c0-c1 joined to the crossing on c1-c2 (or the
-// centroid).
-void vector_segment(const VectorFace& vf, std::size_t f, int c0, int c1, int c2, const Vec3 E[3],
-                    bool to_center, std::vector<LineSegment>& out) {
-  const Surface& surface = vf.surface;
-  const Face& face = surface.faces()[f];
-  const auto& pos = surface.positions();
-  auto edge = [&](int ca, int cb, double& m) {
-    if (face[ca] > face[cb]) std::swap(ca, cb);
-    const double da = std::abs(vf.delta[face[ca]]), db = std::abs(vf.delta[face[cb]]);
-    const double t = da + db > 0.0 ? da / (da + db) : 0.5;
-    m = std::abs((1.0 - t) * vf.mag[face[ca]] + t * vf.mag[face[cb]]);
-    return edge_end(surface, f, ca, cb, t);
+// of face f (vertices v): crossing on edge c0-c1 joined to the crossing on
+// c1-c2 (or the centroid). The threshold and the maximum test are decided
+// from the edge fractions and positions before any endpoint is built.
+void vector_segment(const VectorInputs& in, std::size_t f, const int v[3], int c0, int c1, int c2,
+                    const Vec3 E[3], bool to_center, std::vector<LineSegment>& out) {
+  const Vec3* pos = in.m.pos;
+  struct EdgeCut {
+    int lo, hi;
+    double t, m;
   };
-  double m01, m12;
-  SegmentEnd a = edge(c0, c1, m01);
-  SegmentEnd b;
+  auto edge = [&](int ca, int cb) {
+    if (v[ca] > v[cb]) std::swap(ca, cb);
+    const double da = std::abs(in.delta[v[ca]]), db = std::abs(in.delta[v[cb]]);
+    const double t = da + db > 0.0 ? da / (da + db) : 0.5;
+    const double m = std::abs((1.0 - t) * in.mag[v[ca]] + t * in.mag[v[cb]]);
+    return EdgeCut{ca, cb, t, m};
+  };
+  const EdgeCut a = edge(c0, c1);
+  EdgeCut b{0, 0, 0.0, 0.0};
+  double m12;
   if (to_center) {
-    b.anchor.face = static_cast<std::int32_t>(f);
-    b.anchor.bary = Vec3::Constant(1.0 / 3.0);
-    b.position = (pos[face[0]] + pos[face[1]] + pos[face[2]]) / 3.0;
-    b.kind = EndKind::centroid;
-    b.element = static_cast<std::int32_t>(f);
-    m12 = std::abs(vf.mag[face[0]] + vf.mag[face[1]] + vf.mag[face[2]]) / 3.0;
+    m12 = std::abs(in.mag[v[0]] + in.mag[v[1]] + in.mag[v[2]]) / 3.0;
   } else {
-    b = edge(c1, c2, m12);
+    b = edge(c1, c2);
+    m12 = b.m;
   }
-  const double t = vf.o.threshold;
+  const double m01 = a.m;
+  const double t = in.o.threshold;
   const double k01 = std::max(m01 - t, 0.0), k12 = std::max(m12 - t, 0.0);
   if (k01 == 0.0 && k12 == 0.0) return;
-  if (vf.o.test == ExtremumTest::perpendicular) {
-    const Vec3 n = (pos[face[1]] - pos[face[0]]).cross(pos[face[2]] - pos[face[0]]);
-    const Vec3 perp = n.cross(a.position - b.position);
+  const Vec3 pa = (1.0 - a.t) * pos[v[a.lo]] + a.t * pos[v[a.hi]];
+  const Vec3 pb = to_center ? Vec3((pos[v[0]] + pos[v[1]] + pos[v[2]]) / 3.0)
+                            : Vec3((1.0 - b.t) * pos[v[b.lo]] + b.t * pos[v[b.hi]]);
+  if (in.o.test == ExtremumTest::perpendicular) {
+    const Vec3 n = (pos[v[1]] - pos[v[0]]).cross(pos[v[2]] - pos[v[0]]);
+    const Vec3 perp = n.cross(pa - pb);
     if (E[c0].dot(perp) <= 0.0 || E[c1].dot(perp) >= 0.0 || E[c2].dot(perp) <= 0.0) return;
   }
-  if (vf.o.keep_raw_magnitude) {
-    a.strength = static_cast<float>(m01);
-    b.strength = static_cast<float>(m12);
-  } else {
-    a.strength = t > 0.0 ? static_cast<float>(k01 / (k01 + t)) : 1.0f;
-    b.strength = t > 0.0 ? static_cast<float>(k12 / (k12 + t)) : 1.0f;
-  }
-  LineSegment seg;
+  LineSegment& seg = out.emplace_back();
   seg.face = static_cast<std::int32_t>(f);
-  seg.end[0] = a;
-  seg.end[1] = b;
-  out.push_back(seg);
+  SegmentEnd& ea = seg.end[0];
+  ea.anchor.face = static_cast<std::int32_t>(f);
+  ea.anchor.bary = Vec3::Zero();
+  ea.anchor.bary[a.lo] = 1.0 - a.t;
+  ea.anchor.bary[a.hi] = a.t;
+  ea.position = pa;
+  ea.element = in.m.topo->face_edge(f, 3 - a.lo - a.hi);
+  ea.kind = EndKind::edge;
+  SegmentEnd& eb = seg.end[1];
+  eb.anchor.face = static_cast<std::int32_t>(f);
+  eb.position = pb;
+  if (to_center) {
+    eb.anchor.bary = Vec3::Constant(1.0 / 3.0);
+    eb.kind = EndKind::centroid;
+    eb.element = static_cast<std::int32_t>(f);
+  } else {
+    eb.anchor.bary = Vec3::Zero();
+    eb.anchor.bary[b.lo] = 1.0 - b.t;
+    eb.anchor.bary[b.hi] = b.t;
+    eb.element = in.m.topo->face_edge(f, 3 - b.lo - b.hi);
+    eb.kind = EndKind::edge;
+  }
+  if (in.o.keep_raw_magnitude) {
+    ea.strength = static_cast<float>(m01);
+    eb.strength = static_cast<float>(m12);
+  } else {
+    ea.strength = t > 0.0 ? static_cast<float>(k01 / (k01 + t)) : 1.0f;
+    eb.strength = t > 0.0 ? static_cast<float>(k12 / (k12 + t)) : 1.0f;
+  }
 }
 
-void vector_face(const VectorFace& vf, std::size_t f, std::vector<LineSegment>& out) {
-  const Surface& surface = vf.surface;
-  const Face& face = surface.faces()[f];
+// The rest of vector_face for a face with a corner above the threshold.
+[[gnu::noinline]] void vector_face(const VectorInputs& in, std::size_t f,
+                                   std::vector<LineSegment>& out) {
+  const Face& face = in.m.faces[f];
   const int v[3] = {face[0], face[1], face[2]};
-  const auto& o = vf.o;
+  const auto& o = in.o;
   if (!o.cull.empty() && o.cull[v[0]] <= 0.0 && o.cull[v[1]] <= 0.0 && o.cull[v[2]] <= 0.0) return;
   if (!o.vertex_mask.empty() &&
       (!o.vertex_mask[v[0]] || !o.vertex_mask[v[1]] || !o.vertex_mask[v[2]]))
     return;
-  if (vf.mag[v[0]] <= o.threshold && vf.mag[v[1]] <= o.threshold && vf.mag[v[2]] <= o.threshold)
-    return;
-  const Vec3 E[3] = {vf.delta[v[0]] * vf.dir[v[0]], vf.delta[v[1]] * vf.dir[v[1]],
-                     vf.delta[v[2]] * vf.dir[v[2]]};
+  const Vec3 E[3] = {in.delta[v[0]] * in.dir[v[0]], in.delta[v[1]] * in.dir[v[1]],
+                     in.delta[v[2]] * in.dir[v[2]]};
   bool z01 = E[0].dot(E[1]) <= 0.0;
   bool z12 = E[1].dot(E[2]) <= 0.0;
   bool z20 = E[2].dot(E[0]) <= 0.0;
   if (int(z01) + int(z12) + int(z20) < 2) return;
   if (o.test == ExtremumTest::edge) {
-    const auto& pos = surface.positions();
+    const Vec3* pos = in.m.pos;
     const Vec3 d01 = pos[v[1]] - pos[v[0]], d12 = pos[v[2]] - pos[v[1]],
                d20 = pos[v[0]] - pos[v[2]];
     z01 = z01 && (E[0].dot(d01) >= 0.0 || E[1].dot(d01) <= 0.0);
@@ -238,15 +323,15 @@ void vector_face(const VectorFace& vf, std::size_t f, std::vector<LineSegment>& 
     if (int(z01) + int(z12) + int(z20) < 2) return;
   }
   if (!z01) {
-    vector_segment(vf, f, 1, 2, 0, E, false, out);
+    vector_segment(in, f, v, 1, 2, 0, E, false, out);
   } else if (!z12) {
-    vector_segment(vf, f, 2, 0, 1, E, false, out);
+    vector_segment(in, f, v, 2, 0, 1, E, false, out);
   } else if (!z20) {
-    vector_segment(vf, f, 0, 1, 2, E, false, out);
+    vector_segment(in, f, v, 0, 1, 2, E, false, out);
   } else {
-    vector_segment(vf, f, 1, 2, 0, E, true, out);
-    vector_segment(vf, f, 2, 0, 1, E, true, out);
-    vector_segment(vf, f, 0, 1, 2, E, true, out);
+    vector_segment(in, f, v, 1, 2, 0, E, true, out);
+    vector_segment(in, f, v, 2, 0, 1, E, true, out);
+    vector_segment(in, f, v, 0, 1, 2, E, true, out);
   }
 }
 
@@ -254,24 +339,45 @@ void vector_face(const VectorFace& vf, std::size_t f, std::vector<LineSegment>& 
 
 void scalar_zero_crossings(const Surface& surface, std::span<const double> values,
                            const ScalarCrossingOptions& options, std::vector<LineSegment>& out) {
-  (void)surface.topology();
-  detail::parallel_chunks<LineSegment>(
-      surface.face_count(),
-      [&](std::size_t b, std::size_t e, std::vector<LineSegment>& part) {
-        for (std::size_t f = b; f < e; ++f) scalar_face(surface, f, values, options, part);
-      },
-      out);
+  const ScalarInputs in{MeshArrays(surface),
+                        values.data(),
+                        options.cull.empty() ? nullptr : options.cull.data(),
+                        options.test_den.empty() ? nullptr : options.test_den.data(),
+                        !options.test_num.empty(),
+                        options.fade};
+  scalar_crossings(in, StoredNum{options.test_num.data()}, surface.face_count(), out);
 }
+
+namespace detail {
+
+void suggestive_zero_crossings(const Surface& surface, std::span<const double> kr,
+                               std::span<const double> sc_num, bool negate, double shift,
+                               std::span<const double> ndotv, bool cull, double fade,
+                               std::vector<LineSegment>& out) {
+  const ScalarInputs in{MeshArrays(surface), kr.data(), cull ? ndotv.data() : nullptr,
+                        ndotv.data(),        true,      fade};
+  scalar_crossings(in, ShiftedNum{sc_num.data(), ndotv.data(), negate, shift}, surface.face_count(),
+                   out);
+}
+
+}  // namespace detail
 
 void vector_zero_crossings(const Surface& surface, std::span<const double> derivative,
                            std::span<const Vec3> direction, std::span<const double> magnitude,
                            const VectorCrossingOptions& options, std::vector<LineSegment>& out) {
-  (void)surface.topology();
-  const VectorFace vf{surface, derivative, direction, magnitude, options};
+  const VectorInputs in{MeshArrays(surface), derivative.data(), direction.data(), magnitude.data(),
+                        options};
   detail::parallel_chunks<LineSegment>(
       surface.face_count(),
       [&](std::size_t b, std::size_t e, std::vector<LineSegment>& part) {
-        for (std::size_t f = b; f < e; ++f) vector_face(vf, f, part);
+        const Face* faces = in.m.faces;
+        const double* mag = in.mag;
+        const double th = options.threshold;
+        for (std::size_t f = b; f < e; ++f) {
+          const Face& face = faces[f];
+          if (mag[face[0]] <= th && mag[face[1]] <= th && mag[face[2]] <= th) continue;
+          vector_face(in, f, part);
+        }
       },
       out);
 }

@@ -40,6 +40,12 @@ struct ViewFieldsRequest {
   bool radial = true;    ///< ndotv, kr (contours, suggestive contours, highlights)
   bool sc_test = true;   ///< sc_num (suggestive contours and highlights)
   bool apparent = true;  ///< q1, t1, t1_world, dt1q1
+  /// With a value t (rtsc's q1 threshold in 1/mm², as the apparent-ridge
+  /// extractor uses): t1, t1_world and dt1q1 are computed only at the
+  /// vertices of faces with a corner where q1 > t, the only ones an apparent
+  /// ridge with that threshold reads; elsewhere t1 = (1, 0), t1_world = 0,
+  /// dt1q1 = 0. q1 is always computed everywhere. nullopt: everywhere.
+  std::optional<double> apparent_cull_threshold;
   bool light = false;    ///< light, light_gradient, light_laplacian (PELs, Laplacian lines)
   bool pel = false;      ///< pel_h, pel_maximum (PELs): D_w|∇f| and -D_w D_w|∇f|
   /// Light direction (towards the light) for PELs / Laplacian lines;
