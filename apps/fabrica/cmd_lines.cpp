@@ -156,7 +156,7 @@ int run_lines(const LinesArgs& a) {
   if (a.smooth > 0) {  // on the surface, before visibility tests the positions
     LineSmoothingOptions so;
     so.iterations = a.smooth;
-    smooth_lines(lines, surface, so);
+    smooth_lines(lines, surface, so);  // polylines it cannot smooth stay as they are
   }
   if (!a.no_visibility) compute_visibility(lines, surface, camera);
 

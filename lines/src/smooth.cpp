@@ -276,7 +276,16 @@ PolylineReport smooth_polyline(const TriangleMesh& mesh, const Topology& topolog
   out.reserve(n + n / 4);
   bool ok = true, collapsed = false;
   if (pl.closed && fixed.empty()) {
-    ok = smooth_loop(mesh, topology, pl, core, out, collapsed);
+    // A small loop that would shrink below 3 points is smoothed with fewer
+    // iterations (halved until it survives).
+    CurveSmoothingOptions fewer = core;
+    while (true) {
+      out.clear();
+      collapsed = false;
+      ok = smooth_loop(mesh, topology, pl, fewer, out, collapsed);
+      if (ok || !collapsed || fewer.iterations <= 1) break;
+      fewer.iterations /= 2;
+    }
   } else {
     // Runs between consecutive fixed points; a loop's runs wrap around and
     // the output starts at its first fixed point.

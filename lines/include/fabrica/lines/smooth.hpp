@@ -20,7 +20,10 @@
 // them. Closed loops stay closed. Polylines whose anchors break the surface
 // curve rules (a face index out of range, non-finite or invalid barycentric
 // coordinates, consecutive points that share no face) are left unchanged
-// and counted, as are closed loops that would shrink below three points.
+// and counted. A closed loop that would shrink below three points is
+// smoothed with fewer iterations (halved until it survives), or left
+// unchanged and counted if even one iteration collapses it (loops of 3–4
+// points around one vertex).
 //
 // Per-point attributes: a smoothed polyline gets new points (points are
 // removed, moved, and inserted where the curve is re-routed around a
@@ -79,7 +82,7 @@ struct LineSmoothingStats {
   std::size_t smoothed = 0;       ///< of these, smoothed (possibly unchanged geometry)
   std::size_t too_short = 0;      ///< open polylines of < 3 points: nothing to move
   std::size_t invalid = 0;        ///< left unchanged: anchors break the surface-curve rules
-  std::size_t collapsed = 0;      ///< closed loops left unchanged: would shrink below 3 points
+  std::size_t collapsed = 0;      ///< loops left unchanged: 1 iteration leaves < 3 points
   std::size_t fixed_points = 0;   ///< interior points inside a face, kept fixed
   std::size_t points_before = 0;  ///< points of the smoothed polylines before
   std::size_t points_after = 0;   ///< and after
