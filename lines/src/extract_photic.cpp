@@ -17,12 +17,13 @@ namespace {
 
 // Drops segments whose interpolated `magnitude` is <= t at both ends and
 // sets strength to the fade (m - t)/m, multiplied into the existing one.
+// In place (no per-view copy of the soup), order kept.
 void threshold_by_field(const Surface& surface, std::vector<LineSegment>& segs,
                         const std::vector<double>& magnitude, double t) {
   const auto& faces = surface.faces();
-  std::vector<LineSegment> kept;
-  kept.reserve(segs.size());
-  for (auto& s : segs) {
+  std::size_t kept = 0;
+  for (std::size_t j = 0; j < segs.size(); ++j) {
+    LineSegment& s = segs[j];
     const Face& f = faces[static_cast<std::size_t>(s.face)];
     double k[2];
     for (int e = 0; e < 2; ++e) {
@@ -33,9 +34,10 @@ void threshold_by_field(const Surface& surface, std::vector<LineSegment>& segs,
     if (k[0] == 0.0 && k[1] == 0.0) continue;
     for (int e = 0; e < 2; ++e)
       s.end[e].strength *= t > 0.0 ? static_cast<float>(k[e] / (k[e] + t)) : 1.0f;
-    kept.push_back(s);
+    if (kept != j) segs[kept] = s;
+    ++kept;
   }
-  segs.swap(kept);
+  segs.resize(kept);
 }
 
 // The sparse illumination fields must cover everything `threshold` and
