@@ -90,6 +90,8 @@ SegmentSoup extract_pels(const Surface& surface, const ViewFields& fields, doubl
   ScalarCrossingOptions o;
   o.test_num = fields.pel_maximum;  // -D_w D_w |∇f| > 0: a maximum of the gradient magnitude
   if (options.cull_backfaces) o.cull = fields.ndotv;
+  if (fields.light_faces.empty()) return soup;  // no face can carry a kept line
+  o.faces = fields.light_faces;
   scalar_zero_crossings(surface, fields.pel_h, o, soup.segments);
   threshold_by_field(surface, soup.segments, fields.light_gradient_norm, t);
   return soup;
@@ -107,6 +109,8 @@ SegmentSoup extract_laplacian_lines(const Surface& surface, const ViewFields& fi
   soup.family = LineFamily::laplacian;
   ScalarCrossingOptions o;
   if (options.cull_backfaces) o.cull = fields.ndotv;
+  if (fields.light_faces.empty()) return soup;  // no face can carry a kept line
+  o.faces = fields.light_faces;
   scalar_zero_crossings(surface, fields.light_laplacian, o, soup.segments);
   threshold_by_field(surface, soup.segments, fields.light_gradient_norm, t);
   return soup;

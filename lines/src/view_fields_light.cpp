@@ -3,12 +3,12 @@
 // -D_w D_w|∇f| (ALGORITHMS.md §7). Split from view_fields.cpp so the
 // illumination and the radial/apparent fields can be worked on separately.
 //
-// f and ∇f are computed everywhere. The thresholds leave only a small part
-// of the surface where a line can be kept (on the igea view of the
-// benchmark, 8% of the faces), so Δf and the two further gradient
-// applications of the PEL test are computed only there (ViewFields states
-// where): the extracted lines are the same, bit for bit, as with the
-// fields computed everywhere.
+// f, ∇f and Δf are computed everywhere. The thresholds leave only a small
+// part of the surface where a line can be kept (on the igea view of the
+// benchmark, 8% of the faces): those faces are listed for the extractors,
+// and the two further gradient applications of the PEL test are computed
+// only around them (ViewFields states where). The extracted lines are the
+// same, bit for bit, as with the fields computed everywhere.
 #include <atomic>
 #include <cmath>
 #include <cstdint>
@@ -59,6 +59,7 @@ void update_light_fields(ViewFields& fields, const Surface& surface, const Camer
   detail::resize_or_clear(fields.light_laplacian, light, nv);
   detail::resize_or_clear(fields.pel_h, request.pel, nv);
   detail::resize_or_clear(fields.pel_maximum, request.pel, nv);
+  fields.light_faces.clear();
   fields.light_threshold = request.light_threshold;
   fields.light_cull_backfaces = request.light_cull_backfaces;
   if (!light) return;
@@ -104,7 +105,7 @@ void update_light_fields(ViewFields& fields, const Surface& surface, const Camer
   const double limit = light_cull_limit(request.light_threshold);
   const bool cull = request.light_cull_backfaces && fields.ndotv.size() == nv;
   std::vector<std::uint8_t> corner(nv, 0);
-  std::vector<std::int32_t> line_faces;
+  std::vector<std::int32_t>& line_faces = fields.light_faces;
   detail::parallel_chunks<std::int32_t>(
       faces.size(),
       [&](std::size_t b, std::size_t e, std::vector<std::int32_t>& part) {
@@ -118,12 +119,7 @@ void update_light_fields(ViewFields& fields, const Surface& surface, const Camer
       },
       line_faces, 16384);
 
-  if (!request.pel) {
-    detail::parallel_range(nv, [&](std::size_t i) {
-      if (!corner[i]) lap[i] = 0.0;
-    });
-    return;
-  }
+  if (!request.pel) return;
 
   // D_w h at a corner needs h = D_w|∇f| on its whole row: mark the rows.
   const std::int32_t* col = grad.column.data();
@@ -137,7 +133,6 @@ void update_light_fields(ViewFields& fields, const Surface& surface, const Camer
   detail::parallel_range(
       nv,
       [&](std::size_t i) {
-        if (!corner[i]) lap[i] = 0.0;
         if (!ring[i]) {
           h[i] = 0.0;
           return;

@@ -197,13 +197,14 @@ template <class Num>
 
 template <class Num>
 void scalar_crossings(const ScalarInputs& in, const Num& num, std::size_t face_count,
-                      std::vector<LineSegment>& out) {
+                      std::vector<LineSegment>& out, std::span<const std::int32_t> list = {}) {
   detail::parallel_chunks<LineSegment>(
-      face_count,
+      list.empty() ? face_count : list.size(),
       [&](std::size_t b, std::size_t e, std::vector<LineSegment>& part) {
         const Face* faces = in.m.faces;
         const double* val = in.val;
-        for (std::size_t f = b; f < e; ++f) {
+        for (std::size_t j = b; j < e; ++j) {
+          const std::size_t f = list.empty() ? j : static_cast<std::size_t>(list[j]);
           // Quick exact rejection (most faces): a lone sign needs the three
           // values neither all < 0, nor all > 0, nor all 0 (or NaN).
           const Face& face = faces[f];
@@ -345,7 +346,8 @@ void scalar_zero_crossings(const Surface& surface, std::span<const double> value
                         options.test_den.empty() ? nullptr : options.test_den.data(),
                         !options.test_num.empty(),
                         options.fade};
-  scalar_crossings(in, StoredNum{options.test_num.data()}, surface.face_count(), out);
+  scalar_crossings(in, StoredNum{options.test_num.data()}, surface.face_count(), out,
+                   options.faces);
 }
 
 namespace detail {

@@ -1110,6 +1110,36 @@ TEST(Lines, SmoothWritesACompleteSvgAndShorterLinesOnTheSameCount) {
   EXPECT_FALSE(fs::exists(dir / "x.svg"));
 }
 
+TEST(Render, SmoothFlagAndSceneKey) {
+  if (!has_command("render")) GTEST_SKIP() << "no render command in this build";
+  const fs::path dir = work_dir();
+  write_bytes(dir / "scene.json", "{\"structures\": [{\"mesh\": \"" + aneurysm().generic_string() +
+                                      "\", \"smooth\": 2}]}");
+  const Outcome r =
+      run_fabrica({"render", (dir / "scene.json").string(), "-o", (dir / "a.png").string(),
+                   "--size", "128x128", "--save-scene", (dir / "saved.json").string(), "-q"});
+  if (r.code == 4) GTEST_SKIP() << "no headless GL: " << r.err;
+  ASSERT_EQ(r.code, 0) << describe(r);
+  const auto saved = nlohmann::json::parse(read_text(dir / "saved.json"));
+  EXPECT_EQ(saved.at("structures").at(0).at("smooth").get<int>(), 2);
+  const Outcome flag =
+      run_fabrica({"render", aneurysm().string(), "-o", (dir / "b.png").string(), "--size",
+                   "128x128", "--smooth", "3", "--svg", (dir / "b.svg").string(), "-q"});
+  ASSERT_EQ(flag.code, 0) << describe(flag);
+  EXPECT_NE(read_text(dir / "b.svg").find("<path"), std::string::npos);
+  write_bytes(dir / "bad.json", "{\"structures\": [{\"mesh\": \"" + aneurysm().generic_string() +
+                                    "\", \"smooth\": -1}]}");
+  for (const auto& args : {std::vector<std::string>{"render", (dir / "bad.json").string(), "-o",
+                                                    (dir / "c.png").string()},
+                           std::vector<std::string>{"render", aneurysm().string(), "-o",
+                                                    (dir / "c.png").string(), "--smooth", "-1"}}) {
+    const Outcome bad = run_fabrica(args);
+    EXPECT_EQ(bad.code, 2) << describe(bad);
+    EXPECT_NE(bad.err.find("smooth"), std::string::npos) << describe(bad);
+    EXPECT_FALSE(fs::exists(dir / "c.png"));
+  }
+}
+
 TEST(Pipeline, ExtractedSurfaceThroughEveryMeshCommand) {
   if (!has_command("extract")) GTEST_SKIP() << "no extract command in this build";
   const fs::path dir = work_dir();

@@ -52,10 +52,10 @@ struct ViewFieldsRequest {
   /// nullopt = headlight (v at each vertex).
   std::optional<Vec3> light_direction;
   /// Where PELs and Laplacian lines can be kept (the smallest of their
-  /// thresholds, 1/mm, and whether both cull back faces): light_laplacian,
-  /// pel_h and pel_maximum are then only computed on the faces that can
-  /// carry a kept line and are zero elsewhere (see ViewFields). The
-  /// defaults compute them everywhere.
+  /// thresholds, 1/mm, and whether both cull back faces): pel_h and
+  /// pel_maximum are then only computed around the faces that can carry a
+  /// kept line and are zero elsewhere (see ViewFields). The defaults
+  /// compute them everywhere.
   double light_threshold = -std::numeric_limits<double>::infinity();
   bool light_cull_backfaces = false;
 };
@@ -72,12 +72,13 @@ struct ViewFields {
   /// > 0 where |∇f| is a maximum along w = ∇f/|∇f|; with `pel`).
   /// A face "can carry a line" when some corner has |∇f| > light_threshold
   /// (less a relative 1e-9 margin) and, with light_cull_backfaces, some
-  /// corner has n·v > 0. light_laplacian and pel_h are exact at the corners
-  /// of such faces (pel_h also at their neighbours), pel_maximum at the
-  /// corners of such faces where pel_h changes sign; all three are 0 at
-  /// vertices that no such face needs. Extraction with a threshold >=
-  /// light_threshold (and culling if light_cull_backfaces) is then exact.
+  /// corner has n·v > 0; light_faces lists them (ascending). pel_h is exact
+  /// at their corners and the corners' neighbours, pel_maximum at the
+  /// corners of those where pel_h changes sign; both are 0 at vertices that
+  /// no such face needs. Extraction with a threshold >= light_threshold (and
+  /// culling if light_cull_backfaces) visits only light_faces and is exact.
   std::vector<double> light_gradient_norm, pel_h, pel_maximum;
+  std::vector<std::int32_t> light_faces;
   double light_threshold = -std::numeric_limits<double>::infinity();  ///< as requested
   bool light_cull_backfaces = false;                                   ///< as requested
 };

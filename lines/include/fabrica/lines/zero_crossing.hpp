@@ -40,6 +40,9 @@ struct ScalarCrossingOptions {
   /// culling). Empty: no culling.
   std::span<const double> cull;
   double fade = 0.0;  ///< strength x/(x + fade), x = N/D; 0 gives strength 1
+  /// Only these faces, ascending (output order stays by face); empty: all.
+  /// For callers that know which faces can matter (PELs, Laplacian lines).
+  std::span<const std::int32_t> faces;
 };
 
 /// Appends the zero set of `values` (one per vertex) to `out`, deterministic
