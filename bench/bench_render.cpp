@@ -17,6 +17,8 @@
 #include <cmath>
 #include <map>
 #include <memory>
+#include <string>
+#include <utility>
 
 #include "fabrica/core/camera.hpp"
 #include "fabrica/core/surface.hpp"
@@ -147,6 +149,38 @@ void BM_HybridOverBare(benchmark::State& state) {
   state.counters["ratio"] = hybrid / bare;
 }
 
+// Where the time goes: the pair as above, each frame profiled
+// (HybridFrameProfile: GL_TIME_ELAPSED per stage and the wall clock of each
+// stage with a glFinish after it). Counters in ms per frame: h_/b_ prefix for
+// hybrid/bare, s1/s2 wall clock of the stages, rb the readback, s1gpu/s2gpu
+// the timer queries.
+void BM_HybridStages(benchmark::State& state) {
+  Input& in = input(static_cast<int>(state.range(0)));
+  const auto cam = camera(static_cast<int>(state.range(1)));
+  fr::HybridOptions o;
+  renderer().render_hybrid(in.mesh, cam, o, false, false);
+  renderer().render_hybrid(in.mesh, cam, o, false, true);
+  fr::HybridFrameProfile h, b;
+  bool hybrid_first = true;
+  for (auto _ : state) {
+    for (int k = 0; k < 2; ++k) {
+      const bool bare = (k == 0) != hybrid_first;
+      fr::Image img = renderer().render_hybrid(in.mesh, cam, o, false, bare, bare ? &b : &h);
+      benchmark::DoNotOptimize(img.rgba.data());
+    }
+    hybrid_first = !hybrid_first;
+  }
+  const double n = static_cast<double>(state.iterations());
+  for (const auto& [prefix, p] : {std::pair{"h_", &h}, std::pair{"b_", &b}}) {
+    const std::string s = prefix;
+    state.counters[s + "s1"] = p->stage1_ms / n;
+    state.counters[s + "s2"] = p->stage2_ms / n;
+    state.counters[s + "rb"] = p->readback_ms / n;
+    state.counters[s + "s1gpu"] = p->stage1_gpu_ms / n;
+    state.counters[s + "s2gpu"] = p->stage2_gpu_ms / n;
+  }
+}
+
 // Object-space apparent ridges for the same camera: view-dependent fields,
 // zero crossings, chaining (view-independent precomputation done once).
 void BM_ObjectSpaceApparent(benchmark::State& state) {
@@ -174,6 +208,7 @@ void sizes(benchmark::internal::Benchmark* b) {
 BENCHMARK(BM_Hybrid)->Apply(sizes)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_HybridBare)->Apply(sizes)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_HybridOverBare)->Apply(sizes)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_HybridStages)->Apply(sizes)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_ObjectSpaceApparent)
     ->Args({50, 1024})
     ->Args({300, 1024})

@@ -1,7 +1,6 @@
-// Hybrid apparent ridges: writes (q, t1 packed, coverage) into the
-// off-screen target. Occluders (other opaque structures) write coverage 0
-// and q = 0, like the background.
-uniform int u_occluder;
+// Hybrid apparent ridges: writes (q, t1 packed, coverage 1) into the
+// off-screen target. Occluders (other opaque structures) are drawn by
+// ar_occluder.frag.
 #ifdef PER_FRAGMENT
 in vec3 v_position;
 in vec3 v_normal;
@@ -12,10 +11,6 @@ in vec3 v_packed;
 #endif
 layout(location = 0) out vec4 o_data;
 void main() {
-  if (u_occluder == 1) {
-    o_data = vec4(0.0, 0.5, 0.5, 0.0);
-    return;
-  }
 #ifdef PER_FRAGMENT
   mat3 S = mat3(v_s_diagonal.x, v_s_off.x, v_s_off.y,
                 v_s_off.x, v_s_diagonal.y, v_s_off.z,

@@ -3,7 +3,6 @@
 // filter v = (8 + 8 lambda) q4 - sum_n w_n q_n with
 // w_n = 1 + 2 lambda cos^2(phi_n - theta), theta = t1 quantised to 0, 45, 90
 // or 135 degrees; a line where v > threshold, grey 1 - v (fade) or black.
-// Neighbours s0..s8 row by row from the top (+y) row, s4 the centre.
 uniform sampler2D u_data;
 uniform float u_lambda;
 uniform float u_threshold;
@@ -12,11 +11,7 @@ uniform int u_sign_free;
 uniform vec4 u_line_color;
 layout(location = 0) out vec4 o_color;
 void main() {
-  const ivec2 offsets[9] = ivec2[9](ivec2(-1, 1), ivec2(0, 1), ivec2(1, 1), ivec2(-1, 0),
-                                    ivec2(0, 0), ivec2(1, 0), ivec2(-1, -1), ivec2(0, -1),
-                                    ivec2(1, -1));
   ivec2 p = ivec2(gl_FragCoord.xy);
-  ivec2 last = textureSize(u_data, 0) - 1;
   vec4 centre = texelFetch(u_data, p, 0);
   if (centre.a < 0.5) discard;  // background or occluder
   // q >= 0 and (for lambda >= -1/2) w_n >= 0, so v <= (8 + 8 lambda) q4:
@@ -42,10 +37,11 @@ void main() {
     d = ivec2(-1, 1);
   // The weights in closed form: cos^2 is 1 along d, 0 across it and 1/2 on
   // the two 45-degree pairs, so sum_n w_n q_n = sum_n q_n + 2 lambda C with
-  // C the pair along d plus half the two pairs at 45 degrees.
-#define Q(i) texelFetch(u_data, clamp(p + offsets[i], ivec2(0), last), 0).r
-  float h = Q(3) + Q(5), vert = Q(1) + Q(7);     // along x, along y
-  float diag = Q(2) + Q(6), anti = Q(0) + Q(8);  // along (1,1), along (-1,1)
+  // C the pair along d plus half the two pairs at 45 degrees. The pass is
+  // scissored to one pixel inside the target, so every neighbour exists.
+#define Q(dx, dy) texelFetch(u_data, p + ivec2(dx, dy), 0).r
+  float h = Q(-1, 0) + Q(1, 0), vert = Q(0, 1) + Q(0, -1);    // along x, along y
+  float diag = Q(1, 1) + Q(-1, -1), anti = Q(-1, 1) + Q(1, -1);  // along (1,1), (-1,1)
 #undef Q
   float C = d.y == 0 ? h + 0.5 * (diag + anti)
             : d.x == 0 ? vert + 0.5 * (diag + anti)

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <functional>
 #include <map>
@@ -112,7 +113,11 @@ struct Renderer::Impl {
   GLuint overlay_fbo = 0;  // main_color without depth: overlays may sample depth A
   GLuint oit_fbo = 0, accum = 0, reveal = 0;
   GLuint depthb_fbo = 0, depth_b = 0;
-  GLuint ar_fbo = 0, ar_color = 0, ar_depth = 0;
+  // Hybrid apparent ridges: stage 1 draws (q, t1) into ar_color with the
+  // depth-stencil ar_depth (stencil 1 where a hybrid mesh is visible); stage 2
+  // draws into main_color through ar_out_fbo, which shares ar_depth so that
+  // the filter runs only where it can ink (hybrid_stage2).
+  GLuint ar_fbo = 0, ar_color = 0, ar_depth = 0, ar_out_fbo = 0;
   bool ar_float = false;
 
   explicit Impl(std::unique_ptr<GlContext> c) : ctx(std::move(c)) {
@@ -172,6 +177,10 @@ struct Renderer::Impl {
                 fs({"apparent_ridges.glsl", "ar_stage1.frag"}, {"PER_FRAGMENT"})};
     else if (key == "ar2")
       stages = {vs({"fullscreen.vert"}), fs({"ar_stage2.frag"})};
+    else if (key == "ar_occluder")
+      stages = {vs({"mesh.vert"}), fs({"ar_occluder.frag"})};
+    else if (key == "ar_mask")
+      stages = {vs({"fullscreen.vert"}), fs({"ar_mask.frag"})};
     else if (key == "ar_bare1")
       stages = {vs({"ar_bare.vert"}), fs({"ar_bare_stage1.frag"})};
     else if (key == "ar_bare2")
@@ -284,12 +293,12 @@ struct Renderer::Impl {
 
   void release_targets() {
     const GlFunctions& g = gl();
-    GLuint fbos[] = {main_fbo, overlay_fbo, oit_fbo, depthb_fbo, ar_fbo};
-    g.DeleteFramebuffers(5, fbos);
+    GLuint fbos[] = {main_fbo, overlay_fbo, oit_fbo, depthb_fbo, ar_fbo, ar_out_fbo};
+    g.DeleteFramebuffers(6, fbos);
     GLuint textures[] = {main_color, depth_a, accum, reveal, depth_b, ar_color};
     g.DeleteTextures(6, textures);
     g.DeleteRenderbuffers(1, &ar_depth);
-    main_fbo = overlay_fbo = oit_fbo = depthb_fbo = ar_fbo = 0;
+    main_fbo = overlay_fbo = oit_fbo = depthb_fbo = ar_fbo = ar_out_fbo = 0;
     main_color = depth_a = accum = reveal = depth_b = ar_color = ar_depth = 0;
     target_w = target_h = 0;
   }
@@ -348,6 +357,7 @@ struct Renderer::Impl {
     const GlFunctions& g = gl();
     if (ar_fbo != 0) {
       g.DeleteFramebuffers(1, &ar_fbo);
+      g.DeleteFramebuffers(1, &ar_out_fbo);
       g.DeleteTextures(1, &ar_color);
       g.DeleteRenderbuffers(1, &ar_depth);
     }
@@ -356,12 +366,19 @@ struct Renderer::Impl {
                             : make_texture(GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, target_w, target_h);
     g.GenRenderbuffers(1, &ar_depth);
     g.BindRenderbuffer(GL_RENDERBUFFER, ar_depth);
-    g.RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, target_w, target_h);
+    g.RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH24_STENCIL8, target_w, target_h);
     g.GenFramebuffers(1, &ar_fbo);
     g.BindFramebuffer(GL_FRAMEBUFFER, ar_fbo);
     g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, ar_color, 0);
-    g.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, ar_depth);
+    g.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER,
+                              ar_depth);
     check_fbo("apparent-ridge framebuffer");
+    g.GenFramebuffers(1, &ar_out_fbo);
+    g.BindFramebuffer(GL_FRAMEBUFFER, ar_out_fbo);
+    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, main_color, 0);
+    g.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER,
+                              ar_depth);
+    check_fbo("apparent-ridge output framebuffer");
   }
 
   // ------------------------------------------------------------- helpers
@@ -441,28 +458,89 @@ struct Renderer::Impl {
     set_state_opaque();  // depth writes on, or Clear leaves the depth alone
     g.ClearColor(0.0f, 0.5f, 0.5f, 0.0f);
     g.ClearDepth(1.0);
-    g.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    g.ClearStencil(0);
+    g.StencilMask(0xFF);
+    g.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT | GL_STENCIL_BUFFER_BIT);
+    // Stencil: 1 where a hybrid mesh is the visible surface, 0 elsewhere.
+    g.Enable(GL_STENCIL_TEST);
+    g.StencilOp(GL_KEEP, GL_KEEP, GL_REPLACE);
+    // Occluders (q = 0, coverage 0) by their own program, so the hybrid
+    // program has no per-fragment branch; the draw order is kept.
     const ShaderProgram& p =
         program(bare ? "ar_bare1" : (o.per_fragment ? "ar1_per_fragment" : "ar1"));
-    p.use();
-    set_common(p, m, t);
-    p.set("u_q_max", static_cast<float>(o.saturation));
-    p.set("u_sign_free", o.sign_free ? 1 : 0);
+    const ShaderProgram* current = nullptr;
     for (const auto& d : draws) {
-      p.set("u_scale", d.scale);
-      p.set("u_occluder", d.occluder ? 1 : 0);
+      const ShaderProgram& q = d.occluder ? program("ar_occluder") : p;
+      if (&q != current) {
+        current = &q;
+        q.use();
+        set_common(q, m, t);
+        if (&q == &p) {
+          p.set("u_q_max", static_cast<float>(o.saturation));
+          p.set("u_sign_free", o.sign_free ? 1 : 0);
+        }
+      }
+      if (!d.occluder) p.set("u_scale", d.scale);
+      g.StencilFunc(GL_ALWAYS, d.occluder ? 0 : 1, 0xFF);
       draw_mesh(*d.mesh);
     }
+    g.Disable(GL_STENCIL_TEST);
   }
 
+  // Hybrid stage 2 into main_color (bound through ar_out_fbo). A pixel can
+  // only be inked where stage 1 drew a hybrid mesh (stencil 1) and
+  // (8 + 8 lambda) q > threshold (ar_stage2.frag's exact bound). A software
+  // rasteriser runs a fragment shader's every instruction on every pixel of a
+  // block that is alive (discard does not skip the rest; branches are masks),
+  // but skips blocks that fail the early depth/stencil tests. So the method
+  // first marks the pixels that pass the bound (ar_mask.frag: depth written
+  // as 0.5, a cheap pass over the hybrid pixels only) and then runs
+  // the filter with depth test EQUAL: on the marked pixels only. The bare
+  // pass gets the same stencil test. Output identical to the unmasked filter:
+  // the mask is conservative and the filter repeats the exact tests.
   void hybrid_stage2(const HybridOptions& o, const Tile& t, bool bare) {
     const GlFunctions& g = gl();
+    g.BindFramebuffer(GL_FRAMEBUFFER, ar_out_fbo);
+    const GLenum color0 = GL_COLOR_ATTACHMENT0;
+    g.DrawBuffers(1, &color0);
     g.Viewport(0, 0, t.render_w, t.render_h);
-    set_state_overlay();
-    const ShaderProgram& p = program(bare ? "ar_bare2" : "ar2");
-    p.use();
+    // One pixel inside the target: the filter's neighbours all exist (the
+    // outer pixels are margin, never read back).
+    g.Enable(GL_SCISSOR_TEST);
+    g.Scissor(1, 1, t.render_w - 2, t.render_h - 2);
     g.ActiveTexture(GL_TEXTURE0);
     g.BindTexture(GL_TEXTURE_2D, ar_color);
+    g.Enable(GL_STENCIL_TEST);
+    g.StencilMask(0x00);
+    g.StencilOp(GL_KEEP, GL_KEEP, GL_KEEP);
+    g.StencilFunc(GL_EQUAL, 1, 0xFF);
+    if (!bare) {
+      const ShaderProgram& m = program("ar_mask");
+      m.use();
+      m.set("u_data", 0);
+      // Conservative by a relative 1e-4: stage 2 repeats the exact test.
+      const double gain = 8.0 + 8.0 * o.lambda;
+      const double min_q =
+          o.lambda >= -0.5 ? o.threshold / gain - 1e-4 * std::abs(o.threshold / gain) - 1e-7 : -1.0;
+      m.set("u_min_q", static_cast<float>(min_q));
+      g.ColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+      g.Disable(GL_BLEND);
+      g.Enable(GL_DEPTH_TEST);
+      g.DepthFunc(GL_ALWAYS);
+      g.DepthMask(GL_TRUE);
+      draw_fullscreen();  // z = 0: window depth 0.5 on the marked pixels
+      g.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    }
+    set_state_overlay();
+    if (!bare) {
+      // Only the marked pixels: stage 1 leaves no hybrid or background pixel
+      // at depth 0.5 unless by chance, and those are filtered exactly anyway.
+      g.Disable(GL_STENCIL_TEST);
+      g.Enable(GL_DEPTH_TEST);
+      g.DepthFunc(GL_EQUAL);
+    }
+    const ShaderProgram& p = program(bare ? "ar_bare2" : "ar2");
+    p.use();
     p.set("u_data", 0);
     p.set("u_lambda", static_cast<float>(o.lambda));
     p.set("u_threshold", static_cast<float>(o.threshold));
@@ -470,6 +548,11 @@ struct Renderer::Impl {
     p.set("u_sign_free", o.sign_free ? 1 : 0);
     p.set("u_line_color", o.color.r, o.color.g, o.color.b, o.color.a);
     draw_fullscreen();
+    g.Disable(GL_SCISSOR_TEST);
+    g.Disable(GL_STENCIL_TEST);
+    g.StencilMask(0xFF);
+    g.DepthFunc(GL_LESS);
+    g.Disable(GL_DEPTH_TEST);
   }
 };
 
@@ -769,7 +852,6 @@ Image Renderer::render(const Scene& scene, const Camera& camera, const RenderOpt
           draws.push_back({gpu[i], 1.0f, true});
       }
       I.hybrid_stage1(draws, options.hybrid, M, t, false);
-      g.BindFramebuffer(GL_FRAMEBUFFER, I.overlay_fbo);
       I.hybrid_stage2(options.hybrid, t, false);
     }
     // 5. Lines.
@@ -815,7 +897,8 @@ Image Renderer::render(const Scene& scene, const Camera& camera, const RenderOpt
 }
 
 Image Renderer::render_hybrid(const std::shared_ptr<const RenderMesh>& mesh, const Camera& camera,
-                              const HybridOptions& options, bool transparent, bool bare) {
+                              const HybridOptions& options, bool transparent, bool bare,
+                              HybridFrameProfile* profile) {
   check_size(camera);
   if (!mesh || !mesh->has_curvature())
     throw InputError("hybrid apparent ridges need a mesh with per-vertex curvature");
@@ -833,8 +916,24 @@ Image Renderer::render_hybrid(const std::shared_ptr<const RenderMesh>& mesh, con
   }
   I.ensure_main(max_w, max_h);
   Image image(camera.width, camera.height);
+  GLuint queries[2] = {0, 0};
+  if (profile) g.GenQueries(2, queries);
+  using clock = std::chrono::steady_clock;
+  auto lap = [&](clock::time_point& since, double& into) {
+    g.Finish();
+    const auto now = clock::now();
+    into += std::chrono::duration<double, std::milli>(now - since).count();
+    since = now;
+  };
   for (const Tile& t : tiles) {
+    auto since = clock::now();
+    if (profile) g.BeginQuery(GL_TIME_ELAPSED, queries[0]);
     I.hybrid_stage1({{&gm, scale, false}}, options, M, t, bare);
+    if (profile) {
+      g.EndQuery(GL_TIME_ELAPSED);
+      lap(since, profile->stage1_ms);
+      g.BeginQuery(GL_TIME_ELAPSED, queries[1]);
+    }
     g.BindFramebuffer(GL_FRAMEBUFFER, I.main_fbo);
     const GLenum color0 = GL_COLOR_ATTACHMENT0;
     g.DrawBuffers(1, &color0);
@@ -843,7 +942,23 @@ Image Renderer::render_hybrid(const std::shared_ptr<const RenderMesh>& mesh, con
     g.ClearColor(a, a, a, a);
     g.Clear(GL_COLOR_BUFFER_BIT);
     I.hybrid_stage2(options, t, bare);
+    if (profile) {
+      g.EndQuery(GL_TIME_ELAPSED);
+      lap(since, profile->stage2_ms);
+    }
     I.read_tile(I.main_fbo, t, camera.height, image, true);
+    if (profile) {
+      lap(since, profile->readback_ms);
+      GLuint64 ns[2] = {0, 0};
+      g.GetQueryObjectui64v(queries[0], GL_QUERY_RESULT, &ns[0]);
+      g.GetQueryObjectui64v(queries[1], GL_QUERY_RESULT, &ns[1]);
+      profile->stage1_gpu_ms += 1e-6 * static_cast<double>(ns[0]);
+      profile->stage2_gpu_ms += 1e-6 * static_cast<double>(ns[1]);
+    }
+  }
+  if (profile) {
+    g.DeleteQueries(2, queries);
+    check_gl_error(g, "timing the hybrid stages");
   }
   g.BindVertexArray(0);
   g.BindFramebuffer(GL_FRAMEBUFFER, 0);

@@ -20,6 +20,7 @@ namespace fabrica::render {
   X(PFNGLGETINTEGERVPROC, GetIntegerv)                           \
   X(PFNGLGETFLOATVPROC, GetFloatv)                               \
   X(PFNGLVIEWPORTPROC, Viewport)                                 \
+  X(PFNGLSCISSORPROC, Scissor)                                   \
   X(PFNGLCLEARCOLORPROC, ClearColor)                             \
   X(PFNGLCLEARDEPTHPROC, ClearDepth)                             \
   X(PFNGLCLEARPROC, Clear)                                       \
@@ -31,6 +32,10 @@ namespace fabrica::render {
   X(PFNGLBLENDEQUATIONPROC, BlendEquation)                       \
   X(PFNGLDEPTHFUNCPROC, DepthFunc)                               \
   X(PFNGLDEPTHMASKPROC, DepthMask)                               \
+  X(PFNGLSTENCILFUNCPROC, StencilFunc)                           \
+  X(PFNGLSTENCILOPPROC, StencilOp)                               \
+  X(PFNGLSTENCILMASKPROC, StencilMask)                           \
+  X(PFNGLCLEARSTENCILPROC, ClearStencil)                         \
   X(PFNGLCOLORMASKPROC, ColorMask)                               \
   X(PFNGLPOLYGONOFFSETPROC, PolygonOffset)                       \
   X(PFNGLFINISHPROC, Finish)                                     \
@@ -93,7 +98,12 @@ namespace fabrica::render {
   X(PFNGLUNIFORM3FPROC, Uniform3f)                               \
   X(PFNGLUNIFORM4FPROC, Uniform4f)                               \
   X(PFNGLUNIFORMMATRIX3FVPROC, UniformMatrix3fv)                 \
-  X(PFNGLUNIFORMMATRIX4FVPROC, UniformMatrix4fv)
+  X(PFNGLUNIFORMMATRIX4FVPROC, UniformMatrix4fv)                 \
+  X(PFNGLGENQUERIESPROC, GenQueries)                             \
+  X(PFNGLDELETEQUERIESPROC, DeleteQueries)                       \
+  X(PFNGLBEGINQUERYPROC, BeginQuery)                             \
+  X(PFNGLENDQUERYPROC, EndQuery)                                 \
+  X(PFNGLGETQUERYOBJECTUI64VPROC, GetQueryObjectui64v)
 
 struct GlFunctions {
 #define FABRICA_GL_DECLARE(type, name) type name = nullptr;

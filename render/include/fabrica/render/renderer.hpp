@@ -50,6 +50,19 @@ struct RenderOptions {
   HybridOptions hybrid;
 };
 
+/// Where one render_hybrid frame spends its time (filled when asked for; the
+/// benchmark's breakdown). *_gpu_ms: GL_TIME_ELAPSED of stage 1 (clear and
+/// draw into the (q, t1) target) and stage 2 (clear of the colour target and
+/// the filter pass) as the driver reports it; *_ms: wall clock of each stage
+/// with a glFinish after it, and of the readback (glReadPixels and the copy
+/// into the Image). Profiling adds the glFinish calls; llvmpipe serialises the
+/// stages anyway (stage 2 samples stage 1's target, the readback waits for
+/// stage 2).
+struct HybridFrameProfile {
+  double stage1_gpu_ms = 0.0, stage2_gpu_ms = 0.0;
+  double stage1_ms = 0.0, stage2_ms = 0.0, readback_ms = 0.0;
+};
+
 class Renderer {
  public:
   /// Takes ownership of a context (headless or window).
@@ -68,8 +81,10 @@ class Renderer {
   /// The hybrid method alone on one mesh (stage 1, stage 2, readback), black
   /// lines on white (or transparent). `bare` runs the same passes with
   /// trivial shaders (the benchmark's baseline).
+  /// With `profile`, the stages' times are added to it (summed over tiles).
   Image render_hybrid(const std::shared_ptr<const RenderMesh>& mesh, const Camera& camera,
-                      const HybridOptions& options, bool transparent = false, bool bare = false);
+                      const HybridOptions& options, bool transparent = false, bool bare = false,
+                      HybridFrameProfile* profile = nullptr);
 
   /// Stage 1 only: the packed (q, t1) buffer as an image (for figures and tests).
   Image render_hybrid_buffer(const std::shared_ptr<const RenderMesh>& mesh, const Camera& camera,
