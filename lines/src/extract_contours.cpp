@@ -84,7 +84,9 @@ SegmentSoup extract_contours(const Surface& surface, const ViewFields& fields,
     require_field(fields.kr, nv, "kr");
     o.test_num = fields.kr;
   }
-  scalar_zero_crossings(surface, fields.ndotv, o, soup.segments);
+  detail::SignBits bits;
+  if (fields.signs.size() == nv) bits = {fields.signs.data(), kNdotvNegative, kNdotvPositive, 0};
+  detail::scalar_zero_crossings(surface, fields.ndotv, o, bits, soup.segments);
   return soup;
 }
 
@@ -124,9 +126,12 @@ SegmentSoup suggestive_like(const Surface& surface, const ViewFields& fields, do
   soup.family = highlight ? LineFamily::highlight : LineFamily::suggestive;
   // Test N/D with N = ±sc_num - t n·v and D = n·v, N evaluated only at the
   // corners of faces where K_r changes sign.
+  detail::SignBits bits;
+  if (fields.signs.size() == nv)
+    bits = {fields.signs.data(), kKrNegative, kKrPositive, cull ? unsigned(kNdotvNotBack) : 0u};
   detail::suggestive_zero_crossings(surface, fields.kr, fields.sc_num, highlight,
                                     threshold / (fs * fs), fields.ndotv, cull, fade / (fs * fs),
-                                    soup.segments);
+                                    bits, soup.segments);
   return soup;
 }
 

@@ -6,6 +6,7 @@
 #include "fabrica/lines/extract.hpp"
 #include "fabrica/lines/zero_crossing.hpp"
 #include "parallel.hpp"
+#include "zero_crossing_internal.hpp"
 
 namespace fabrica {
 
@@ -79,7 +80,16 @@ SegmentSoup extract_apparent_ridges(const Surface& surface, const ViewFields& fi
   o.threshold = options.threshold / (feature_size * feature_size);
   // No back-face culling: contour-like apparent ridges come from barely
   // back-facing faces (§6.3).
-  vector_zero_crossings(surface, fields.dt1q1, fields.t1_world, fields.q1, o, soup.segments);
+  // Fields computed with a cull threshold hold D_t1 q1 only around the
+  // vertices above it (exact for any threshold at least as high); their
+  // kQ1Above bits answer the per-face threshold test when it is the same.
+  const auto& cull_t = fields.apparent_cull_threshold;
+  if (cull_t && !(o.threshold >= *cull_t))
+    throw Error(ErrorKind::internal,
+                "apparent ridges: the view fields were computed for a higher threshold");
+  const bool bits = fields.signs.size() == nv && cull_t && *cull_t == o.threshold;
+  detail::vector_zero_crossings(surface, fields.dt1q1, fields.t1_world, fields.q1, o,
+                                bits ? fields.signs.data() : nullptr, kQ1Above, soup.segments);
   return soup;
 }
 

@@ -75,6 +75,9 @@ void update_view_fields(ViewFields& fields, const Surface& surface, const Camera
   detail::resize_or_clear(fields.t1, request.apparent, nv);
   detail::resize_or_clear(fields.t1_world, request.apparent, nv);
   detail::resize_or_clear(fields.dt1q1, request.apparent, nv);
+  detail::resize_or_clear(fields.signs, radial, nv);
+  fields.apparent_cull_threshold =
+      request.apparent ? request.apparent_cull_threshold : std::optional<double>{};
 
   const auto& pos = surface.positions();
   const auto& normals = surface.vertex_normals();
@@ -83,15 +86,27 @@ void update_view_fields(ViewFields& fields, const Surface& surface, const Camera
     const auto& dcurv = surface.curvature_derivatives();
     const bool want_sc = request.sc_test;
     const bool want_app = request.apparent;
-    // Pass 1: n·v, K_r, the suggestive-contour numerator and q1.
+    const bool cull = want_app && request.apparent_cull_threshold.has_value();
+    const double cull_t = cull ? *request.apparent_cull_threshold : 0.0;
+    // Pass 1: n·v, K_r, the suggestive-contour numerator, q1, t1 and the
+    // sign bits.
     detail::parallel_range(nv, [&](std::size_t i) {
       const Vec3 v = camera.view_vector(pos[i]);
       const double ndotv = v.dot(normals[i]);
       fields.ndotv[i] = ndotv;
+      const unsigned nbits = unsigned(ndotv > 0.0) * kNdotvPositive |
+                             unsigned(ndotv < 0.0) * kNdotvNegative |
+                             unsigned(!(ndotv <= 0.0)) * kNdotvNotBack;
       if (!curv.valid[i]) {
         fields.kr[i] = 0.0;
         if (want_sc) fields.sc_num[i] = 0.0;
-        if (want_app) fields.q1[i] = 0.0;
+        if (want_app) {
+          fields.q1[i] = 0.0;
+          fields.t1[i] = Vec2(1.0, 0.0);
+          fields.t1_world[i] = Vec3::Zero();
+        }
+        fields.signs[i] =
+            static_cast<std::uint8_t>(nbits | unsigned(cull && !(0.0 <= cull_t)) * kQ1Above);
         return;
       }
       const double k1 = curv.k1[i], k2 = curv.k2[i];
@@ -112,10 +127,20 @@ void update_view_fields(ViewFields& fields, const Surface& surface, const Camera
           fields.sc_num[i] = 0.0;
         }
       }
-      if (want_app) fields.q1[i] = view_curvature_at(curv, i, v, ndotv).q1;
+      unsigned bits = nbits | unsigned(fields.kr[i] > 0.0) * kKrPositive |
+                      unsigned(fields.kr[i] < 0.0) * kKrNegative;
+      if (want_app) {
+        const ViewCurvature m = view_curvature_at(curv, i, v, ndotv);
+        fields.q1[i] = m.q1;
+        const Vec2 t1 = view_dependent_direction(m);
+        fields.t1[i] = t1;
+        fields.t1_world[i] = t1[0] * curv.e1[i] + t1[1] * curv.e2[i];
+        bits |= unsigned(cull && !(m.q1 <= cull_t)) * kQ1Above;
+      }
+      fields.signs[i] = static_cast<std::uint8_t>(bits);
     });
     if (want_app) {
-      // Pass 2: t1 and D_t1 q1 by Judd's finite differences (ALGORITHMS.md
+      // Pass 2: D_t1 q1 by Judd's finite differences (ALGORITHMS.md
       // §6.2): along the line through p_i in direction t1, find the crossing
       // with the opposite edge of each incident face, and average the (at
       // most two) one-sided differences, measured in projected (screen)
@@ -129,39 +154,32 @@ void update_view_fields(ViewFields& fields, const Surface& surface, const Camera
       const auto& faces = surface.faces();
       const LinePrecompute::CornerRing* ring = precompute ? &precompute->corner_ring() : nullptr;
       const double* q1 = fields.q1.data();
-      const bool cull = request.apparent_cull_threshold.has_value();
-      const double cull_t = cull ? *request.apparent_cull_threshold : 0.0;
+      const std::uint8_t* sg = fields.signs.data();
       detail::parallel_range(nv, [&](std::size_t i) {
-        auto skip = [&] {
-          fields.t1[i] = Vec2(1.0, 0.0);
-          fields.t1_world[i] = Vec3::Zero();
-          fields.dt1q1[i] = 0.0;
-        };
-        if (!curv.valid[i]) return skip();
-        if (cull && q1[i] <= cull_t) {
-          bool active = false;
+        if (cull && !(sg[i] & kQ1Above)) {
+          // Branch-free over the ring (bytes, not q1: a small array).
+          unsigned any = 0;
           if (ring) {
             const auto* o = ring->opposite.data();
-            for (std::int32_t j = ring->offset[i], e = ring->offset[i + 1]; j < e && !active; ++j)
-              active = !(q1[o[j][0]] <= cull_t) || !(q1[o[j][1]] <= cull_t);
+            for (std::int32_t j = ring->offset[i], e = ring->offset[i + 1]; j < e; ++j)
+              any |= unsigned(sg[o[j][0]]) | unsigned(sg[o[j][1]]);
           } else {
             const auto fs = topo.vertex_faces(i);
             const auto cs = topo.vertex_face_corners(i);
-            for (std::size_t j = 0; j < fs.size() && !active; ++j) {
+            for (std::size_t j = 0; j < fs.size(); ++j) {
               const Face& f = faces[static_cast<std::size_t>(fs[j])];
               const int c = cs[j];
-              active = !(q1[f[(c + 1) % 3]] <= cull_t) || !(q1[f[(c + 2) % 3]] <= cull_t);
+              any |= unsigned(sg[f[(c + 1) % 3]]) | unsigned(sg[f[(c + 2) % 3]]);
             }
           }
-          if (!active) return skip();
+          if (!(any & kQ1Above)) {
+            fields.dt1q1[i] = 0.0;
+            return;
+          }
         }
         const Vec3& p0 = pos[i];
         const double ndotv = fields.ndotv[i];
-        const Vec2 t1 =
-            view_dependent_direction(view_curvature_at(curv, i, camera.view_vector(p0), ndotv));
-        fields.t1[i] = t1;
-        const Vec3 t1w = t1[0] * curv.e1[i] + t1[1] * curv.e2[i];
-        fields.t1_world[i] = t1w;
+        const Vec3& t1w = fields.t1_world[i];
         double result = 0.0;
         if (t1w.squaredNorm() == 0.0) {
           fields.dt1q1[i] = 0.0;

@@ -197,12 +197,26 @@ template <class Num>
 
 template <class Num>
 void scalar_crossings(const ScalarInputs& in, const Num& num, std::size_t face_count,
-                      std::vector<LineSegment>& out, std::span<const std::int32_t> list = {}) {
+                      std::vector<LineSegment>& out, std::span<const std::int32_t> list = {},
+                      const detail::SignBits& bits = {}) {
   detail::parallel_chunks<LineSegment>(
       list.empty() ? face_count : list.size(),
       [&](std::size_t b, std::size_t e, std::vector<LineSegment>& part) {
         const Face* faces = in.m.faces;
         const double* val = in.val;
+        if (bits.signs && list.empty()) {
+          // The same rejections (and the culling) from one byte per corner.
+          const std::uint8_t* sg = bits.signs;
+          const unsigned neg = bits.negative, pos = bits.positive, cull = bits.cull;
+          for (std::size_t f = b; f < e; ++f) {
+            const Face& face = faces[f];
+            const unsigned a0 = sg[face[0]], a1 = sg[face[1]], a2 = sg[face[2]];
+            const unsigned all = a0 & a1 & a2, any = a0 | a1 | a2;
+            if ((all & (neg | pos)) | (~any & cull) || !(any & (neg | pos))) continue;
+            scalar_face(in, num, f, part);
+          }
+          return;
+        }
         for (std::size_t j = b; j < e; ++j) {
           const std::size_t f = list.empty() ? j : static_cast<std::size_t>(list[j]);
           // Quick exact rejection (most faces): a lone sign needs the three
@@ -352,14 +366,50 @@ void scalar_zero_crossings(const Surface& surface, std::span<const double> value
 
 namespace detail {
 
+void scalar_zero_crossings(const Surface& surface, std::span<const double> values,
+                           const ScalarCrossingOptions& options, const SignBits& bits,
+                           std::vector<LineSegment>& out) {
+  const ScalarInputs in{MeshArrays(surface),
+                        values.data(),
+                        options.cull.empty() ? nullptr : options.cull.data(),
+                        options.test_den.empty() ? nullptr : options.test_den.data(),
+                        !options.test_num.empty(),
+                        options.fade};
+  scalar_crossings(in, StoredNum{options.test_num.data()}, surface.face_count(), out, options.faces,
+                   bits);
+}
+
 void suggestive_zero_crossings(const Surface& surface, std::span<const double> kr,
                                std::span<const double> sc_num, bool negate, double shift,
                                std::span<const double> ndotv, bool cull, double fade,
-                               std::vector<LineSegment>& out) {
+                               const SignBits& bits, std::vector<LineSegment>& out) {
   const ScalarInputs in{MeshArrays(surface), kr.data(), cull ? ndotv.data() : nullptr,
                         ndotv.data(),        true,      fade};
   scalar_crossings(in, ShiftedNum{sc_num.data(), ndotv.data(), negate, shift}, surface.face_count(),
-                   out);
+                   out, {}, bits);
+}
+
+void vector_zero_crossings(const Surface& surface, std::span<const double> derivative,
+                           std::span<const Vec3> direction, std::span<const double> magnitude,
+                           const VectorCrossingOptions& options, const std::uint8_t* signs,
+                           unsigned above_bit, std::vector<LineSegment>& out) {
+  if (!signs) {
+    fabrica::vector_zero_crossings(surface, derivative, direction, magnitude, options, out);
+    return;
+  }
+  const VectorInputs in{MeshArrays(surface), derivative.data(), direction.data(), magnitude.data(),
+                        options};
+  detail::parallel_chunks<LineSegment>(
+      surface.face_count(),
+      [&](std::size_t b, std::size_t e, std::vector<LineSegment>& part) {
+        const Face* faces = in.m.faces;
+        for (std::size_t f = b; f < e; ++f) {
+          const Face& face = faces[f];
+          if (!((signs[face[0]] | signs[face[1]] | signs[face[2]]) & above_bit)) continue;
+          vector_face(in, f, part);
+        }
+      },
+      out);
 }
 
 }  // namespace detail

@@ -3,13 +3,29 @@
 // temporaries.
 #pragma once
 
+#include <cstdint>
 #include <span>
 #include <vector>
 
 #include "fabrica/core/surface.hpp"
 #include "fabrica/lines/segments.hpp"
+#include "fabrica/lines/zero_crossing.hpp"
 
 namespace fabrica::detail {
+
+/// Per-vertex sign bytes (ViewFields::signs) for the quick face rejection
+/// of the scalar kernel: the bits meaning value < 0 and value > 0, and
+/// optionally the bit meaning "not culled" (!(cull <= 0)). Exactly the
+/// rejections the kernel makes from the doubles; signs == nullptr: unused.
+struct SignBits {
+  const std::uint8_t* signs = nullptr;
+  unsigned negative = 0, positive = 0, cull = 0;
+};
+
+/// scalar_zero_crossings with sign bytes for `values` (and options.cull).
+void scalar_zero_crossings(const Surface& surface, std::span<const double> values,
+                           const ScalarCrossingOptions& options, const SignBits& bits,
+                           std::vector<LineSegment>& out);
 
 /// scalar_zero_crossings(kr) with the suggestive-contour test N/D, where
 /// D = ndotv and N_i = ±sc_num_i - shift * ndotv_i (minus sign when
@@ -18,6 +34,14 @@ namespace fabrica::detail {
 void suggestive_zero_crossings(const Surface& surface, std::span<const double> kr,
                                std::span<const double> sc_num, bool negate, double shift,
                                std::span<const double> ndotv, bool cull, double fade,
-                               std::vector<LineSegment>& out);
+                               const SignBits& bits, std::vector<LineSegment>& out);
+
+/// vector_zero_crossings where `above_bit` of signs[v] is set exactly when
+/// !(magnitude[v] <= options.threshold): faces without it are skipped from
+/// the bytes. signs == nullptr: the plain kernel.
+void vector_zero_crossings(const Surface& surface, std::span<const double> derivative,
+                           std::span<const Vec3> direction, std::span<const double> magnitude,
+                           const VectorCrossingOptions& options, const std::uint8_t* signs,
+                           unsigned above_bit, std::vector<LineSegment>& out);
 
 }  // namespace fabrica::detail

@@ -41,10 +41,10 @@ struct ViewFieldsRequest {
   bool sc_test = true;   ///< sc_num (suggestive contours and highlights)
   bool apparent = true;  ///< q1, t1, t1_world, dt1q1
   /// With a value t (rtsc's q1 threshold in 1/mm², as the apparent-ridge
-  /// extractor uses): t1, t1_world and dt1q1 are computed only at the
-  /// vertices of faces with a corner where q1 > t, the only ones an apparent
-  /// ridge with that threshold reads; elsewhere t1 = (1, 0), t1_world = 0,
-  /// dt1q1 = 0. q1 is always computed everywhere. nullopt: everywhere.
+  /// extractor uses): dt1q1 is computed only at the vertices of faces with a
+  /// corner where q1 > t, the only ones an apparent ridge with that
+  /// threshold reads, and is 0 elsewhere; ViewFields::signs gets kQ1Above.
+  /// q1, t1 and t1_world are always computed everywhere. nullopt: everywhere.
   std::optional<double> apparent_cull_threshold;
   bool light = false;    ///< light, light_gradient, light_laplacian (PELs, Laplacian lines)
   bool pel = false;      ///< pel_h, pel_maximum (PELs): D_w|∇f| and -D_w D_w|∇f|
@@ -60,12 +60,26 @@ struct ViewFieldsRequest {
   bool light_cull_backfaces = false;
 };
 
+/// Bits of ViewFields::signs: one byte per vertex, filled with the radial
+/// group, so face loops can reject most faces from a small array. Exact
+/// comparisons (NaN sets neither of a > 0 / < 0 pair).
+enum ViewSign : std::uint8_t {
+  kNdotvPositive = 1,     ///< n·v > 0
+  kNdotvNegative = 2,     ///< n·v < 0
+  kNdotvNotBack = 4,      ///< !(n·v <= 0): not culled as back-facing
+  kKrPositive = 8,        ///< K_r > 0
+  kKrNegative = 16,       ///< K_r < 0
+  kQ1Above = 32,          ///< !(q1 <= apparent_cull_threshold) (only with a threshold)
+};
+
 struct ViewFields {
   Camera camera;
   std::vector<double> ndotv, kr, sc_num;
   std::vector<double> q1, dt1q1;
   std::vector<Vec2> t1;
   std::vector<Vec3> t1_world;
+  std::vector<std::uint8_t> signs;  ///< ViewSign bits (with the radial group)
+  std::optional<double> apparent_cull_threshold;  ///< as requested
   std::vector<double> light, light_laplacian;
   std::vector<Vec3> light_gradient;
   /// |∇f| (1/mm; with `light`), D_w|∇f| (1/mm²) and -D_w D_w|∇f| (1/mm³,
