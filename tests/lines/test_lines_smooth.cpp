@@ -395,6 +395,42 @@ TEST(LinesSmooth, BrokenPolylinesAreLeftUnchangedAndCounted) {
   }
 }
 
+// The smoothing is intrinsic: the same lines on a rotated, moved and scaled
+// copy of the mesh give the same lines, moved and scaled. Not to rounding:
+// the discrete steps (vertex snapping, removals) may decide a near tie
+// differently, which moves a few points by up to ~1e-3 edge lengths.
+TEST(LinesSmooth, SameAnchorsUnderRigidMotionAndScaling) {
+  JitteredTorus t;
+  const LineSet lines =
+      lines_for(t.surface, t.camera, {LineFamily::contour, LineFamily::suggestive}, 0.1);
+  TriangleMesh moved = t.surface.mesh();
+  const Eigen::Matrix3d R =
+      Eigen::AngleAxisd(0.7, Vec3(1.0, 2.0, -0.5).normalized()).toRotationMatrix();
+  for (auto& p : moved.positions) p = 3.0 * (R * p) + Vec3(10.0, -4.0, 2.5);
+  Surface other(moved);
+  LineSet a = lines, b = lines;
+  for (auto& pl : b.polylines)
+    for (auto& v : pl.vertices) v.position = v.anchor.position(moved);
+  LineSmoothingOptions o;
+  o.iterations = 4;
+  const auto sa = smooth_lines(a, t.surface, o);
+  const auto sb = smooth_lines(b, other, o);
+  EXPECT_EQ(sa.smoothed, sb.smoothed);
+  EXPECT_NEAR(sb.length_after, 3.0 * sa.length_after, 1e-6 * sb.length_after);
+  ASSERT_EQ(a.polylines.size(), b.polylines.size());
+  for (std::size_t p = 0; p < a.polylines.size(); ++p) {
+    const auto &x = a.polylines[p].vertices, &y = b.polylines[p].vertices;
+    ASSERT_EQ(x.size(), y.size()) << "polyline " << p;
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      // Compare positions (the anchor's face may differ for a point on an edge).
+      const Vec3 expected = 3.0 * (R * x[i].position) + Vec3(10.0, -4.0, 2.5);
+      EXPECT_LT((y[i].position - expected).norm(), 3.0 * 2e-4)
+          << "polyline " << p << " point " << i;
+      EXPECT_NEAR(y[i].strength, x[i].strength, 1e-3);
+    }
+  }
+}
+
 TEST(LinesSmooth, RejectsBadOptions) {
   JitteredTorus t;
   LineSet l;
