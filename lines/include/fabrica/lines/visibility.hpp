@@ -39,6 +39,9 @@ struct DepthBuffer {
 /// from the camera) with perspective-correct depth. Triangles with a corner
 /// behind the near plane are skipped.
 DepthBuffer render_depth(const TriangleMesh& mesh, const Camera& camera);
+/// The same into `out`, reusing its storage (no allocation when the size
+/// is unchanged: keep one DepthBuffer per view for redraws).
+void render_depth(const TriangleMesh& mesh, const Camera& camera, DepthBuffer& out);
 
 struct VisibilityOptions {
   /// Depth tolerance in mm; <= 0 uses half the median edge length.
