@@ -11,6 +11,8 @@ namespace fabrica {
 
 struct LinePrecompute::Cache {
   std::once_flag k1_once, ridge_once, demarcating_once, gradient_once, laplacian_once, ring_once;
+  std::once_flag ridge_keys_once, demarcating_keys_once;
+  std::vector<RawKey> ridge_keys, valley_keys, demarcating_keys;
   CornerRing ring;
   std::vector<double> abs_k1;
   std::vector<LineSegment> ridges, valleys, demarcating;
@@ -102,6 +104,40 @@ const std::vector<LineSegment>& LinePrecompute::raw_ridges() const {
 const std::vector<LineSegment>& LinePrecompute::raw_valleys() const {
   (void)raw_ridges();
   return cache_->valleys;
+}
+
+namespace {
+
+std::vector<LinePrecompute::RawKey> raw_keys(const Surface& s,
+                                             const std::vector<LineSegment>& raw) {
+  std::vector<LinePrecompute::RawKey> keys(raw.size());
+  const auto& faces = s.faces();
+  for (std::size_t i = 0; i < raw.size(); ++i) {
+    const Face& f = faces[static_cast<std::size_t>(raw[i].face)];
+    keys[i] = {{f[0], f[1], f[2]}, raw[i].end[0].strength, raw[i].end[1].strength};
+  }
+  return keys;
+}
+
+}  // namespace
+
+const std::vector<LinePrecompute::RawKey>& LinePrecompute::raw_ridge_keys() const {
+  std::call_once(cache_->ridge_keys_once, [&] {
+    cache_->ridge_keys = raw_keys(*surface_, raw_ridges());
+    cache_->valley_keys = raw_keys(*surface_, raw_valleys());
+  });
+  return cache_->ridge_keys;
+}
+
+const std::vector<LinePrecompute::RawKey>& LinePrecompute::raw_valley_keys() const {
+  (void)raw_ridge_keys();
+  return cache_->valley_keys;
+}
+
+const std::vector<LinePrecompute::RawKey>& LinePrecompute::raw_demarcating_keys() const {
+  std::call_once(cache_->demarcating_keys_once,
+                 [&] { cache_->demarcating_keys = raw_keys(*surface_, raw_demarcating()); });
+  return cache_->demarcating_keys;
 }
 
 const std::vector<LineSegment>& LinePrecompute::raw_demarcating() const {

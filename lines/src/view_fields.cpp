@@ -11,6 +11,8 @@ namespace fabrica {
 
 namespace {
 
+constexpr std::size_t kPrefetchAhead = 8;
+
 // QᵀQ for Q = S P⁻¹ in principal coordinates (Judd et al. 2007;
 // ALGORITHMS.md §6.1) and its largest eigenvalue q1. u2, uv, w2 are the
 // components of ŵ (the unit projected view direction) squared/multiplied.
@@ -42,22 +44,17 @@ inline Vec2 view_dependent_direction(const ViewCurvature& m) {
   return len > 0.0 ? Vec2(e / len) : Vec2(1.0, 0.0);
 }
 
-// Everything view_dependent_curvature needs at vertex i, from the view
-// vector v: the same expressions in the q1 pass and in the t1 pass, so both
-// see the same bits.
-inline ViewCurvature view_curvature_at(const PrincipalCurvatures& curv, std::size_t i,
-                                       const Vec3& v, double ndotv) {
-  const double u = v.dot(curv.e1[i]), w = v.dot(curv.e2[i]);
-  const double u2 = u * u, w2 = w * w;
-  const double sin2 = u2 + w2;
-  const double csc2 = sin2 > 1e-300 ? 1.0 / sin2 : 0.0;
+// view_dependent_curvature from u = v·e1, w = v·e2 (u2 = u², w2 = w²)
+// and csc2 = 1/sin²θ (0 when sin θ = 0).
+inline ViewCurvature view_curvature_at(double k1, double k2, double ndotv, double u, double w,
+                                       double u2, double w2, double csc2) {
   double hu2 = 1.0, huv = 0.0, hw2 = 0.0;
   if (csc2 > 0.0) {
     hu2 = u2 * csc2;
     huv = u * w * csc2;
     hw2 = w2 * csc2;
   }
-  return view_dependent_curvature(curv.k1[i], curv.k2[i], ndotv, hu2, huv, hw2);
+  return view_dependent_curvature(k1, k2, ndotv, hu2, huv, hw2);
 }
 
 }  // namespace
@@ -130,7 +127,7 @@ void update_view_fields(ViewFields& fields, const Surface& surface, const Camera
       unsigned bits = nbits | unsigned(fields.kr[i] > 0.0) * kKrPositive |
                       unsigned(fields.kr[i] < 0.0) * kKrNegative;
       if (want_app) {
-        const ViewCurvature m = view_curvature_at(curv, i, v, ndotv);
+        const ViewCurvature m = view_curvature_at(k1, k2, ndotv, u, w, u2, w2, csc2);
         fields.q1[i] = m.q1;
         const Vec2 t1 = view_dependent_direction(m);
         fields.t1[i] = t1;
@@ -156,6 +153,17 @@ void update_view_fields(ViewFields& fields, const Surface& surface, const Camera
       const double* q1 = fields.q1.data();
       const std::uint8_t* sg = fields.signs.data();
       detail::parallel_range(nv, [&](std::size_t i) {
+        // The ring's positions are scattered over the mesh: ask for those of
+        // a vertex a few steps ahead (no effect on the results).
+        if (ring && i + kPrefetchAhead < nv) {
+          const auto* o = ring->opposite.data();
+          for (std::int32_t j = ring->offset[i + kPrefetchAhead],
+                            e = ring->offset[i + kPrefetchAhead + 1];
+               j < e; ++j) {
+            __builtin_prefetch(&pos[static_cast<std::size_t>(o[j][0])]);
+            __builtin_prefetch(&q1[o[j][0]]);
+          }
+        }
         if (cull && !(sg[i] & kQ1Above)) {
           // Branch-free over the ring (bytes, not q1: a small array).
           unsigned any = 0;

@@ -44,6 +44,17 @@ class LinePrecompute {
   const std::vector<LineSegment>& raw_valleys() const;
   /// Demarcating curves without threshold; strength holds C(g,g,g) (1/mm²).
   const std::vector<LineSegment>& raw_demarcating() const;
+  /// One entry per segment of raw_ridges() / raw_valleys() /
+  /// raw_demarcating(), same order: the segment face's corners and its two
+  /// end strengths, so the per-view culling and thresholding read 20 bytes
+  /// per segment instead of the whole segment.
+  struct RawKey {
+    std::array<std::int32_t, 3> corners;
+    float m0, m1;
+  };
+  const std::vector<RawKey>& raw_ridge_keys() const;
+  const std::vector<RawKey>& raw_valley_keys() const;
+  const std::vector<RawKey>& raw_demarcating_keys() const;
   const GradientOperator& gradient_operator() const;
   /// Cotan Laplacian of each normal component (1/mm²), per vertex.
   const std::vector<Vec3>& normal_laplacian() const;
