@@ -1,10 +1,13 @@
 // Drawing: Lambert and toon shading against the analytic sphere, lines as
 // quads whose width scales with the image, hidden-line modes, weighted
 // blended transparency, the stage-1 buffer of the hybrid method against the
-// analytic q1 of a sphere, and scene JSON round trips.
+// analytic q1 of a sphere, its stage 2 against the plain filter on the CPU,
+// and scene JSON round trips.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <nlohmann/json.hpp>
 #include <set>
 
@@ -258,6 +261,80 @@ TEST(RenderDrawing, HybridSphereHasOnlyTheOutline) {
     EXPECT_EQ(ink_inside, 0u) << "variant " << variant;
     EXPECT_GT(ink_ring, 300u) << "variant " << variant;
     EXPECT_EQ(sectors.size(), 36u) << "variant " << variant << ": the outline is closed";
+  }
+}
+
+// Stage 2 on the CPU from the stage-1 buffer (8-bit target): the filter of
+// ar_stage2.frag without any shortcut, for HybridStageTwoMatchesCpuFilter.
+// Returns the red channel render_hybrid writes over white (255 = no ink).
+int cpu_stage_two(const fr::Image& buf, int x, int y, const fr::HybridOptions& o) {
+  const auto* c = buf.pixel(x, y);
+  if (c[3] < 128) return 255;
+  const float lambda = static_cast<float>(o.lambda), threshold = static_cast<float>(o.threshold);
+  float v = (8.0f + 8.0f * lambda) * (c[0] / 255.0f);
+  if (lambda >= -0.5f && v <= threshold) return 255;
+  float tx = 2.0f * (c[1] / 255.0f - 0.5f), ty = 2.0f * (c[2] / 255.0f - 0.5f);
+  if (tx == 0.0f && ty == 0.0f) return 255;
+  if (o.sign_free) {
+    const float phi = 0.5f * std::atan2(ty, tx);
+    tx = std::cos(phi);
+    ty = std::sin(phi);
+  }
+  const float b = 0.92387953251080f, a = 0.70710678118655f;
+  int dx = -1, dy = 1;
+  if (std::abs(tx) > b)
+    dx = 1, dy = 0;
+  else if (std::abs(a * tx + a * ty) > b)
+    dx = 1, dy = 1;
+  else if (std::abs(ty) > b)
+    dx = 0, dy = 1;
+  // GL offsets (y up) on an image stored top row first.
+  auto q = [&](int ox, int oy) { return buf.pixel(x + ox, y - oy)[0] / 255.0f; };
+  const float h = q(-1, 0) + q(1, 0), vert = q(0, 1) + q(0, -1);
+  const float diag = q(1, 1) + q(-1, -1), anti = q(-1, 1) + q(1, -1);
+  const float C = dy == 0    ? h + 0.5f * (diag + anti)
+                  : dx == 0  ? vert + 0.5f * (diag + anti)
+                  : dx == dy ? diag + 0.5f * (h + vert)
+                             : anti + 0.5f * (h + vert);
+  v -= (h + vert + diag + anti) + 2.0f * lambda * C;
+  if (v <= threshold) return 255;
+  const float ink = o.fade ? std::min(v, 1.0f) : 1.0f;
+  return static_cast<int>(std::lround(255.0 * (1.0 - ink)));
+}
+
+TEST(RenderDrawing, HybridStageTwoMatchesCpuFilter) {
+  // The renderer filters only the pixels its mask pass marks (renderer.cpp,
+  // hybrid_stage2); the image must equal the plain filter applied to every
+  // pixel of the stage-1 buffer. A torus in perspective has contours, ridges
+  // inside and pixels on both sides of every early test.
+  auto mesh = fabrica::test::torus_render_mesh(1.0, 0.35, 96, 48);
+  Camera cam = fabrica::test::front_camera(256, 256, 5.0);
+  cam.eye = Vec3(0.0, -4.0, 5.5);
+  for (int variant = 0; variant < 5; ++variant) {
+    fr::HybridOptions o;
+    if (variant == 1) o.lambda = 0.0, o.threshold = 0.05;
+    if (variant == 2) o.lambda = -0.75;  // no early bound: every covered pixel is filtered
+    if (variant == 3) o.fade = false, o.sign_free = true;
+    if (variant == 4) o.tau = 0.0, o.threshold = 0.1;
+    const fr::Image buf = renderer().render_hybrid_buffer(mesh, cam, o);
+    const fr::Image img = renderer().render_hybrid(mesh, cam, o);
+    std::size_t inked = 0, differ = 0, grey = 0;
+    for (int y = 1; y + 1 < img.height; ++y)
+      for (int x = 1; x + 1 < img.width; ++x) {
+        const int expected = cpu_stage_two(buf, x, y, o);
+        const int actual = img.pixel(x, y)[0];
+        if (expected < 255) ++inked;
+        if (expected > 0 && expected < 255) ++grey;
+        if (std::abs(expected - actual) > 1) ++differ;
+      }
+    // Float rounding (FMA, conversions) may move a pixel across the
+    // threshold; a pixel the mask lost would differ by its whole ink.
+    EXPECT_GT(inked, 400u) << "variant " << variant;
+    if (o.fade && variant < 3) {
+      EXPECT_GT(grey, 40u) << "variant " << variant << ": faded ink";
+    }
+    EXPECT_LE(differ, inked / 500 + 2)
+        << "variant " << variant << ": " << differ << " of " << inked << " inked pixels differ";
   }
 }
 
