@@ -11,7 +11,8 @@ namespace fabrica {
 
 struct LinePrecompute::Cache {
   std::once_flag k1_once, ridge_once, demarcating_once, gradient_once, laplacian_once, ring_once;
-  std::once_flag ridge_keys_once, demarcating_keys_once;
+  std::once_flag ridge_keys_once, demarcating_keys_once, tangent_ring_once;
+  TangentRing tangent_ring;
   std::vector<RawKey> ridge_keys, valley_keys, demarcating_keys;
   CornerRing ring;
   std::vector<double> abs_k1;
@@ -56,6 +57,35 @@ const LinePrecompute::CornerRing& LinePrecompute::corner_ring() const {
     });
   });
   return cache_->ring;
+}
+
+const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
+  std::call_once(cache_->tangent_ring_once, [&] {
+    const CornerRing& r = corner_ring();
+    const auto& pos = surface_->positions();
+    const auto& curv = surface_->curvature();
+    TangentRing& t = cache_->tangent_ring;
+    t.offset = r.offset;
+    t.entry.resize(r.opposite.size());
+    detail::parallel_range(surface_->vertex_count(), [&](std::size_t i) {
+      const bool ok = curv.valid[i] != 0;
+      for (std::int32_t j = r.offset[i]; j < r.offset[i + 1]; ++j) {
+        const auto [i1, i2] = r.opposite[static_cast<std::size_t>(j)];
+        TangentRing::Entry& e = t.entry[static_cast<std::size_t>(j)];
+        e.i1 = i1;
+        e.i2 = i2;
+        e.x1 = e.y1 = e.x2 = e.y2 = 0.0f;
+        if (!ok) continue;
+        const Vec3 d1 = pos[static_cast<std::size_t>(i1)] - pos[i];
+        const Vec3 d2 = pos[static_cast<std::size_t>(i2)] - pos[i];
+        e.x1 = static_cast<float>(d1.dot(curv.e1[i]));
+        e.y1 = static_cast<float>(d1.dot(curv.e2[i]));
+        e.x2 = static_cast<float>(d2.dot(curv.e1[i]));
+        e.y2 = static_cast<float>(d2.dot(curv.e2[i]));
+      }
+    });
+  });
+  return cache_->tangent_ring;
 }
 
 namespace {

@@ -67,6 +67,19 @@ class LinePrecompute {
     std::vector<std::array<std::int32_t, 2>> opposite;
   };
   const CornerRing& corner_ring() const;
+  /// corner_ring() with each opposite corner's offset d = p_k - p_i in
+  /// vertex i's principal frame, (d·e1, d·e2), as float (zeros where the
+  /// curvature is invalid): the per-view D_t1 q1 differences then stream
+  /// one array and work in the tangent plane instead of gathering positions.
+  struct TangentRing {
+    struct Entry {
+      std::int32_t i1, i2;
+      float x1, y1, x2, y2;
+    };
+    std::vector<std::int32_t> offset;  ///< = corner_ring().offset
+    std::vector<Entry> entry;
+  };
+  const TangentRing& tangent_ring() const;
 
  private:
   struct Cache;
