@@ -157,6 +157,7 @@ void BM_ViewFields(benchmark::State& state, bool apparent, bool light) {
   req.apparent = apparent;
   req.light = req.pel = light;
   if (light) {  // as LineExtractor asks for PELs + Laplacian lines (default thresholds)
+    req.radial = false;  // n·v comes with the illumination
     req.light_threshold = f.extractor->options().pel.threshold / f.feature_size;
     req.light_cull_backfaces = true;
   }
