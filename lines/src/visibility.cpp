@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include "parallel.hpp"
@@ -48,26 +49,59 @@ float DepthBuffer::max3x3(double x, double y) const {
 
 namespace {
 
-// Projected corner: pixel position and linear depth.
+// Projected corner: pixel position, linear depth, and the pixel centres on
+// either side of it: lo = the first centre at or after the coordinate, hi =
+// the last centre at or before it (per axis; coordinates clamped to just
+// outside the image). A triangle's box covers the centres from the minimum
+// lo to the maximum hi of its corners (the maps are monotonic).
 struct Corner {
   double x, y, z;
+  std::int32_t x_lo, x_hi, y_lo, y_hi;
+  bool valid;  // finite, and in front of the near limit (perspective)
 };
 
-// Pixel centres x + 0.5 inside [lo, hi], clipped to [0, size - 1]; first >
-// last when there are none. Exact: no rounding of lo - 0.5.
-bool pixel_span(double lo, double hi, int size, int& first, int& last) {
-  if (!(hi >= 0.0 && lo < static_cast<double>(size))) return false;  // also NaN
-  const double flo = std::floor(std::max(lo, -1.0));
-  const double fhi = std::floor(std::min(hi, static_cast<double>(size)));
-  first = static_cast<int>(flo) + (flo + 0.5 < lo ? 1 : 0);
-  last = static_cast<int>(fhi) - (fhi + 0.5 > hi ? 1 : 0);
-  first = std::max(first, 0);
-  last = std::min(last, size - 1);
-  return first <= last;
+// floor(v) for v well inside the int range (std::floor is a library call
+// without SSE4.1).
+inline int floor_int(double v) {
+  const int i = static_cast<int>(v);
+  return i - (static_cast<double>(i) > v ? 1 : 0);
 }
+
+// First pixel centre (c + 0.5) at or after v and last at or before v, for
+// v clamped to [-2, size + 1]. Exact: no rounding of v - 0.5.
+inline void centres_around(double v, int size, std::int32_t& lo, std::int32_t& hi) {
+  v = std::min(std::max(v, -2.0), static_cast<double>(size) + 1.0);
+  const int f = floor_int(v);
+  lo = f + (f + 0.5 < v ? 1 : 0);
+  hi = f - (f + 0.5 > v ? 1 : 0);
+}
+
+// A triangle in a band's list: its face, the pixel centres of its bounding
+// box (clipped to the image), its doubled signed area in pixels, and a lower
+// bound of any depth it can write (-inf: none known).
+struct Binned {
+  double area;
+  std::int32_t face;
+  float bound;
+  std::int32_t x0, x1, y0, y1;
+};
 
 }  // namespace
 
+// Depth raster. Per pixel the coverage test and the depth are evaluated
+// exactly as the original scalar rasteriser did (same double operations in
+// the same order), so the buffer is bit-identical to it; what changed is
+// which triangles and pixels are visited:
+//  * only pixel centres inside a triangle's bounding box are tested;
+//  * triangles are binned into 32-row bands per fixed chunk of faces (in
+//    parallel) and the bands are rasterised in parallel;
+//  * in each band the triangles facing the camera in the image (negative
+//    signed area: counter-clockwise in a y-up view) are drawn first, then the
+//    others, each of which is skipped when every pixel of its box already
+//    holds a depth at or below a guaranteed lower bound of any depth it
+//    could write. The buffer keeps the minimum, which does not depend on the
+//    order (positive depths), so skipping changes nothing; on a closed or
+//    nearly closed surface almost all back faces are skipped this way.
 void render_depth(const TriangleMesh& mesh, const Camera& camera, DepthBuffer& buf) {
   buf.width = camera.width;
   buf.height = camera.height;
@@ -76,43 +110,85 @@ void render_depth(const TriangleMesh& mesh, const Camera& camera, DepthBuffer& b
   const std::size_t nf = mesh.faces.size();
   std::vector<Corner> proj(nv);
   const detail::Projector project(camera);
-  detail::parallel_range(nv, [&](std::size_t i) {
-    const ProjectedPoint pp = project(mesh.positions[i]);
-    proj[i] = {pp.pixel.x(), pp.pixel.y(), pp.depth};
-  });
   const bool perspective = camera.projection == Projection::perspective;
   const double near_eps = 1e-9;
-  // Which pixel rows and columns a triangle covers (pixel centres inside its
-  // bounding box); false when none, or a corner is at or behind the eye.
-  struct Span {
-    int x0, x1, y0, y1;
-  };
-  auto span_of = [&](const Face& t, Span& sp) {
-    const Corner &a = proj[t[0]], &b = proj[t[1]], &c = proj[t[2]];
-    if (perspective && (a.z <= near_eps || b.z <= near_eps || c.z <= near_eps)) return false;
-    return pixel_span(std::min({a.x, b.x, c.x}), std::max({a.x, b.x, c.x}), buf.width, sp.x0,
-                      sp.x1) &&
-           pixel_span(std::min({a.y, b.y, c.y}), std::max({a.y, b.y, c.y}), buf.height, sp.y0,
-                      sp.y1);
-  };
-  // Bin triangles into horizontal bands, per fixed chunk of faces (in
-  // parallel), then rasterise the bands in parallel, each taking the chunks
-  // in face order: every pixel sees its triangles in face order at any
-  // thread count.
+  detail::parallel_range(nv, [&](std::size_t i) {
+    const ProjectedPoint pp = project(mesh.positions[i]);
+    Corner& c = proj[i];
+    c.x = pp.pixel.x();
+    c.y = pp.pixel.y();
+    c.z = pp.depth;
+    c.valid = std::isfinite(c.x) && std::isfinite(c.y) && std::isfinite(c.z) &&
+              !(perspective && c.z <= near_eps);
+    if (c.valid) {
+      centres_around(c.x, buf.width, c.x_lo, c.x_hi);
+      centres_around(c.y, buf.height, c.y_lo, c.y_hi);
+    }
+  });
+  const int W = buf.width;
   constexpr int kBand = 32;
   constexpr std::size_t kChunk = 16384;
   const int bands = (buf.height + kBand - 1) / kBand;
   const std::size_t chunks = (nf + kChunk - 1) / kChunk;
-  std::vector<std::vector<std::int32_t>> binned(chunks * static_cast<std::size_t>(bands));
+  // Per chunk of faces: its triangles that cover a pixel centre
+  // (`entries`, in face order) and, per (group, band), the indices of those
+  // that reach the band (CSR: `start`, `index`). Group 0: negative area.
+  struct Chunk {
+    std::vector<Binned> entries;
+    std::vector<std::uint32_t> start;  // 2 * bands + 1
+    std::vector<std::uint16_t> index;  // kChunk <= 65536
+  };
+  static_assert(kChunk <= 65536);
+  std::vector<Chunk> binned(chunks);
+  const std::size_t nb = static_cast<std::size_t>(bands);
   detail::parallel_range(
       chunks,
       [&](std::size_t c) {
-        std::vector<std::int32_t>* bins = binned.data() + c * static_cast<std::size_t>(bands);
+        Chunk& ch = binned[c];
+        ch.entries.reserve(std::min(kChunk, nf - c * kChunk));
+        ch.start.assign(2 * nb + 1, 0);
         for (std::size_t f = c * kChunk; f < std::min(nf, (c + 1) * kChunk); ++f) {
-          Span sp;
-          if (!span_of(mesh.faces[f], sp)) continue;
-          for (int k = sp.y0 / kBand; k <= sp.y1 / kBand; ++k)
-            bins[k].push_back(static_cast<std::int32_t>(f));
+          const Face& t = mesh.faces[f];
+          const Corner &a = proj[t[0]], &b = proj[t[1]], &cc = proj[t[2]];
+          if (!(a.valid && b.valid && cc.valid)) continue;
+          Binned e;
+          e.x0 = std::max(std::min({a.x_lo, b.x_lo, cc.x_lo}), 0);
+          e.x1 = std::min(std::max({a.x_hi, b.x_hi, cc.x_hi}), buf.width - 1);
+          if (e.x0 > e.x1) continue;
+          e.y0 = std::max(std::min({a.y_lo, b.y_lo, cc.y_lo}), 0);
+          e.y1 = std::min(std::max({a.y_hi, b.y_hi, cc.y_hi}), buf.height - 1);
+          if (e.y0 > e.y1) continue;
+          e.area = (b.x - a.x) * (cc.y - a.y) - (b.y - a.y) * (cc.x - a.x);
+          if (e.area == 0.0 || e.area != e.area) continue;
+          e.face = static_cast<std::int32_t>(f);
+          e.bound = -kInf;
+          const std::size_t g = e.area < 0.0 ? 0 : 1;
+          if (g == 1) {
+            // Any depth written is >= zmin (1 - 1e-6) when the barycentric
+            // weights are accurate: their error is below about
+            // 1e-14 (s + 1)^2 / |area| for a box of side s (products of
+            // coordinate differences <= s (s + 1), a few roundings each),
+            // so the sum of the weights is within 1e-7 of 1 where
+            // (s + 1)^2 <= 3e6 |area|. Slivers and non-positive depths get
+            // no bound (never skipped). Rounding to float is monotonic;
+            // one more step down keeps the bound below the stored depth.
+            const double zmin = std::min({a.z, b.z, cc.z});
+            const double side = std::max(e.x1 - e.x0, e.y1 - e.y0) + 2.0;
+            if (zmin > 0.0 && (side + 1.0) * (side + 1.0) <= 3e6 * std::abs(e.area))
+              e.bound = std::nextafter(static_cast<float>(zmin * (1.0 - 1e-6)), -kInf);
+          }
+          for (int k = e.y0 / kBand; k <= e.y1 / kBand; ++k)
+            ++ch.start[g * nb + static_cast<std::size_t>(k) + 1];
+          ch.entries.push_back(e);
+        }
+        for (std::size_t k = 1; k <= 2 * nb; ++k) ch.start[k] += ch.start[k - 1];
+        ch.index.resize(ch.start[2 * nb]);
+        std::vector<std::uint32_t> fill(ch.start.begin(), ch.start.end() - 1);
+        for (std::size_t i = 0; i < ch.entries.size(); ++i) {
+          const Binned& e = ch.entries[i];
+          const std::size_t g = e.area < 0.0 ? 0 : 1;
+          for (int k = e.y0 / kBand; k <= e.y1 / kBand; ++k)
+            ch.index[fill[g * nb + static_cast<std::size_t>(k)]++] = static_cast<std::uint16_t>(i);
         }
       },
       1);
@@ -121,47 +197,67 @@ void render_depth(const TriangleMesh& mesh, const Camera& camera, DepthBuffer& b
       [&](std::size_t band) {
         const int y_lo = static_cast<int>(band) * kBand;
         const int y_hi = std::min(buf.height, y_lo + kBand) - 1;
-        float* const rows = buf.depth.data() + static_cast<std::size_t>(y_lo) * buf.width;
-        std::fill(rows, rows + static_cast<std::size_t>(y_hi - y_lo + 1) * buf.width, kInf);
-        for (std::size_t c = 0; c < chunks; ++c)
-          for (std::int32_t f : binned[c * static_cast<std::size_t>(bands) + band]) {
-            const Face& t = mesh.faces[static_cast<std::size_t>(f)];
-            Span sp;
-            span_of(t, sp);
-            const Corner p[3] = {proj[t[0]], proj[t[1]], proj[t[2]]};
-            const double area =
-                (p[1].x - p[0].x) * (p[2].y - p[0].y) - (p[1].y - p[0].y) * (p[2].x - p[0].x);
-            if (area == 0.0) continue;
-            const double inv_area = 1.0 / area;
-            // Edge k runs from corner k+1 to corner k+2; its barycentric
-            // weight at (px, py) is ((bx - ax)(py - ay) - (by - ay)(px - ax))
-            // / area, evaluated term by term as before (same bits).
-            double ax[3], ay[3], ex[3], ey[3];
-            for (int k = 0; k < 3; ++k) {
-              const Corner& ca = p[(k + 1) % 3];
-              const Corner& cb = p[(k + 2) % 3];
-              ax[k] = ca.x;
-              ay[k] = ca.y;
-              ex[k] = cb.x - ca.x;
-              ey[k] = cb.y - ca.y;
+        float* const image = buf.depth.data();
+        std::fill(image + static_cast<std::size_t>(y_lo) * W,
+                  image + static_cast<std::size_t>(y_hi + 1) * W, kInf);
+        auto draw = [&](const Binned& e) {
+          const int ya = std::max(y_lo, e.y0), yb = std::min(y_hi, e.y1);
+          if (e.bound > -kInf) {
+            bool hidden = true;
+            for (int y = ya; y <= yb && hidden; ++y) {
+              const float* row = image + static_cast<std::size_t>(y) * W;
+              for (int x = e.x0; x <= e.x1; ++x)
+                if (!(row[x] <= e.bound)) {
+                  hidden = false;
+                  break;
+                }
             }
-            const int ya = std::max(y_lo, sp.y0), yb = std::min(y_hi, sp.y1);
-            for (int y = ya; y <= yb; ++y) {
-              const double py = y + 0.5;
-              double ry[3];
-              for (int k = 0; k < 3; ++k) ry[k] = ex[k] * (py - ay[k]);
-              float* const row = buf.depth.data() + static_cast<std::size_t>(y) * buf.width;
-              for (int x = sp.x0; x <= sp.x1; ++x) {
-                const double px = x + 0.5;
-                const double w0 = (ry[0] - ey[0] * (px - ax[0])) * inv_area;
-                const double w1 = (ry[1] - ey[1] * (px - ax[1])) * inv_area;
-                const double w2 = (ry[2] - ey[2] * (px - ax[2])) * inv_area;
-                if (w0 < 0.0 || w1 < 0.0 || w2 < 0.0) continue;
-                const double d = perspective ? 1.0 / (w0 / p[0].z + w1 / p[1].z + w2 / p[2].z)
-                                             : w0 * p[0].z + w1 * p[1].z + w2 * p[2].z;
-                row[x] = std::min(row[x], static_cast<float>(d));
-              }
+            if (hidden) return;
+          }
+          const Face& t = mesh.faces[static_cast<std::size_t>(e.face)];
+          const Corner p[3] = {proj[t[0]], proj[t[1]], proj[t[2]]};
+          const double inv_area = 1.0 / e.area;
+          // Edge k runs from corner k+1 to corner k+2; its barycentric
+          // weight at (px, py) is ((bx - ax)(py - ay) - (by - ay)(px - ax))
+          // / area, evaluated term by term as the original (same bits). The
+          // weight is negative exactly when the numerator's sign differs
+          // from the area's (the product cannot underflow at pixel scale),
+          // so uncovered pixels are rejected before the multiplications.
+          double ax[3], ay[3], ex[3], ey[3];
+          for (int k = 0; k < 3; ++k) {
+            const Corner& ca = p[(k + 1) % 3];
+            const Corner& cb = p[(k + 2) % 3];
+            ax[k] = ca.x;
+            ay[k] = ca.y;
+            ex[k] = cb.x - ca.x;
+            ey[k] = cb.y - ca.y;
+          }
+          const bool positive = e.area > 0.0;
+          for (int y = ya; y <= yb; ++y) {
+            const double py = y + 0.5;
+            double ry[3];
+            for (int k = 0; k < 3; ++k) ry[k] = ex[k] * (py - ay[k]);
+            float* const row = image + static_cast<std::size_t>(y) * W;
+            for (int x = e.x0; x <= e.x1; ++x) {
+              const double px = x + 0.5;
+              const double n0 = ry[0] - ey[0] * (px - ax[0]);
+              const double n1 = ry[1] - ey[1] * (px - ax[1]);
+              const double n2 = ry[2] - ey[2] * (px - ax[2]);
+              if (positive ? (n0 < 0.0 || n1 < 0.0 || n2 < 0.0)
+                           : (n0 > 0.0 || n1 > 0.0 || n2 > 0.0))
+                continue;
+              const double w0 = n0 * inv_area, w1 = n1 * inv_area, w2 = n2 * inv_area;
+              const double d = perspective ? 1.0 / (w0 / p[0].z + w1 / p[1].z + w2 / p[2].z)
+                                           : w0 * p[0].z + w1 * p[1].z + w2 * p[2].z;
+              row[x] = std::min(row[x], static_cast<float>(d));
             }
+          }
+        };
+        for (std::size_t g = 0; g < 2; ++g)
+          for (const Chunk& ch : binned) {
+            const std::size_t k = g * nb + band;
+            for (std::uint32_t i = ch.start[k]; i < ch.start[k + 1]; ++i)
+              draw(ch.entries[ch.index[i]]);
           }
       },
       1);
@@ -190,7 +286,7 @@ void compute_visibility(LineSet& lines, const Surface& surface, const Camera& ca
   // by row as DepthBuffer::max3x3 / min3x3; the bounds checks only near the
   // image border.
   auto window = [&](double x, double y) {
-    const int cx = static_cast<int>(std::floor(x)), cy = static_cast<int>(std::floor(y));
+    const int cx = floor_int(x), cy = floor_int(y);  // x, y inside the image
     if (cx < 1 || cy < 1 || cx > W - 2 || cy > H - 2)
       return options.window_minimum ? depth->min3x3(x, y) : depth->max3x3(x, y);
     const float* r = z + static_cast<std::size_t>(cy - 1) * W + (cx - 1);
