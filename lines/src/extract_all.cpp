@@ -5,6 +5,7 @@
 
 #include "fabrica/core/error.hpp"
 #include "fabrica/lines/extract.hpp"
+#include "parallel.hpp"
 #include "view_fields_light.hpp"
 
 namespace fabrica {
@@ -33,6 +34,15 @@ void LineExtractor::set_options(LineOptions options) {
   if (!(feature_size_ > 0.0) || !std::isfinite(feature_size_))
     throw InputError("feature size must be a positive number (got " +
                      std::to_string(feature_size_) + "); pass --feature-size");
+}
+
+void LineExtractor::extract(const Camera& camera, std::vector<SegmentSoup>& soups) {
+  // The previous soups' storage goes back to the output pool, where this
+  // view's extractors find it (no fresh pages per view).
+  for (auto& soup : soups)
+    detail::ChunkBufferPool<LineSegment>::instance().give(detail::kOutputKey,
+                                                          std::move(soup.segments));
+  soups = extract(camera);
 }
 
 std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {

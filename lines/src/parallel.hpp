@@ -9,46 +9,80 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <map>
 #include <mutex>
+#include <utility>
 #include <vector>
 
 namespace fabrica::detail {
 
 inline constexpr std::size_t kFaceChunk = 4096;
 
-/// Process-wide free list of chunk output buffers: the chunks of one call
+/// Process-wide free lists of output buffers, so that the chunks of a call
 /// reuse the capacity (already-touched memory) left by earlier calls instead
-/// of growing fresh vectors every view. Keeps at most kMaxBytes of capacity.
+/// of growing fresh vectors every view. Chunk buffers are filed under their
+/// call site and chunk index (a chunk gets back a buffer sized by the same
+/// chunk of an earlier call); whole outputs (handed back through
+/// LineExtractor::extract(camera, soups)) under kOutputKey, taken best-fit.
+/// Keeps at most kMaxBytes of capacity. Buffers never affect the results.
 template <class T>
 class ChunkBufferPool {
  public:
+  using Key = std::pair<const void*, std::size_t>;
   static ChunkBufferPool& instance() {
     static ChunkBufferPool pool;
     return pool;
   }
-  std::vector<T> take() {
+  /// The largest free buffer filed under `key`, or an empty vector.
+  std::vector<T> take(const Key& key) {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (free_.empty()) return {};
-    std::vector<T> v = std::move(free_.back());
-    free_.pop_back();
-    bytes_ -= v.capacity() * sizeof(T);
-    return v;
+    auto it = free_.find(key);
+    if (it == free_.end() || it->second.empty()) return {};
+    auto& list = it->second;
+    std::size_t best = 0;
+    for (std::size_t k = 1; k < list.size(); ++k)
+      if (list[k].capacity() > list[best].capacity()) best = k;
+    return pop(list, best);
   }
-  void give(std::vector<T>&& v) {
+  /// The smallest free buffer under `key` with capacity >= n, or empty.
+  std::vector<T> take_at_least(const Key& key, std::size_t n) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto it = free_.find(key);
+    if (it == free_.end()) return {};
+    auto& list = it->second;
+    std::size_t best = list.size();
+    for (std::size_t k = 0; k < list.size(); ++k)
+      if (list[k].capacity() >= n &&
+          (best == list.size() || list[k].capacity() < list[best].capacity()))
+        best = k;
+    if (best == list.size()) return {};
+    return pop(list, best);
+  }
+  void give(const Key& key, std::vector<T>&& v) {
     if (v.capacity() == 0) return;
     v.clear();
     std::lock_guard<std::mutex> lock(mutex_);
     if (bytes_ + v.capacity() * sizeof(T) > kMaxBytes) return;
     bytes_ += v.capacity() * sizeof(T);
-    free_.push_back(std::move(v));
+    free_[key].push_back(std::move(v));
   }
 
  private:
-  static constexpr std::size_t kMaxBytes = std::size_t{64} << 20;
+  std::vector<T> pop(std::vector<std::vector<T>>& list, std::size_t k) {
+    std::vector<T> v = std::move(list[k]);
+    list[k] = std::move(list.back());
+    list.pop_back();
+    bytes_ -= v.capacity() * sizeof(T);
+    return v;
+  }
+  static constexpr std::size_t kMaxBytes = std::size_t{128} << 20;
   std::mutex mutex_;
-  std::vector<std::vector<T>> free_;
+  std::map<Key, std::vector<std::vector<T>>> free_;
   std::size_t bytes_ = 0;
 };
+
+/// Key of the whole-output buffers in ChunkBufferPool.
+inline constexpr std::pair<const void*, std::size_t> kOutputKey{nullptr, 0};
 
 /// fn(begin, end, std::vector<T>& out) for fixed chunks of [0, n); the
 /// outputs are appended to `out` in chunk order.
@@ -61,20 +95,25 @@ void parallel_chunks(std::size_t n, Fn&& fn, std::vector<T>& out, std::size_t ch
     return;
   }
   auto& pool = ChunkBufferPool<T>::instance();
+  static const char site = 0;  // one per instantiation, i.e. per call site
   std::vector<std::vector<T>> parts(chunks);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1),
                     [&](const tbb::blocked_range<std::size_t>& r) {
                       for (std::size_t c = r.begin(); c != r.end(); ++c) {
-                        parts[c] = pool.take();
+                        parts[c] = pool.take({&site, c + 1});
                         fn(c * chunk, std::min(n, (c + 1) * chunk), parts[c]);
                       }
                     });
   std::size_t total = out.size();
   for (const auto& p : parts) total += p.size();
+  if (out.empty() && out.capacity() < total) {
+    std::vector<T> v = pool.take_at_least(kOutputKey, total);
+    if (v.capacity() >= total) out.swap(v);
+  }
   out.reserve(total);
-  for (auto& p : parts) {
-    out.insert(out.end(), p.begin(), p.end());
-    pool.give(std::move(p));
+  for (std::size_t c = 0; c < chunks; ++c) {
+    out.insert(out.end(), parts[c].begin(), parts[c].end());
+    pool.give({&site, c + 1}, std::move(parts[c]));
   }
 }
 

@@ -142,6 +142,9 @@ class LineExtractor {
   const ViewFields& fields() const { return fields_; }
   /// One soup per requested family, in options().families order.
   std::vector<SegmentSoup> extract(const Camera& camera);
+  /// The same into `soups`, whose previous segment storage is recycled
+  /// (for a redraw loop: no fresh memory per view once warmed up).
+  void extract(const Camera& camera, std::vector<SegmentSoup>& soups);
 
  private:
   const Surface* surface_;
