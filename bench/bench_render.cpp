@@ -3,8 +3,10 @@
 // stage 2 filter, readback of the RGBA image) at 512², 1024² and 2048² on
 // noisy spheres of about 50k, 300k and 1M vertices, against the same two
 // passes with trivial shaders (Renderer::render_hybrid(..., bare = true)) in
-// the same run; and the object-space apparent ridges (fabrica::lines
-// extraction + chaining for the same camera) on the same meshes.
+// the same run (BM_HybridOverBare; BM_HybridStages splits both per stage
+// with GL timer queries); and the object-space apparent ridges
+// (fabrica::lines extraction + chaining for the same camera) on the same
+// meshes.
 //
 // The spheres are generated here: a latitude-longitude sphere of radius 50 mm
 // with smooth bumps r = R (1 + 0.05 sin 5θ sin 4φ + 0.02 sin 11θ cos 7φ), so
