@@ -12,7 +12,9 @@
 // BM_Set* "families only" benchmarks also reuse one ViewFields; BM_ViewFields
 // times the fields alone, and the BM_*PerView benchmarks time the whole
 // LineExtractor::extract(camera) (fields + extraction), which is what a new
-// camera costs. Chaining and visibility are timed separately.
+// camera costs (BM_PerViewReused: extract(camera, soups), recycling the
+// previous view's segment storage). Chaining and visibility are timed
+// separately.
 // Argument: TBB thread count.
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
@@ -155,8 +157,13 @@ void BM_ViewFields(benchmark::State& state, bool apparent, bool light) {
   ViewFieldsRequest req;
   req.sc_test = !light;
   req.apparent = apparent;
+  // As LineExtractor::extract: D_t1 q1 only where an apparent ridge can be
+  // drawn with the default threshold.
+  if (apparent)
+    req.apparent_cull_threshold =
+        f.extractor->options().apparent.threshold / (f.feature_size * f.feature_size);
   req.light = req.pel = light;
-  if (light) {  // as LineExtractor asks for PELs + Laplacian lines (default thresholds)
+  if (light) {           // as LineExtractor asks for PELs + Laplacian lines (default thresholds)
     req.radial = false;  // n·v comes with the illumination
     req.light_threshold = f.extractor->options().pel.threshold / f.feature_size;
     req.light_cull_backfaces = true;
@@ -182,6 +189,25 @@ void BM_PerView(benchmark::State& state, std::vector<LineFamily> families) {
   std::vector<SegmentSoup> soups;
   for (auto _ : state) {
     soups = ex.extract(f.camera);
+    benchmark::DoNotOptimize(soups.data());
+  }
+  count_segments(state, soups);
+}
+
+// The same, recycling the previous view's soups (extract(camera, soups)),
+// as a redraw loop would.
+void BM_PerViewReused(benchmark::State& state, std::vector<LineFamily> families) {
+  Fixture& f = fixture();
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
+                            static_cast<std::size_t>(state.range(0)));
+  LineOptions o;
+  o.families = std::move(families);
+  o.feature_size = f.feature_size;
+  LineExtractor ex(*f.surface, o);
+  std::vector<SegmentSoup> soups;
+  ex.extract(f.camera, soups);
+  for (auto _ : state) {
+    ex.extract(f.camera, soups);
     benchmark::DoNotOptimize(soups.data());
   }
   count_segments(state, soups);
@@ -276,6 +302,12 @@ void register_all() {
         ->UseRealTime();
     benchmark::RegisterBenchmark((std::string("BM_PerView/") + set.name).c_str(),
                                  [fams](benchmark::State& s) { BM_PerView(s, fams); })
+        ->Arg(1)
+        ->Arg(2)
+        ->Unit(ms)
+        ->UseRealTime();
+    benchmark::RegisterBenchmark((std::string("BM_PerViewReused/") + set.name).c_str(),
+                                 [fams](benchmark::State& s) { BM_PerViewReused(s, fams); })
         ->Arg(1)
         ->Arg(2)
         ->Unit(ms)
