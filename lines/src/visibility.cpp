@@ -1,10 +1,14 @@
 #include "fabrica/lines/visibility.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <memory>
+#include <string>
 
+#include "fabrica/core/error.hpp"
 #include "parallel.hpp"
 #include "projector.hpp"
 
@@ -56,7 +60,7 @@ namespace {
 // lo to the maximum hi of its corners (the maps are monotonic).
 struct Corner {
   double x, y, z;
-  std::int32_t x_lo, x_hi, y_lo, y_hi;
+  std::int16_t x_lo, x_hi, y_lo, y_hi;
   bool valid;  // finite, and in front of the near limit (perspective)
 };
 
@@ -69,32 +73,62 @@ inline int floor_int(double v) {
 
 // First pixel centre (c + 0.5) at or after v and last at or before v, for
 // v clamped to [-2, size + 1]. Exact: no rounding of v - 0.5.
-inline void centres_around(double v, int size, std::int32_t& lo, std::int32_t& hi) {
+inline void centres_around(double v, int size, std::int16_t& lo, std::int16_t& hi) {
   v = std::min(std::max(v, -2.0), static_cast<double>(size) + 1.0);
   const int f = floor_int(v);
-  lo = f + (f + 0.5 < v ? 1 : 0);
-  hi = f - (f + 0.5 > v ? 1 : 0);
+  lo = static_cast<std::int16_t>(f + (f + 0.5 < v ? 1 : 0));
+  hi = static_cast<std::int16_t>(f - (f + 0.5 > v ? 1 : 0));
 }
 
-// A triangle in a band's list: its face, the pixel centres of its bounding
-// box (clipped to the image), its doubled signed area in pixels, and a lower
-// bound of any depth it can write (-inf: none known).
+// A triangle in a band's list: its doubled signed area in pixels, its face,
+// a lower bound of any depth it can write (-inf: none known), and the pixel
+// centres of its bounding box (clipped to the image).
 struct Binned {
   double area;
   std::int32_t face;
   float bound;
-  std::int32_t x0, x1, y0, y1;
+  std::int16_t x0, x1, y0, y1;
 };
 
+constexpr int kBand = 32;              // rows per band
+constexpr std::size_t kChunk = 16384;  // faces per binning chunk
+constexpr int kMaxSide = 32000;        // pixel indices (and size + 1) fit in int16
+
 }  // namespace
+
+namespace detail {
+
+// render_depth's working memory, kept in the DepthBuffer between calls.
+struct RasterScratch {
+  std::vector<Corner> corners;
+  std::vector<Binned> per_face;      // face -1: covers no pixel centre
+  std::vector<std::uint32_t> count;  // [chunk][group][band], then offsets
+  std::vector<Binned> binned;        // by (group, band, chunk, face)
+};
+
+RasterScratchSlot::RasterScratchSlot() = default;
+RasterScratchSlot::~RasterScratchSlot() = default;
+RasterScratchSlot::RasterScratchSlot(const RasterScratchSlot&) {}
+RasterScratchSlot& RasterScratchSlot::operator=(const RasterScratchSlot&) {
+  return *this;
+}
+RasterScratchSlot::RasterScratchSlot(RasterScratchSlot&&) noexcept = default;
+RasterScratchSlot& RasterScratchSlot::operator=(RasterScratchSlot&&) noexcept = default;
+RasterScratch& RasterScratchSlot::get() {
+  if (!scratch_) scratch_ = std::make_unique<RasterScratch>();
+  return *scratch_;
+}
+
+}  // namespace detail
 
 // Depth raster. Per pixel the coverage test and the depth are evaluated
 // exactly as the original scalar rasteriser did (same double operations in
 // the same order), so the buffer is bit-identical to it; what changed is
 // which triangles and pixels are visited:
 //  * only pixel centres inside a triangle's bounding box are tested;
-//  * triangles are binned into 32-row bands per fixed chunk of faces (in
-//    parallel) and the bands are rasterised in parallel;
+//  * triangles are binned into 32-row bands per fixed chunk of faces (count,
+//    then fill; both in parallel over chunks) and the bands are rasterised
+//    in parallel;
 //  * in each band the triangles facing the camera in the image (negative
 //    signed area: counter-clockwise in a y-up view) are drawn first, then the
 //    others, each of which is skipped when every pixel of its box already
@@ -103,12 +137,19 @@ struct Binned {
 //    order (positive depths), so skipping changes nothing; on a closed or
 //    nearly closed surface almost all back faces are skipped this way.
 void render_depth(const TriangleMesh& mesh, const Camera& camera, DepthBuffer& buf) {
+  if (camera.width <= 0 || camera.height <= 0 || camera.width > kMaxSide ||
+      camera.height > kMaxSide)
+    throw InputError("depth buffer: image size " + std::to_string(camera.width) + "x" +
+                     std::to_string(camera.height) + " is not between 1 and " +
+                     std::to_string(kMaxSide) + " pixels per side; choose a smaller size");
   buf.width = camera.width;
   buf.height = camera.height;
   buf.depth.resize(static_cast<std::size_t>(buf.width) * static_cast<std::size_t>(buf.height));
+  detail::RasterScratch& scratch = buf.scratch.get();
   const std::size_t nv = mesh.positions.size();
   const std::size_t nf = mesh.faces.size();
-  std::vector<Corner> proj(nv);
+  std::vector<Corner>& proj = scratch.corners;
+  proj.resize(nv);
   const detail::Projector project(camera);
   const bool perspective = camera.projection == Projection::perspective;
   const double near_eps = 1e-9;
@@ -126,74 +167,104 @@ void render_depth(const TriangleMesh& mesh, const Camera& camera, DepthBuffer& b
     }
   });
   const int W = buf.width;
-  constexpr int kBand = 32;
-  constexpr std::size_t kChunk = 16384;
-  const int bands = (buf.height + kBand - 1) / kBand;
+  const std::size_t nb = static_cast<std::size_t>((buf.height + kBand - 1) / kBand);
   const std::size_t chunks = (nf + kChunk - 1) / kChunk;
-  // Per chunk of faces: its triangles that cover a pixel centre
-  // (`entries`, in face order) and, per (group, band), the indices of those
-  // that reach the band (CSR: `start`, `index`). Group 0: negative area.
-  struct Chunk {
-    std::vector<Binned> entries;
-    std::vector<std::uint32_t> start;  // 2 * bands + 1
-    std::vector<std::uint16_t> index;  // kChunk <= 65536
+  // The triangle of face f when it covers a pixel centre: its entry and
+  // group (0: negative area).
+  auto setup = [&](std::size_t f, Binned& e, std::size_t& g) {
+    const Face& t = mesh.faces[f];
+    const Corner &a = proj[t[0]], &b = proj[t[1]], &c = proj[t[2]];
+    if (!(a.valid && b.valid && c.valid)) return false;
+    e.x0 = std::max<std::int16_t>(std::min({a.x_lo, b.x_lo, c.x_lo}), 0);
+    e.x1 = std::min<std::int16_t>(std::max({a.x_hi, b.x_hi, c.x_hi}),
+                                  static_cast<std::int16_t>(buf.width - 1));
+    if (e.x0 > e.x1) return false;
+    e.y0 = std::max<std::int16_t>(std::min({a.y_lo, b.y_lo, c.y_lo}), 0);
+    e.y1 = std::min<std::int16_t>(std::max({a.y_hi, b.y_hi, c.y_hi}),
+                                  static_cast<std::int16_t>(buf.height - 1));
+    if (e.y0 > e.y1) return false;
+    e.area = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
+    if (e.area == 0.0 || e.area != e.area) return false;
+    e.face = static_cast<std::int32_t>(f);
+    e.bound = -kInf;
+    g = e.area < 0.0 ? 0 : 1;
+    if (g == 1) {
+      // Any depth written is >= zmin (1 - 1e-6) when the barycentric
+      // weights are accurate: their error is below about
+      // 1e-14 (s + 1)^2 / |area| for a box of side s (products of
+      // coordinate differences <= s (s + 1), a few roundings each), so the
+      // sum of the weights is within 1e-7 of 1 where (s + 1)^2 <= 3e6 |area|.
+      // Slivers and non-positive depths get no bound (never skipped).
+      // Rounding to float is monotonic; one more step down keeps the bound
+      // below the stored depth.
+      const double zmin = std::min({a.z, b.z, c.z});
+      const double side = std::max(e.x1 - e.x0, e.y1 - e.y0) + 2.0;
+      if (zmin > 0.0 && (side + 1.0) * (side + 1.0) <= 3e6 * std::abs(e.area)) {
+        const float z = static_cast<float>(zmin * (1.0 - 1e-6));
+        if (z > 0.0f && z < kInf)  // the next float below z
+          e.bound = std::bit_cast<float>(std::bit_cast<std::uint32_t>(z) - 1u);
+      }
+    }
+    return true;
   };
-  static_assert(kChunk <= 65536);
-  std::vector<Chunk> binned(chunks);
-  const std::size_t nb = static_cast<std::size_t>(bands);
+  // count[(c * 2 + g) * nb + band]: entries of chunk c, group g in the band.
+  std::vector<std::uint32_t>& count = scratch.count;
+  count.assign(chunks * 2 * nb, 0);
+  std::vector<Binned>& per_face = scratch.per_face;
+  per_face.resize(nf);
   detail::parallel_range(
       chunks,
       [&](std::size_t c) {
-        Chunk& ch = binned[c];
-        ch.entries.reserve(std::min(kChunk, nf - c * kChunk));
-        ch.start.assign(2 * nb + 1, 0);
+        std::uint32_t* cnt = count.data() + c * 2 * nb;
+        std::size_t g;
         for (std::size_t f = c * kChunk; f < std::min(nf, (c + 1) * kChunk); ++f) {
-          const Face& t = mesh.faces[f];
-          const Corner &a = proj[t[0]], &b = proj[t[1]], &cc = proj[t[2]];
-          if (!(a.valid && b.valid && cc.valid)) continue;
-          Binned e;
-          e.x0 = std::max(std::min({a.x_lo, b.x_lo, cc.x_lo}), 0);
-          e.x1 = std::min(std::max({a.x_hi, b.x_hi, cc.x_hi}), buf.width - 1);
-          if (e.x0 > e.x1) continue;
-          e.y0 = std::max(std::min({a.y_lo, b.y_lo, cc.y_lo}), 0);
-          e.y1 = std::min(std::max({a.y_hi, b.y_hi, cc.y_hi}), buf.height - 1);
-          if (e.y0 > e.y1) continue;
-          e.area = (b.x - a.x) * (cc.y - a.y) - (b.y - a.y) * (cc.x - a.x);
-          if (e.area == 0.0 || e.area != e.area) continue;
-          e.face = static_cast<std::int32_t>(f);
-          e.bound = -kInf;
-          const std::size_t g = e.area < 0.0 ? 0 : 1;
-          if (g == 1) {
-            // Any depth written is >= zmin (1 - 1e-6) when the barycentric
-            // weights are accurate: their error is below about
-            // 1e-14 (s + 1)^2 / |area| for a box of side s (products of
-            // coordinate differences <= s (s + 1), a few roundings each),
-            // so the sum of the weights is within 1e-7 of 1 where
-            // (s + 1)^2 <= 3e6 |area|. Slivers and non-positive depths get
-            // no bound (never skipped). Rounding to float is monotonic;
-            // one more step down keeps the bound below the stored depth.
-            const double zmin = std::min({a.z, b.z, cc.z});
-            const double side = std::max(e.x1 - e.x0, e.y1 - e.y0) + 2.0;
-            if (zmin > 0.0 && (side + 1.0) * (side + 1.0) <= 3e6 * std::abs(e.area))
-              e.bound = std::nextafter(static_cast<float>(zmin * (1.0 - 1e-6)), -kInf);
+          Binned& e = per_face[f];
+          if (setup(f, e, g)) {
+            for (int k = e.y0 / kBand; k <= e.y1 / kBand; ++k)
+              ++cnt[g * nb + static_cast<std::size_t>(k)];
+          } else {
+            e.face = -1;
           }
-          for (int k = e.y0 / kBand; k <= e.y1 / kBand; ++k)
-            ++ch.start[g * nb + static_cast<std::size_t>(k) + 1];
-          ch.entries.push_back(e);
         }
-        for (std::size_t k = 1; k <= 2 * nb; ++k) ch.start[k] += ch.start[k - 1];
-        ch.index.resize(ch.start[2 * nb]);
-        std::vector<std::uint32_t> fill(ch.start.begin(), ch.start.end() - 1);
-        for (std::size_t i = 0; i < ch.entries.size(); ++i) {
-          const Binned& e = ch.entries[i];
+      },
+      1);
+  // Offsets in (group, band, chunk) order: each band's entries of a group
+  // are contiguous and in face order.
+  std::uint32_t total = 0;
+  for (std::size_t g = 0; g < 2; ++g)
+    for (std::size_t k = 0; k < nb; ++k)
+      for (std::size_t c = 0; c < chunks; ++c) {
+        std::uint32_t& n = count[(c * 2 + g) * nb + k];
+        const std::uint32_t here = n;
+        n = total;
+        total += here;
+      }
+  // Start of (group, band): the offset of its first chunk; the end is the
+  // start of the next (group, band), or `total`.
+  auto range_start = [&](std::size_t g, std::size_t k) {
+    return count[g * nb + k];  // chunk 0
+  };
+  std::vector<std::uint32_t> starts(2 * nb + 1);
+  for (std::size_t g = 0; g < 2; ++g)
+    for (std::size_t k = 0; k < nb; ++k) starts[g * nb + k] = range_start(g, k);
+  starts[2 * nb] = total;
+  std::vector<Binned>& binned = scratch.binned;
+  binned.resize(total);
+  detail::parallel_range(
+      chunks,
+      [&](std::size_t c) {
+        std::uint32_t* cursor = count.data() + c * 2 * nb;
+        for (std::size_t f = c * kChunk; f < std::min(nf, (c + 1) * kChunk); ++f) {
+          const Binned& e = per_face[f];
+          if (e.face < 0) continue;
           const std::size_t g = e.area < 0.0 ? 0 : 1;
           for (int k = e.y0 / kBand; k <= e.y1 / kBand; ++k)
-            ch.index[fill[g * nb + static_cast<std::size_t>(k)]++] = static_cast<std::uint16_t>(i);
+            binned[cursor[g * nb + static_cast<std::size_t>(k)]++] = e;
         }
       },
       1);
   detail::parallel_range(
-      static_cast<std::size_t>(bands),
+      nb,
       [&](std::size_t band) {
         const int y_lo = static_cast<int>(band) * kBand;
         const int y_hi = std::min(buf.height, y_lo + kBand) - 1;
@@ -201,7 +272,7 @@ void render_depth(const TriangleMesh& mesh, const Camera& camera, DepthBuffer& b
         std::fill(image + static_cast<std::size_t>(y_lo) * W,
                   image + static_cast<std::size_t>(y_hi + 1) * W, kInf);
         auto draw = [&](const Binned& e) {
-          const int ya = std::max(y_lo, e.y0), yb = std::min(y_hi, e.y1);
+          const int ya = std::max<int>(y_lo, e.y0), yb = std::min<int>(y_hi, e.y1);
           if (e.bound > -kInf) {
             bool hidden = true;
             for (int y = ya; y <= yb && hidden; ++y) {
@@ -215,7 +286,7 @@ void render_depth(const TriangleMesh& mesh, const Camera& camera, DepthBuffer& b
             if (hidden) return;
           }
           const Face& t = mesh.faces[static_cast<std::size_t>(e.face)];
-          const Corner p[3] = {proj[t[0]], proj[t[1]], proj[t[2]]};
+          const Corner* p[3] = {&proj[t[0]], &proj[t[1]], &proj[t[2]]};
           const double inv_area = 1.0 / e.area;
           // Edge k runs from corner k+1 to corner k+2; its barycentric
           // weight at (px, py) is ((bx - ax)(py - ay) - (by - ay)(px - ax))
@@ -225,40 +296,52 @@ void render_depth(const TriangleMesh& mesh, const Camera& camera, DepthBuffer& b
           // so uncovered pixels are rejected before the multiplications.
           double ax[3], ay[3], ex[3], ey[3];
           for (int k = 0; k < 3; ++k) {
-            const Corner& ca = p[(k + 1) % 3];
-            const Corner& cb = p[(k + 2) % 3];
+            const Corner& ca = *p[(k + 1) % 3];
+            const Corner& cb = *p[(k + 2) % 3];
             ax[k] = ca.x;
             ay[k] = ca.y;
             ex[k] = cb.x - ca.x;
             ey[k] = cb.y - ca.y;
           }
+          const double z0 = p[0]->z, z1 = p[1]->z, z2 = p[2]->z;
           const bool positive = e.area > 0.0;
+          // Per row, up to 64 columns at a time: the coverage of every pixel
+          // first (no branches), then the depth of the covered ones.
+          double num[64][3];
           for (int y = ya; y <= yb; ++y) {
             const double py = y + 0.5;
             double ry[3];
             for (int k = 0; k < 3; ++k) ry[k] = ex[k] * (py - ay[k]);
             float* const row = image + static_cast<std::size_t>(y) * W;
-            for (int x = e.x0; x <= e.x1; ++x) {
-              const double px = x + 0.5;
-              const double n0 = ry[0] - ey[0] * (px - ax[0]);
-              const double n1 = ry[1] - ey[1] * (px - ax[1]);
-              const double n2 = ry[2] - ey[2] * (px - ax[2]);
-              if (positive ? (n0 < 0.0 || n1 < 0.0 || n2 < 0.0)
-                           : (n0 > 0.0 || n1 > 0.0 || n2 > 0.0))
-                continue;
-              const double w0 = n0 * inv_area, w1 = n1 * inv_area, w2 = n2 * inv_area;
-              const double d = perspective ? 1.0 / (w0 / p[0].z + w1 / p[1].z + w2 / p[2].z)
-                                           : w0 * p[0].z + w1 * p[1].z + w2 * p[2].z;
-              row[x] = std::min(row[x], static_cast<float>(d));
+            for (int xs = e.x0; xs <= e.x1; xs += 64) {
+              const int n = std::min<int>(e.x1 - xs + 1, 64);
+              std::uint64_t mask = 0;
+              for (int i = 0; i < n; ++i) {
+                const double px = (xs + i) + 0.5;
+                double* const m = num[i];
+                m[0] = ry[0] - ey[0] * (px - ax[0]);
+                m[1] = ry[1] - ey[1] * (px - ax[1]);
+                m[2] = ry[2] - ey[2] * (px - ax[2]);
+                const bool in = positive ? (!(m[0] < 0.0) & !(m[1] < 0.0) & !(m[2] < 0.0))
+                                         : (!(m[0] > 0.0) & !(m[1] > 0.0) & !(m[2] > 0.0));
+                mask |= static_cast<std::uint64_t>(in) << i;
+              }
+              while (mask != 0) {
+                const int i = std::countr_zero(mask);
+                mask &= mask - 1;
+                const double* const m = num[i];
+                const double w0 = m[0] * inv_area, w1 = m[1] * inv_area, w2 = m[2] * inv_area;
+                const double d =
+                    perspective ? 1.0 / (w0 / z0 + w1 / z1 + w2 / z2) : w0 * z0 + w1 * z1 + w2 * z2;
+                float& dst = row[xs + i];
+                dst = std::min(dst, static_cast<float>(d));
+              }
             }
           }
         };
         for (std::size_t g = 0; g < 2; ++g)
-          for (const Chunk& ch : binned) {
-            const std::size_t k = g * nb + band;
-            for (std::uint32_t i = ch.start[k]; i < ch.start[k + 1]; ++i)
-              draw(ch.entries[ch.index[i]]);
-          }
+          for (std::uint32_t i = starts[g * nb + band]; i < starts[g * nb + band + 1]; ++i)
+            draw(binned[i]);
       },
       1);
 }

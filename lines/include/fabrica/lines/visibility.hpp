@@ -15,6 +15,7 @@
 // order independent).
 #pragma once
 
+#include <memory>
 #include <vector>
 
 #include "fabrica/core/camera.hpp"
@@ -22,6 +23,25 @@
 #include "fabrica/lines/line_set.hpp"
 
 namespace fabrica {
+
+namespace detail {
+struct RasterScratch;
+/// render_depth's working memory (projected corners, binned triangles),
+/// kept between calls on the same DepthBuffer; copies start empty.
+class RasterScratchSlot {
+ public:
+  RasterScratchSlot();
+  ~RasterScratchSlot();
+  RasterScratchSlot(const RasterScratchSlot&);
+  RasterScratchSlot& operator=(const RasterScratchSlot&);
+  RasterScratchSlot(RasterScratchSlot&&) noexcept;
+  RasterScratchSlot& operator=(RasterScratchSlot&&) noexcept;
+  RasterScratch& get();
+
+ private:
+  std::unique_ptr<RasterScratch> scratch_;
+};
+}  // namespace detail
 
 /// Linear eye depth per pixel (row-major, y down); +infinity where empty.
 struct DepthBuffer {
@@ -33,14 +53,18 @@ struct DepthBuffer {
   float min3x3(double x, double y) const;
   /// Maximum over the same window (+infinity where any pixel is empty).
   float max3x3(double x, double y) const;
+  /// render_depth's working memory, reused when the buffer is rendered again.
+  detail::RasterScratchSlot scratch;
 };
 
 /// Rasterises every triangle of `mesh` seen by `camera` (width x height
 /// from the camera) with perspective-correct depth. Triangles with a corner
 /// behind the near plane are skipped.
 DepthBuffer render_depth(const TriangleMesh& mesh, const Camera& camera);
-/// The same into `out`, reusing its storage (no allocation when the size
-/// is unchanged: keep one DepthBuffer per view for redraws).
+/// The same into `out`, reusing its storage and working memory (no
+/// allocation when the mesh and image sizes are unchanged: keep one
+/// DepthBuffer per view for redraws). Throws InputError when a side of the
+/// image exceeds 32000 pixels.
 void render_depth(const TriangleMesh& mesh, const Camera& camera, DepthBuffer& out);
 
 struct VisibilityOptions {
