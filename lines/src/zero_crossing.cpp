@@ -92,6 +92,25 @@ struct ShiftedNum {
   }
 };
 
+// Faces that passed the quick rejection, processed in groups (in face
+// order, so the output is unchanged) after their corners' data have been
+// prefetched: the slow path's scattered loads then overlap instead of
+// waiting one after another.
+struct CandidateBatch {
+  static constexpr int kSize = 16;
+  std::size_t face[kSize];
+  int n = 0;
+  bool add(std::size_t f) {
+    face[n++] = f;
+    return n == kSize;
+  }
+  template <class Fn>
+  void flush(Fn&& fn) {
+    for (int k = 0; k < n; ++k) fn(face[k]);
+    n = 0;
+  }
+};
+
 struct ScalarInputs {
   MeshArrays m;
   const double* val;
@@ -208,13 +227,20 @@ void scalar_crossings(const ScalarInputs& in, const Num& num, std::size_t face_c
           // The same rejections (and the culling) from one byte per corner.
           const std::uint8_t* sg = bits.signs;
           const unsigned neg = bits.negative, pos = bits.positive, cull = bits.cull;
+          CandidateBatch batch;
           for (std::size_t f = b; f < e; ++f) {
             const Face& face = faces[f];
             const unsigned a0 = sg[face[0]], a1 = sg[face[1]], a2 = sg[face[2]];
             const unsigned all = a0 & a1 & a2, any = a0 | a1 | a2;
             if ((all & (neg | pos)) | (~any & cull) || !(any & (neg | pos))) continue;
-            scalar_face(in, num, f, part);
+            for (int k = 0; k < 3; ++k) {
+              __builtin_prefetch(&in.m.pos[face[k]]);
+              __builtin_prefetch(&val[face[k]]);
+              if (in.den) __builtin_prefetch(&in.den[face[k]]);
+            }
+            if (batch.add(f)) batch.flush([&](std::size_t g) { scalar_face(in, num, g, part); });
           }
+          batch.flush([&](std::size_t g) { scalar_face(in, num, g, part); });
           return;
         }
         for (std::size_t j = b; j < e; ++j) {
@@ -403,11 +429,19 @@ void vector_zero_crossings(const Surface& surface, std::span<const double> deriv
       surface.face_count(),
       [&](std::size_t b, std::size_t e, std::vector<LineSegment>& part) {
         const Face* faces = in.m.faces;
+        CandidateBatch batch;
         for (std::size_t f = b; f < e; ++f) {
           const Face& face = faces[f];
           if (!((signs[face[0]] | signs[face[1]] | signs[face[2]]) & above_bit)) continue;
-          vector_face(in, f, part);
+          for (int k = 0; k < 3; ++k) {
+            __builtin_prefetch(&in.m.pos[face[k]]);
+            __builtin_prefetch(&in.mag[face[k]]);
+            __builtin_prefetch(&in.delta[face[k]]);
+            __builtin_prefetch(&in.dir[face[k]]);
+          }
+          if (batch.add(f)) batch.flush([&](std::size_t g) { vector_face(in, g, part); });
         }
+        batch.flush([&](std::size_t g) { vector_face(in, g, part); });
       },
       out);
 }
