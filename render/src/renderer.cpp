@@ -66,6 +66,55 @@ struct Tile {
   std::array<float, 4> transform{};
 };
 
+// A rectangle of whole-image pixels [x0, x1) x [y0, y1), GL coordinates.
+struct PixelRect {
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+};
+
+// Pixels the meshes can cover: their bounding spheres' enclosing cubes
+// projected, 2 px wider for rounding; the whole image when a corner is not
+// in front of the eye.
+PixelRect projected_rect(const Matrices& m, const std::vector<const RenderMesh*>& meshes, int width,
+                         int height) {
+  const PixelRect whole{0, 0, width, height};
+  const Eigen::Matrix4d mvp =
+      Eigen::Map<const Eigen::Matrix4f>(m.projection.data()).cast<double>() *
+      Eigen::Map<const Eigen::Matrix4f>(m.model_view.data()).cast<double>();
+  double lo_x = 1e300, lo_y = 1e300, hi_x = -1e300, hi_y = -1e300;
+  for (const RenderMesh* mesh : meshes) {
+    for (int corner = 0; corner < 8; ++corner) {
+      const Vec3 p =
+          mesh->center + mesh->radius * Vec3(corner & 1 ? 1.0 : -1.0, corner & 2 ? 1.0 : -1.0,
+                                             corner & 4 ? 1.0 : -1.0);
+      const Eigen::Vector4d clip = mvp * Eigen::Vector4d(p.x(), p.y(), p.z(), 1.0);
+      if (!(clip.w() > 1e-9)) return whole;
+      const double x = (0.5 * clip.x() / clip.w() + 0.5) * width;
+      const double y = (0.5 * clip.y() / clip.w() + 0.5) * height;
+      if (!std::isfinite(x) || !std::isfinite(y)) return whole;
+      lo_x = std::min(lo_x, x), hi_x = std::max(hi_x, x);
+      lo_y = std::min(lo_y, y), hi_y = std::max(hi_y, y);
+    }
+  }
+  if (meshes.empty()) return {};
+  auto to_int = [](double v, int lo, int hi) {
+    return static_cast<int>(std::clamp(v, static_cast<double>(lo), static_cast<double>(hi)));
+  };
+  return {to_int(std::floor(lo_x) - 2.0, 0, width), to_int(std::floor(lo_y) - 2.0, 0, height),
+          to_int(std::ceil(hi_x) + 2.0, 0, width), to_int(std::ceil(hi_y) + 2.0, 0, height)};
+}
+
+// `region` in the pixels of tile `t` (render region, margins included),
+// one pixel inside it; empty (x1 <= x0 or y1 <= y0) when the tile misses it.
+PixelRect tile_region(const Tile& t, const PixelRect& region) {
+  const int ox = t.x - kTileMargin, oy = t.y - kTileMargin;  // tile origin in the image
+  return {std::max(1, region.x0 - ox), std::max(1, region.y0 - oy),
+          std::min(t.render_w - 1, region.x1 - ox), std::min(t.render_h - 1, region.y1 - oy)};
+}
+
+bool is_empty(const PixelRect& r) {
+  return r.x1 <= r.x0 || r.y1 <= r.y0;
+}
+
 std::vector<Tile> make_tiles(int width, int height, int inner) {
   std::vector<Tile> tiles;
   for (int y = 0; y < height; y += inner) {
@@ -498,16 +547,20 @@ struct Renderer::Impl {
   // the filter with depth test EQUAL: on the marked pixels only. The bare
   // pass gets the same stencil test. Output identical to the unmasked filter:
   // the mask is conservative and the filter repeats the exact tests.
-  void hybrid_stage2(const HybridOptions& o, const Tile& t, bool bare) {
+  // `region`: the whole-image pixels the hybrid meshes can cover; the
+  // passes are scissored to it (and to one pixel inside the target, so the
+  // filter's neighbours all exist; the outer pixels are margin, never read
+  // back), and skipped in tiles it misses.
+  void hybrid_stage2(const HybridOptions& o, const Tile& t, const PixelRect& region, bool bare) {
     const GlFunctions& g = gl();
+    const PixelRect r = tile_region(t, region);
+    if (is_empty(r)) return;
     g.BindFramebuffer(GL_FRAMEBUFFER, ar_out_fbo);
     const GLenum color0 = GL_COLOR_ATTACHMENT0;
     g.DrawBuffers(1, &color0);
     g.Viewport(0, 0, t.render_w, t.render_h);
-    // One pixel inside the target: the filter's neighbours all exist (the
-    // outer pixels are margin, never read back).
     g.Enable(GL_SCISSOR_TEST);
-    g.Scissor(1, 1, t.render_w - 2, t.render_h - 2);
+    g.Scissor(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
     g.ActiveTexture(GL_TEXTURE0);
     g.BindTexture(GL_TEXTURE_2D, ar_color);
     g.Enable(GL_STENCIL_TEST);
@@ -755,6 +808,14 @@ Image Renderer::render(const Scene& scene, const Camera& camera, const RenderOpt
   }
   I.ensure_main(max_w, max_h);
 
+  PixelRect hybrid_region;
+  if (any_hybrid) {
+    std::vector<const RenderMesh*> hybrid_meshes;
+    for (const auto& s : scene.structures)
+      if (s.style.hybrid_apparent_ridges) hybrid_meshes.push_back(s.mesh.get());
+    hybrid_region = projected_rect(M, hybrid_meshes, camera.width, camera.height);
+  }
+
   const float bg_alpha = options.transparent_background ? 0.0f : scene.background.a;
   Image image(camera.width, camera.height);
   for (const Tile& t : tiles) {
@@ -841,8 +902,8 @@ Image Renderer::render(const Scene& scene, const Camera& camera, const RenderOpt
       for (std::size_t i = 0; i < scene.structures.size(); ++i)
         if (!opaque(scene.structures[i])) I.draw_mesh(*gpu[i]);
     }
-    // 4. Hybrid apparent ridges.
-    if (any_hybrid) {
+    // 4. Hybrid apparent ridges (where the tile meets the hybrid meshes).
+    if (any_hybrid && !is_empty(tile_region(t, hybrid_region))) {
       std::vector<Impl::HybridDraw> draws;
       for (std::size_t i = 0; i < scene.structures.size(); ++i) {
         const Structure& s = scene.structures[i];
@@ -852,7 +913,7 @@ Image Renderer::render(const Scene& scene, const Camera& camera, const RenderOpt
           draws.push_back({gpu[i], 1.0f, true});
       }
       I.hybrid_stage1(draws, options.hybrid, M, t, false);
-      I.hybrid_stage2(options.hybrid, t, false);
+      I.hybrid_stage2(options.hybrid, t, hybrid_region, false);
     }
     // 5. Lines.
     if (!batches.empty()) {
@@ -908,6 +969,7 @@ Image Renderer::render_hybrid(const std::shared_ptr<const RenderMesh>& mesh, con
   const Matrices M = camera_matrices(camera, mesh->center, mesh->radius);
   const GpuMesh& gm = I.gpu_mesh(mesh);
   const float scale = hybrid_scale(*mesh, options);
+  const PixelRect region = projected_rect(M, {mesh.get()}, camera.width, camera.height);
   const auto tiles = make_tiles(camera.width, camera.height, I.tile_inner_size(0));
   int max_w = 0, max_h = 0;
   for (const auto& t : tiles) {
@@ -941,7 +1003,7 @@ Image Renderer::render_hybrid(const std::shared_ptr<const RenderMesh>& mesh, con
     const float a = transparent ? 0.0f : 1.0f;
     g.ClearColor(a, a, a, a);
     g.Clear(GL_COLOR_BUFFER_BIT);
-    I.hybrid_stage2(options, t, bare);
+    I.hybrid_stage2(options, t, region, bare);
     if (profile) {
       g.EndQuery(GL_TIME_ELAPSED);
       lap(since, profile->stage2_ms);
