@@ -1,6 +1,13 @@
 #include "fabrica/lines/view_fields.hpp"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
 #include <cmath>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "fabrica/core/error.hpp"
 #include "fabrica/lines/precompute.hpp"
@@ -40,6 +47,42 @@ inline Vec2 view_dependent_direction(const ViewCurvature& m) {
   const Vec2& e = a.squaredNorm() >= b.squaredNorm() ? a : b;
   const double len = e.norm();
   return len > 0.0 ? Vec2(e / len) : Vec2(1.0, 0.0);
+}
+
+// view_dependent_direction for n vertices, two at a time where SSE2 is
+// available (the same IEEE operations in the same order: the same bits).
+// Run over a block after the rest of the vertex pass, the sqrt/divide chains
+// of neighbouring vertices overlap instead of stalling the loop one by one.
+inline void view_dependent_directions(const ViewCurvature* m, std::size_t n, Vec2* out) {
+  std::size_t k = 0;
+#if defined(__SSE2__)
+  const __m128d neg0 = _mm_set1_pd(-0.0), zero = _mm_setzero_pd(), one = _mm_set1_pd(1.0);
+  auto pick = [](__m128d mask, __m128d x, __m128d y) {
+    return _mm_or_pd(_mm_and_pd(mask, x), _mm_andnot_pd(mask, y));
+  };
+  for (; k + 2 <= n; k += 2) {
+    const __m128d m11 = _mm_set_pd(m[k + 1].m11, m[k].m11);
+    const __m128d m12 = _mm_set_pd(m[k + 1].m12, m[k].m12);
+    const __m128d m22 = _mm_set_pd(m[k + 1].m22, m[k].m22);
+    const __m128d q1 = _mm_set_pd(m[k + 1].q1, m[k].q1);
+    const __m128d a0 = _mm_sub_pd(m22, q1), a1 = _mm_xor_pd(m12, neg0);
+    const __m128d b0 = m12, b1 = _mm_sub_pd(q1, m11);
+    const __m128d sa = _mm_add_pd(_mm_mul_pd(a0, a0), _mm_mul_pd(a1, a1));
+    const __m128d sb = _mm_add_pd(_mm_mul_pd(b0, b0), _mm_mul_pd(b1, b1));
+    const __m128d use_a = _mm_cmpge_pd(sa, sb);
+    const __m128d e0 = pick(use_a, a0, b0), e1 = pick(use_a, a1, b1);
+    const __m128d len = _mm_sqrt_pd(_mm_add_pd(_mm_mul_pd(e0, e0), _mm_mul_pd(e1, e1)));
+    const __m128d ok = _mm_cmpgt_pd(len, zero);
+    const __m128d t0 = pick(ok, _mm_div_pd(e0, len), one);
+    const __m128d t1 = pick(ok, _mm_div_pd(e1, len), zero);
+    alignas(16) double r0[2], r1[2];
+    _mm_store_pd(r0, t0);
+    _mm_store_pd(r1, t1);
+    out[k] = Vec2(r0[0], r1[0]);
+    out[k + 1] = Vec2(r0[1], r1[1]);
+  }
+#endif
+  for (; k < n; ++k) out[k] = view_dependent_direction(m[k]);
 }
 
 // view_dependent_curvature from u = v·e1, w = v·e2 (u2 = u², w2 = w²)
@@ -83,9 +126,10 @@ void update_view_fields(ViewFields& fields, const Surface& surface, const Camera
     const bool want_app = request.apparent;
     const bool cull = want_app && request.apparent_cull_threshold.has_value();
     const double cull_t = cull ? *request.apparent_cull_threshold : 0.0;
-    // Pass 1: n·v, K_r, the suggestive-contour numerator, q1, t1 and the
-    // sign bits.
-    detail::parallel_range(nv, [&](std::size_t i) {
+    // Pass 1: n·v, K_r, the suggestive-contour numerator, q1 and the sign
+    // bits per vertex; t1 per block of vertices afterwards. Returns whether
+    // m (for t1) was filled.
+    auto vertex = [&](std::size_t i, ViewCurvature& m) -> bool {
       const Vec3 v = camera.view_vector(pos[i]);
       const double ndotv = v.dot(normals[i]);
       fields.ndotv[i] = ndotv;
@@ -102,7 +146,7 @@ void update_view_fields(ViewFields& fields, const Surface& surface, const Camera
         }
         fields.signs[i] =
             static_cast<std::uint8_t>(nbits | unsigned(cull && !(0.0 <= cull_t)) * kQ1Above);
-        return;
+        return false;
       }
       const double k1 = curv.k1[i], k2 = curv.k2[i];
       const double u = v.dot(curv.e1[i]), w = v.dot(curv.e2[i]);
@@ -124,16 +168,38 @@ void update_view_fields(ViewFields& fields, const Surface& surface, const Camera
       }
       unsigned bits = nbits | unsigned(fields.kr[i] > 0.0) * kKrPositive |
                       unsigned(fields.kr[i] < 0.0) * kKrNegative;
-      if (want_app) {
-        const ViewCurvature m = view_curvature_at(k1, k2, ndotv, u, w, u2, w2, csc2);
-        fields.q1[i] = m.q1;
-        const Vec2 t1 = view_dependent_direction(m);
-        fields.t1[i] = t1;
-        fields.t1_world[i] = t1[0] * curv.e1[i] + t1[1] * curv.e2[i];
-        bits |= unsigned(cull && !(m.q1 <= cull_t)) * kQ1Above;
+      if (!want_app) {
+        fields.signs[i] = static_cast<std::uint8_t>(bits);
+        return false;
       }
+      m = view_curvature_at(k1, k2, ndotv, u, w, u2, w2, csc2);
+      fields.q1[i] = m.q1;
+      bits |= unsigned(cull && !(m.q1 <= cull_t)) * kQ1Above;
       fields.signs[i] = static_cast<std::uint8_t>(bits);
-    });
+      return true;
+    };
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 2048),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        constexpr std::size_t kBlock = 64;
+                        ViewCurvature m[kBlock];
+                        bool has[kBlock];
+                        Vec2 t1[kBlock];
+                        for (std::size_t b = r.begin(); b < r.end(); b += kBlock) {
+                          const std::size_t cnt = std::min(kBlock, r.end() - b);
+                          for (std::size_t k = 0; k < cnt; ++k) {
+                            m[k] = {0.0, 0.0, 0.0, 0.0};
+                            has[k] = vertex(b + k, m[k]);
+                          }
+                          if (!want_app) continue;
+                          view_dependent_directions(m, cnt, t1);
+                          for (std::size_t k = 0; k < cnt; ++k) {
+                            if (!has[k]) continue;
+                            const std::size_t i = b + k;
+                            fields.t1[i] = t1[k];
+                            fields.t1_world[i] = t1[k][0] * curv.e1[i] + t1[k][1] * curv.e2[i];
+                          }
+                        }
+                      });
     if (want_app) {
       // Pass 2: D_t1 q1 by Judd's finite differences (ALGORITHMS.md §6.2):
       // along the line through p_i in direction t1, find the crossing with
