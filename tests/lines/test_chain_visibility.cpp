@@ -1,0 +1,289 @@
+// Chaining and hidden-line removal against independent, plain
+// implementations: the depth raster against a brute-force rasteriser (every
+// triangle, every pixel of its box, the same per-pixel formula: the buffers
+// must agree bit for bit, so the binning, the back-face skipping and the
+// reused working memory change nothing); chaining by the flat end table
+// against the sort-based pairing (ids too large for the table); branch
+// points; visibility with and without a given depth buffer; threads.
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <vector>
+
+#include "fabrica/core/camera.hpp"
+#include "fabrica/core/error.hpp"
+#include "fabrica/core/surface.hpp"
+#include "fabrica/lines/chain.hpp"
+#include "fabrica/lines/extract.hpp"
+#include "fabrica/lines/visibility.hpp"
+#include "test_support.hpp"
+
+using namespace fabrica;
+
+namespace {
+
+Camera look_at(const Vec3& eye, const Vec3& center, int w, int h,
+               Projection proj = Projection::perspective, double fov = 40.0) {
+  Camera c;
+  c.eye = eye;
+  c.center = center;
+  c.up = Vec3(0.0, 1.0, 0.0);
+  c.fov_deg = fov;
+  c.projection = proj;
+  c.width = w;
+  c.height = h;
+  return c;
+}
+
+TriangleMesh translated(TriangleMesh m, const Vec3& t) {
+  for (auto& p : m.positions) p += t;
+  return m;
+}
+
+TriangleMesh merged(const TriangleMesh& a, const TriangleMesh& b) {
+  TriangleMesh m = a;
+  const auto off = static_cast<std::int32_t>(a.positions.size());
+  m.positions.insert(m.positions.end(), b.positions.begin(), b.positions.end());
+  for (Face f : b.faces) {
+    for (int k = 0; k < 3; ++k) f[k] += off;
+    m.faces.push_back(f);
+  }
+  return m;
+}
+
+// Every triangle, every pixel of its (unclipped) box, the weights and the
+// depth by the documented formula; min kept.
+std::vector<float> brute_force_depth(const TriangleMesh& mesh, const Camera& camera) {
+  const float inf = std::numeric_limits<float>::infinity();
+  std::vector<float> out(static_cast<std::size_t>(camera.width) * camera.height, inf);
+  const bool perspective = camera.projection == Projection::perspective;
+  for (const Face& t : mesh.faces) {
+    ProjectedPoint q[3];
+    for (int k = 0; k < 3; ++k) q[k] = project(camera, mesh.positions[t[k]]);
+    if (perspective && (q[0].depth <= 1e-9 || q[1].depth <= 1e-9 || q[2].depth <= 1e-9)) continue;
+    const Vec2 p[3] = {q[0].pixel, q[1].pixel, q[2].pixel};
+    const double area =
+        (p[1] - p[0]).x() * (p[2] - p[0]).y() - (p[1] - p[0]).y() * (p[2] - p[0]).x();
+    if (area == 0.0) continue;
+    const double inv_area = 1.0 / area;
+    const double xmin = std::min({p[0].x(), p[1].x(), p[2].x()});
+    const double xmax = std::max({p[0].x(), p[1].x(), p[2].x()});
+    const double ymin = std::min({p[0].y(), p[1].y(), p[2].y()});
+    const double ymax = std::max({p[0].y(), p[1].y(), p[2].y()});
+    const int x0 = std::max(0, static_cast<int>(std::floor(xmin)));
+    const int x1 = std::min(camera.width - 1, static_cast<int>(std::floor(xmax)));
+    const int y0 = std::max(0, static_cast<int>(std::floor(ymin)));
+    const int y1 = std::min(camera.height - 1, static_cast<int>(std::floor(ymax)));
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) {
+        const double px = x + 0.5, py = y + 0.5;
+        double w[3];
+        for (int k = 0; k < 3; ++k) {
+          const Vec2& a = p[(k + 1) % 3];
+          const Vec2& b = p[(k + 2) % 3];
+          w[k] = ((b.x() - a.x()) * (py - a.y()) - (b.y() - a.y()) * (px - a.x())) * inv_area;
+        }
+        if (w[0] < 0.0 || w[1] < 0.0 || w[2] < 0.0) continue;
+        const double d = perspective
+                             ? 1.0 / (w[0] / q[0].depth + w[1] / q[1].depth + w[2] / q[2].depth)
+                             : w[0] * q[0].depth + w[1] * q[1].depth + w[2] * q[2].depth;
+        float& dst = out[static_cast<std::size_t>(y) * camera.width + x];
+        dst = std::min(dst, static_cast<float>(d));
+      }
+  }
+  return out;
+}
+
+std::size_t count_differences(const std::vector<float>& a, const std::vector<float>& b) {
+  EXPECT_EQ(a.size(), b.size());
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < std::min(a.size(), b.size()); ++i)
+    n += std::memcmp(&a[i], &b[i], sizeof(float)) != 0;
+  return n;
+}
+
+std::size_t finite_pixels(const std::vector<float>& d) {
+  return static_cast<std::size_t>(
+      std::count_if(d.begin(), d.end(), [](float z) { return std::isfinite(z); }));
+}
+
+}  // namespace
+
+TEST(DepthRaster, BitIdenticalToBruteForceOnClosedOpenAndClippedScenes) {
+  // Two spheres (closed, back faces hidden), an open cylinder seen from an
+  // angle (back faces visible through the ends), a jittered torus, an
+  // orthographic view, and an eye between the spheres (near-plane skipping).
+  const TriangleMesh spheres = merged(translated(test::make_icosphere(1.0, 4), Vec3(0, 0, 1)),
+                                      translated(test::make_icosphere(1.5, 4), Vec3(0.8, 0.3, -2)));
+  const TriangleMesh cylinder = test::make_cylinder(1.0, 3.0, 20, 48);
+  const TriangleMesh torus = test::make_torus(2.0, 0.6, 64, 32, 0.05);
+  struct Case {
+    const TriangleMesh* mesh;
+    Camera camera;
+  };
+  const std::vector<Case> cases = {
+      {&spheres, look_at(Vec3(0, 0, 9), Vec3(0, 0, 0), 320, 240)},
+      {&cylinder, look_at(Vec3(3, 4, 5), Vec3(0, 0, 0), 257, 300)},
+      {&torus, look_at(Vec3(1, 6, 4), Vec3(0, 0, 0), 400, 400)},
+      {&torus, look_at(Vec3(0, 2, 8), Vec3(0, 0, 0), 200, 150, Projection::orthographic, 30)},
+      {&spheres,
+       look_at(Vec3(0.2, 0.1, -0.5), Vec3(0, 0, 1), 160, 120, Projection::perspective, 100)},
+  };
+  DepthBuffer reused;  // rendered into again and again: working memory reused
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    const auto& c = cases[i];
+    const std::vector<float> expected = brute_force_depth(*c.mesh, c.camera);
+    ASSERT_GT(finite_pixels(expected), 500u) << "case " << i << " sees too little";
+    const DepthBuffer fresh = render_depth(*c.mesh, c.camera);
+    EXPECT_EQ(fresh.width, c.camera.width);
+    EXPECT_EQ(fresh.height, c.camera.height);
+    EXPECT_EQ(count_differences(fresh.depth, expected), 0u) << "case " << i;
+    render_depth(*c.mesh, c.camera, reused);
+    EXPECT_EQ(count_differences(reused.depth, expected), 0u) << "case " << i << " (reused)";
+    {
+      tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+      const DepthBuffer serial = render_depth(*c.mesh, c.camera);
+      EXPECT_EQ(count_differences(serial.depth, expected), 0u) << "case " << i << " (1 thread)";
+    }
+  }
+}
+
+TEST(DepthRaster, RejectsImagesTooLargeToIndex) {
+  const TriangleMesh m = test::make_icosphere(1.0, 1);
+  Camera c = look_at(Vec3(0, 0, 5), Vec3(0, 0, 0), 40000, 10);
+  EXPECT_THROW(render_depth(m, c), InputError);
+}
+
+namespace {
+
+SegmentEnd edge_end(std::int32_t element, double x) {
+  SegmentEnd e;
+  e.kind = EndKind::edge;
+  e.element = element;
+  e.position = Vec3(x, 0.1 * x * x, 0.0);
+  e.anchor.face = 0;
+  return e;
+}
+
+LineSegment seg(std::int32_t a, std::int32_t b, double xa, double xb, std::int32_t face) {
+  LineSegment s;
+  s.face = face;
+  s.end[0] = edge_end(a, xa);
+  s.end[1] = edge_end(b, xb);
+  return s;
+}
+
+void expect_same_lines(const std::vector<Polyline>& a, const std::vector<Polyline>& b) {
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].closed, b[i].closed);
+    ASSERT_EQ(a[i].vertices.size(), b[i].vertices.size());
+    for (std::size_t k = 0; k < a[i].vertices.size(); ++k)
+      EXPECT_EQ(a[i].vertices[k].position, b[i].vertices[k].position);
+    EXPECT_EQ(a[i].edge_faces, b[i].edge_faces);
+  }
+}
+
+}  // namespace
+
+TEST(Chaining, FlatTableAndSortedPairingAgree) {
+  // A shuffled open chain of 6 segments, a loop of 4, and a branch point
+  // where three segments meet (nothing joins there); ids 0..99 use the flat
+  // table, the same ids times 2^24 force the sort-based pairing.
+  auto soup_with_scale = [](std::int32_t scale) {
+    SegmentSoup s;
+    s.family = LineFamily::ridge;
+    auto id = [&](std::int32_t i) { return i * scale; };
+    // open chain 1-2-3-4-5-6-7, segments out of order and flipped
+    s.segments.push_back(seg(id(4), id(3), 4, 3, 10));
+    s.segments.push_back(seg(id(1), id(2), 1, 2, 11));
+    s.segments.push_back(seg(id(6), id(7), 6, 7, 12));
+    s.segments.push_back(seg(id(3), id(2), 3, 2, 13));
+    s.segments.push_back(seg(id(5), id(6), 5, 6, 14));
+    s.segments.push_back(seg(id(4), id(5), 4, 5, 15));
+    // loop 20-21-22-23-20
+    s.segments.push_back(seg(id(21), id(22), 21, 22, 16));
+    s.segments.push_back(seg(id(20), id(21), 20, 21, 17));
+    s.segments.push_back(seg(id(23), id(20), 23, 20, 18));
+    s.segments.push_back(seg(id(22), id(23), 22, 23, 19));
+    // branch at 30: three segments end there
+    s.segments.push_back(seg(id(30), id(31), 30, 31, 20));
+    s.segments.push_back(seg(id(32), id(30), 32, 30, 21));
+    s.segments.push_back(seg(id(30), id(33), 30, 33, 22));
+    return s;
+  };
+  const auto flat = chain_segments(soup_with_scale(1));
+  const auto sorted = chain_segments(soup_with_scale(1 << 24));
+  // 1 open chain of 6 segments, 3 single segments at the branch, 1 loop.
+  ASSERT_EQ(flat.size(), 5u);
+  EXPECT_FALSE(flat[0].closed);
+  EXPECT_EQ(flat[0].vertices.size(), 7u);
+  for (int i = 1; i <= 3; ++i) EXPECT_EQ(flat[static_cast<std::size_t>(i)].vertices.size(), 2u);
+  EXPECT_TRUE(flat[4].closed);
+  EXPECT_EQ(flat[4].vertices.size(), 4u);
+  EXPECT_EQ(flat[4].edge_faces.size(), 4u);
+  expect_same_lines(flat, sorted);
+  // The chain runs through consecutive x (positions encode the ids).
+  for (std::size_t k = 1; k < flat[0].vertices.size(); ++k)
+    EXPECT_DOUBLE_EQ(
+        std::abs(flat[0].vertices[k].position.x() - flat[0].vertices[k - 1].position.x()), 1.0);
+}
+
+TEST(Chaining, SameAtOneAndTwoThreadsOnATorus) {
+  const Surface s(test::make_torus(2.0, 0.7, 96, 48, 0.02));
+  const Camera cam = look_at(Vec3(0.5, 5.0, 6.0), Vec3(0, 0, 0), 600, 400);
+  LineOptions o;
+  o.families = {LineFamily::contour, LineFamily::suggestive, LineFamily::ridge, LineFamily::valley,
+                LineFamily::apparent};
+  LineExtractor ex(s, o);
+  const auto soups = ex.extract(cam);
+  ChainOptions co;
+  co.camera = cam;
+  co.min_length_px = 3.0;
+  LineSet one, two;
+  {
+    tbb::global_control g(tbb::global_control::max_allowed_parallelism, 1);
+    one = chain_segments(soups, co);
+  }
+  {
+    tbb::global_control g(tbb::global_control::max_allowed_parallelism, 2);
+    two = chain_segments(soups, co);
+  }
+  ASSERT_GT(one.polylines.size(), 4u);
+  expect_same_lines(one.polylines, two.polylines);
+  // Every kept chain is at least 3 px long on screen.
+  for (const auto& p : one.polylines) EXPECT_GE(projected_length(p, cam), 3.0);
+}
+
+TEST(LinesVisibility, GivenAndOwnDepthBufferAgree) {
+  const Surface s(merged(translated(test::make_icosphere(1.0, 4), Vec3(0.3, 0, 1.5)),
+                         test::make_torus(2.0, 0.6, 64, 32)));
+  const Camera cam = look_at(Vec3(0.5, 3.0, 7.0), Vec3(0, 0, 0), 500, 400);
+  LineOptions o;
+  o.families = {LineFamily::contour, LineFamily::suggestive};
+  LineExtractor ex(s, o);
+  const LineSet chained = chain_segments(ex.extract(cam));
+  LineSet a = chained, b = chained;
+  compute_visibility(a, s, cam);
+  DepthBuffer depth;
+  render_depth(s.mesh(), cam, depth);
+  compute_visibility(b, s, cam, {}, &depth);
+  ASSERT_EQ(a.polylines.size(), b.polylines.size());
+  std::size_t hidden = 0, visible = 0;
+  for (std::size_t i = 0; i < a.polylines.size(); ++i) {
+    ASSERT_EQ(a.polylines[i].vertices.size(), b.polylines[i].vertices.size());
+    EXPECT_EQ(a.polylines[i].edge_faces.size(), b.polylines[i].edge_faces.size());
+    for (std::size_t k = 0; k < a.polylines[i].vertices.size(); ++k) {
+      EXPECT_EQ(a.polylines[i].vertices[k].visible, b.polylines[i].vertices[k].visible);
+      EXPECT_EQ(a.polylines[i].vertices[k].position, b.polylines[i].vertices[k].position);
+      (a.polylines[i].vertices[k].visible ? visible : hidden)++;
+    }
+  }
+  // The sphere hides part of the torus' lines: both states occur.
+  EXPECT_GT(hidden, 10u);
+  EXPECT_GT(visible, 100u);
+}
