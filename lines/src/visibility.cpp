@@ -274,16 +274,25 @@ void render_depth(const TriangleMesh& mesh, const Camera& camera, DepthBuffer& b
         auto draw = [&](const Binned& e) {
           const int ya = std::max<int>(y_lo, e.y0), yb = std::min<int>(y_hi, e.y1);
           if (e.bound > -kInf) {
-            bool hidden = true;
-            for (int y = ya; y <= yb && hidden; ++y) {
-              const float* row = image + static_cast<std::size_t>(y) * W;
-              for (int x = e.x0; x <= e.x1; ++x)
-                if (!(row[x] <= e.bound)) {
-                  hidden = false;
-                  break;
-                }
+            // Hidden when the farthest pixel of the box is at or below the
+            // bound (the buffer never holds NaN). Boxes up to 4 wide (almost
+            // all) take four clamped reads per row and no branches.
+            float far = -kInf;
+            if (e.x1 - e.x0 < 4) {
+              const int c1 = std::min(e.x0 + 1, static_cast<int>(e.x1));
+              const int c2 = std::min(e.x0 + 2, static_cast<int>(e.x1));
+              const int c3 = std::min(e.x0 + 3, static_cast<int>(e.x1));
+              for (int y = ya; y <= yb; ++y) {
+                const float* row = image + static_cast<std::size_t>(y) * W;
+                far = std::max({far, row[e.x0], row[c1], row[c2], row[c3]});
+              }
+            } else {
+              for (int y = ya; y <= yb && far <= e.bound; ++y) {
+                const float* row = image + static_cast<std::size_t>(y) * W;
+                for (int x = e.x0; x <= e.x1; ++x) far = std::max(far, row[x]);
+              }
             }
-            if (hidden) return;
+            if (far <= e.bound) return;
           }
           const Face& t = mesh.faces[static_cast<std::size_t>(e.face)];
           const Corner* p[3] = {&proj[t[0]], &proj[t[1]], &proj[t[2]]};
