@@ -142,27 +142,12 @@ void update_light_fields(ViewFields& fields, const Surface& surface, const Camer
       },
       4096);
 
-  // The kernel reads the maximum test only on faces where h changes sign.
-  std::vector<std::uint8_t> crossing(nv, 0);
-  detail::parallel_range(
-      line_faces.size(),
-      [&](std::size_t j) {
-        const Face& fc = faces[static_cast<std::size_t>(line_faces[j])];
-        const double a = h[fc[0]], b = h[fc[1]], c = h[fc[2]];
-        // A superset of the kernel's "one corner's sign differs" (a zero
-        // counts against either sign): not all zero, not all of one sign.
-        const bool all_neg = a < 0.0 && b < 0.0 && c < 0.0;
-        const bool all_pos = a > 0.0 && b > 0.0 && c > 0.0;
-        const bool all_zero = a == 0.0 && b == 0.0 && c == 0.0;
-        if (all_neg || all_pos || all_zero) return;
-        for (int k = 0; k < 3; ++k) mark(crossing, static_cast<std::size_t>(fc[k]));
-      },
-      4096);
+  // The maximum test -D_w D_w|∇f| = -<∇h, w> at the corners.
   double* smax = fields.pel_maximum.data();
   detail::parallel_range(
       nv,
       [&](std::size_t i) {
-        if (!crossing[i]) {
+        if (!corner[i]) {
           smax[i] = 0.0;
           return;
         }

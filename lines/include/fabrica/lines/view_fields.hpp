@@ -87,10 +87,10 @@ struct ViewFields {
   /// A face "can carry a line" when some corner has |∇f| > light_threshold
   /// (less a relative 1e-9 margin) and, with light_cull_backfaces, some
   /// corner has n·v > 0; light_faces lists them (ascending). pel_h is exact
-  /// at their corners and the corners' neighbours, pel_maximum at the
-  /// corners of those where pel_h changes sign; both are 0 at vertices that
-  /// no such face needs. Extraction with a threshold >= light_threshold (and
-  /// culling if light_cull_backfaces) visits only light_faces and is exact.
+  /// at their corners and the corners' neighbours, pel_maximum at their
+  /// corners; both are 0 at vertices that no such face needs. Extraction
+  /// with a threshold >= light_threshold (and culling if
+  /// light_cull_backfaces) visits only light_faces and is exact.
   std::vector<double> light_gradient_norm, pel_h, pel_maximum;
   std::vector<std::int32_t> light_faces;
   double light_threshold = -std::numeric_limits<double>::infinity();  ///< as requested
