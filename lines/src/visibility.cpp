@@ -382,14 +382,16 @@ void compute_visibility(LineSet& lines, const Surface& surface, const Camera& ca
     if (cx < 1 || cy < 1 || cx > W - 2 || cy > H - 2)
       return options.window_minimum ? depth->min3x3(x, y) : depth->max3x3(x, y);
     const float* r = z + static_cast<std::size_t>(cy - 1) * W + (cx - 1);
-    if (options.window_minimum) {
-      float m = kInf;
-      for (int k = 0; k < 3; ++k, r += W) m = std::min({m, r[0], r[1], r[2]});
-      return m;
-    }
-    float m = -kInf;
-    for (int k = 0; k < 3; ++k, r += W) m = std::max({m, r[0], r[1], r[2]});
-    return m;
+    const float* r1 = r + W;
+    const float* r2 = r1 + W;
+    // No NaN in the buffer: the order of the comparisons does not matter.
+    if (options.window_minimum)
+      return std::min(std::min(std::min(std::min(r[0], r[1]), std::min(r[2], r1[0])),
+                               std::min(std::min(r1[1], r1[2]), std::min(r2[0], r2[1]))),
+                      r2[2]);
+    return std::max(std::max(std::max(std::max(r[0], r[1]), std::max(r[2], r1[0])),
+                             std::max(std::max(r1[1], r1[2]), std::max(r2[0], r2[1]))),
+                    r2[2]);
   };
   auto raw_visible = [&](const ProjectedPoint& pp) {
     if (pp.depth <= 0.0) return false;
