@@ -7,6 +7,7 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <type_traits>
 
 #include "fabrica/core/error.hpp"
 #include "parallel.hpp"
@@ -100,10 +101,26 @@ namespace detail {
 
 // render_depth's working memory, kept in the DepthBuffer between calls.
 struct RasterScratch {
-  std::vector<Corner> corners;
-  std::vector<Binned> per_face;      // face -1: covers no pixel centre
+  // Grow-only storage left uninitialised (every element used is written
+  // first, in the parallel loops), so a fresh buffer pays no serial zeroing.
+  template <class T>
+  struct Array {
+    std::unique_ptr<T[]> data;
+    std::size_t capacity = 0;
+    void resize(std::size_t n) {
+      if (n > capacity) {
+        data.reset(new T[n]);
+        capacity = n;
+      }
+    }
+    T& operator[](std::size_t i) { return data[i]; }
+  };
+  static_assert(std::is_trivially_default_constructible_v<Corner> &&
+                std::is_trivially_default_constructible_v<Binned>);
+  Array<Corner> corners;
+  Array<Binned> per_face;            // face -1: covers no pixel centre
   std::vector<std::uint32_t> count;  // [chunk][group][band], then offsets
-  std::vector<Binned> binned;        // by (group, band, chunk, face)
+  Array<Binned> binned;              // by (group, band, chunk, face)
 };
 
 RasterScratchSlot::RasterScratchSlot() = default;
@@ -148,7 +165,7 @@ void render_depth(const TriangleMesh& mesh, const Camera& camera, DepthBuffer& b
   detail::RasterScratch& scratch = buf.scratch.get();
   const std::size_t nv = mesh.positions.size();
   const std::size_t nf = mesh.faces.size();
-  std::vector<Corner>& proj = scratch.corners;
+  auto& proj = scratch.corners;
   proj.resize(nv);
   const detail::Projector project(camera);
   const bool perspective = camera.projection == Projection::perspective;
@@ -210,7 +227,7 @@ void render_depth(const TriangleMesh& mesh, const Camera& camera, DepthBuffer& b
   // count[(c * 2 + g) * nb + band]: entries of chunk c, group g in the band.
   std::vector<std::uint32_t>& count = scratch.count;
   count.assign(chunks * 2 * nb, 0);
-  std::vector<Binned>& per_face = scratch.per_face;
+  auto& per_face = scratch.per_face;
   per_face.resize(nf);
   detail::parallel_range(
       chunks,
@@ -248,7 +265,7 @@ void render_depth(const TriangleMesh& mesh, const Camera& camera, DepthBuffer& b
   for (std::size_t g = 0; g < 2; ++g)
     for (std::size_t k = 0; k < nb; ++k) starts[g * nb + k] = range_start(g, k);
   starts[2 * nb] = total;
-  std::vector<Binned>& binned = scratch.binned;
+  auto& binned = scratch.binned;
   binned.resize(total);
   detail::parallel_range(
       chunks,
