@@ -59,7 +59,11 @@ struct DepthBuffer {
 
 /// Rasterises every triangle of `mesh` seen by `camera` (width x height
 /// from the camera) with perspective-correct depth. Triangles with a corner
-/// behind the near plane are skipped.
+/// behind the near plane are skipped. A pixel is covered when its centre
+/// has no negative barycentric weight (shared edges: both triangles); the
+/// buffer holds the minimum depth, bit-identical at any thread count and to
+/// a plain loop over every triangle and every pixel of its box (the binning
+/// and the skipping of hidden back faces in visibility.cpp change nothing).
 DepthBuffer render_depth(const TriangleMesh& mesh, const Camera& camera);
 /// The same into `out`, reusing its storage and working memory (no
 /// allocation when the mesh and image sizes are unchanged: keep one
