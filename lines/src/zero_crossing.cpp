@@ -95,7 +95,8 @@ struct ShiftedNum {
 // Faces that passed the quick rejection, processed in groups (in face
 // order, so the output is unchanged) after their corners' data have been
 // prefetched: the slow path's scattered loads then overlap instead of
-// waiting one after another.
+// waiting one after another, and its first data-dependent rejection can be
+// evaluated for the whole group without branches.
 struct CandidateBatch {
   static constexpr int kSize = 16;
   std::size_t face[kSize];
@@ -103,11 +104,6 @@ struct CandidateBatch {
   bool add(std::size_t f) {
     face[n++] = f;
     return n == kSize;
-  }
-  template <class Fn>
-  void flush(Fn&& fn) {
-    for (int k = 0; k < n; ++k) fn(face[k]);
-    n = 0;
   }
 };
 
@@ -228,6 +224,37 @@ void scalar_crossings(const ScalarInputs& in, const Num& num, std::size_t face_c
           const std::uint8_t* sg = bits.signs;
           const unsigned neg = bits.negative, pos = bits.positive, cull = bits.cull;
           CandidateBatch batch;
+          // scalar_face's test-function rejection (N <= 0 at every corner,
+          // or N/D <= 0 at every corner), evaluated for the whole batch
+          // without branches and compacted; scalar_face repeats it.
+          auto flush = [&] {
+            std::size_t keep[CandidateBatch::kSize];
+            int nk = 0;
+            for (int k = 0; k < batch.n; ++k) {
+              const std::size_t g = batch.face[k];
+              const Face& fg = faces[g];
+              bool reject = false;
+              if (in.test) {
+                const double n0 = num(static_cast<std::size_t>(fg[0]));
+                const double n1 = num(static_cast<std::size_t>(fg[1]));
+                const double n2 = num(static_cast<std::size_t>(fg[2]));
+                if (!in.den) {
+                  reject = (n0 <= 0.0) & (n1 <= 0.0) & (n2 <= 0.0);
+                } else {
+                  const double* d = in.den;
+                  const double d0 = d[fg[0]], d1 = d[fg[1]], d2 = d[fg[2]];
+                  reject = ((n0 <= 0.0) & (d0 >= 0.0) & (n1 <= 0.0) & (d1 >= 0.0) & (n2 <= 0.0) &
+                            (d2 >= 0.0)) |
+                           ((n0 >= 0.0) & (d0 <= 0.0) & (n1 >= 0.0) & (d1 <= 0.0) & (n2 >= 0.0) &
+                            (d2 <= 0.0));
+                }
+              }
+              keep[nk] = g;
+              nk += int(!reject);
+            }
+            batch.n = 0;
+            for (int k = 0; k < nk; ++k) scalar_face(in, num, keep[k], part);
+          };
           for (std::size_t f = b; f < e; ++f) {
             const Face& face = faces[f];
             const unsigned a0 = sg[face[0]], a1 = sg[face[1]], a2 = sg[face[2]];
@@ -238,9 +265,9 @@ void scalar_crossings(const ScalarInputs& in, const Num& num, std::size_t face_c
               __builtin_prefetch(&val[face[k]]);
               if (in.den) __builtin_prefetch(&in.den[face[k]]);
             }
-            if (batch.add(f)) batch.flush([&](std::size_t g) { scalar_face(in, num, g, part); });
+            if (batch.add(f)) flush();
           }
-          batch.flush([&](std::size_t g) { scalar_face(in, num, g, part); });
+          flush();
           return;
         }
         for (std::size_t j = b; j < e; ++j) {
@@ -430,6 +457,27 @@ void vector_zero_crossings(const Surface& surface, std::span<const double> deriv
       [&](std::size_t b, std::size_t e, std::vector<LineSegment>& part) {
         const Face* faces = in.m.faces;
         CandidateBatch batch;
+        // vector_face's first test (at least two edges where E_i·E_j <= 0),
+        // evaluated for the whole batch without branches and compacted, so
+        // its hard-to-predict outcome does not cost a mispredicted branch
+        // per face; vector_face repeats it on the survivors.
+        auto flush = [&] {
+          std::size_t keep[CandidateBatch::kSize];
+          int nk = 0;
+          for (int k = 0; k < batch.n; ++k) {
+            const std::size_t g = batch.face[k];
+            const Face& fg = faces[g];
+            const Vec3 E0 = in.delta[fg[0]] * in.dir[fg[0]];
+            const Vec3 E1 = in.delta[fg[1]] * in.dir[fg[1]];
+            const Vec3 E2 = in.delta[fg[2]] * in.dir[fg[2]];
+            const int zeros =
+                int(E0.dot(E1) <= 0.0) + int(E1.dot(E2) <= 0.0) + int(E2.dot(E0) <= 0.0);
+            keep[nk] = g;
+            nk += int(zeros >= 2);
+          }
+          batch.n = 0;
+          for (int k = 0; k < nk; ++k) vector_face(in, keep[k], part);
+        };
         for (std::size_t f = b; f < e; ++f) {
           const Face& face = faces[f];
           if (!((signs[face[0]] | signs[face[1]] | signs[face[2]]) & above_bit)) continue;
@@ -439,9 +487,9 @@ void vector_zero_crossings(const Surface& surface, std::span<const double> deriv
             __builtin_prefetch(&in.delta[face[k]]);
             __builtin_prefetch(&in.dir[face[k]]);
           }
-          if (batch.add(f)) batch.flush([&](std::size_t g) { vector_face(in, g, part); });
+          if (batch.add(f)) flush();
         }
-        batch.flush([&](std::size_t g) { vector_face(in, g, part); });
+        flush();
       },
       out);
 }
