@@ -46,7 +46,7 @@ struct ViewFieldsRequest {
   /// threshold reads, and is 0 elsewhere; ViewFields::signs gets kQ1Above.
   /// q1, t1 and t1_world are always computed everywhere. nullopt: everywhere.
   std::optional<double> apparent_cull_threshold;
-  bool light = false;    ///< light, light_gradient, light_laplacian (PELs, Laplacian lines)
+  bool light = false;    ///< light, light_gradient(_norm), light_laplacian, light_faces
   bool pel = false;      ///< pel_h, pel_maximum (PELs): D_w|∇f| and -D_w D_w|∇f|
   /// Light direction (towards the light) for PELs / Laplacian lines;
   /// nullopt = headlight (v at each vertex).
