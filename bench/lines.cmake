@@ -3,3 +3,7 @@
 fabrica_add_bench(bench_lines
   SOURCES ${CMAKE_CURRENT_LIST_DIR}/bench_lines.cpp
   LIBS fabrica::lines fabrica::io TBB::tbb)
+# A plain per-view driver for profilers (callgrind, perf): bench/drive_lines.cpp.
+add_executable(drive_lines ${CMAKE_CURRENT_LIST_DIR}/drive_lines.cpp)
+target_link_libraries(drive_lines PRIVATE fabrica::lines fabrica::io TBB::tbb fabrica::warnings)
+target_compile_definitions(drive_lines PRIVATE FABRICA_BENCH_DATA="${FABRICA_BENCH_DATA}")

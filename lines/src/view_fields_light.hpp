@@ -34,4 +34,12 @@ void update_light_fields(ViewFields& fields, const Surface& surface, const Camer
                          const ViewFieldsRequest& request, const LinePrecompute* precompute,
                          bool radial);
 
+/// D_t1 q1 (fields.dt1q1) from the filled q1, t1, t1_world, ndotv and
+/// signs: Judd's one-sided finite differences along t1 (ALGORITHMS.md §6.2).
+/// With `cull`, only at vertices of faces with a corner carrying kQ1Above
+/// (0 elsewhere). `precompute` supplies the tangent ring; nullptr: from the
+/// topology.
+void update_dt1q1(ViewFields& fields, const Surface& surface, bool cull,
+                  const LinePrecompute* precompute);
+
 }  // namespace fabrica::detail
