@@ -11,7 +11,8 @@ namespace fabrica {
 
 struct LinePrecompute::Cache {
   std::once_flag k1_once, ridge_once, demarcating_once, gradient_once, laplacian_once, ring_once;
-  std::once_flag ridge_keys_once, demarcating_keys_once, tangent_ring_once;
+  std::once_flag ridge_keys_once, demarcating_keys_once, tangent_ring_once, blocks_once;
+  VertexBlocks blocks;
   TangentRing tangent_ring;
   std::vector<RawKey> ridge_keys, valley_keys, demarcating_keys;
   CornerRing ring;
@@ -86,6 +87,46 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
     });
   });
   return cache_->tangent_ring;
+}
+
+const LinePrecompute::VertexBlocks& LinePrecompute::vertex_blocks() const {
+  std::call_once(cache_->blocks_once, [&] {
+    const auto& pos = surface_->positions();
+    const auto& nrm = surface_->vertex_normals();
+    const auto& curv = surface_->curvature();
+    const auto& dcurv = surface_->curvature_derivatives();
+    const std::size_t nv = surface_->vertex_count();
+    const std::size_t nb = (nv + 3) / 4;
+    VertexBlocks& vb = cache_->blocks;
+    vb.block.assign(nb, VertexBlock{});
+    vb.valid.assign(nb, 0);
+    detail::parallel_range(
+        nb,
+        [&](std::size_t b) {
+          VertexBlock& blk = vb.block[b];
+          unsigned valid = 0;
+          for (std::size_t l = 0; l < 4 && 4 * b + l < nv; ++l) {
+            const std::size_t i = 4 * b + l;
+            for (int k = 0; k < 3; ++k) {
+              blk.p[k][l] = pos[i][k];
+              blk.n[k][l] = nrm[i][k];
+              blk.e1[k][l] = curv.e1[i][k];
+              blk.e2[k][l] = curv.e2[i][k];
+            }
+            blk.k1[l] = curv.k1[i];
+            blk.k2[l] = curv.k2[i];
+            blk.a[l] = dcurv.a[i];
+            blk.b[l] = dcurv.b[i];
+            blk.c[l] = dcurv.c[i];
+            blk.d[l] = dcurv.d[i];
+            valid |= unsigned(curv.valid[i] != 0) << l;
+            valid |= unsigned(dcurv.valid[i] != 0) << (4 + l);
+          }
+          vb.valid[b] = static_cast<std::uint8_t>(valid);
+        },
+        512);
+  });
+  return cache_->blocks;
 }
 
 namespace {

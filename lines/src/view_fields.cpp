@@ -8,6 +8,11 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && \
+    !defined(FABRICA_NO_MULTIVERSION)
+#include <immintrin.h>
+#define FABRICA_VERTEX_PASS_AVX2 1
+#endif
 
 #include "fabrica/core/error.hpp"
 #include "fabrica/lines/precompute.hpp"
@@ -97,6 +102,167 @@ inline ViewCurvature view_curvature_at(double k1, double k2, double ndotv, doubl
   }
   return view_dependent_curvature(k1, k2, ndotv, hu2, huv, hw2);
 }
+
+#if defined(FABRICA_VERTEX_PASS_AVX2)
+// The vertex pass four vertices at a time with 256-bit vectors, from
+// LinePrecompute::vertex_blocks(): the same IEEE operations in the same
+// order as `vertex` and view_dependent_direction below (Eigen's Vec3 dot is
+// (x x' + y y') + z z'; no fused multiply-adds), so the same bits. Compiled
+// for AVX2 and called only when the CPU has it (vertex_pass_has_avx2).
+struct VertexPassArgs {
+  std::size_t nv;
+  bool perspective, want_sc, want_app, cull;
+  double cull_t;
+  double eye[3], view[3];  // eye (perspective) or the constant view vector
+  double *ndotv, *kr, *sc_num, *q1;
+  Vec2* t1;
+  Vec3* t1_world;
+  std::uint8_t* signs;
+};
+
+bool vertex_pass_has_avx2() {
+  static const bool has = __builtin_cpu_supports("avx2");
+  return has;
+}
+
+// Blocks [b0, b1) whose four vertices all have valid curvature; the others
+// go to `other(b)`.
+template <class Other>
+[[gnu::target("avx2")]] void vertex_pass_avx2(const LinePrecompute::VertexBlock* blocks,
+                                              const std::uint8_t* valid, std::size_t b0,
+                                              std::size_t b1, const VertexPassArgs& A,
+                                              Other&& other) {
+  const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0);
+  const __m256d neg0 = _mm256_set1_pd(-0.0), three = _mm256_set1_pd(3.0);
+  const __m256i lane_bits = _mm256_set_epi64x(8, 4, 2, 1);
+  for (std::size_t b = b0; b < b1; ++b) {
+    if ((valid[b] & 0xF) != 0xF || 4 * b + 4 > A.nv) {
+      other(b);
+      continue;
+    }
+    const LinePrecompute::VertexBlock& k = blocks[b];
+    const std::size_t i = 4 * b;
+#define FABRICA_LD(x) _mm256_load_pd(x)
+#define FABRICA_PICK(mask, x, y) _mm256_blendv_pd((y), (x), (mask))
+#define FABRICA_DOT(ax, ay, az, bx, by, bz) \
+  _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(ax, bx), _mm256_mul_pd(ay, by)), _mm256_mul_pd(az, bz))
+    __m256d vx, vy, vz;
+    if (A.perspective) {
+      const __m256d dx = _mm256_sub_pd(_mm256_set1_pd(A.eye[0]), FABRICA_LD(k.p[0]));
+      const __m256d dy = _mm256_sub_pd(_mm256_set1_pd(A.eye[1]), FABRICA_LD(k.p[1]));
+      const __m256d dz = _mm256_sub_pd(_mm256_set1_pd(A.eye[2]), FABRICA_LD(k.p[2]));
+      const __m256d z = FABRICA_DOT(dx, dy, dz, dx, dy, dz);
+      const __m256d sz = _mm256_sqrt_pd(z);
+      const __m256d ok = _mm256_cmp_pd(z, zero, _CMP_GT_OQ);
+      vx = FABRICA_PICK(ok, _mm256_div_pd(dx, sz), dx);
+      vy = FABRICA_PICK(ok, _mm256_div_pd(dy, sz), dy);
+      vz = FABRICA_PICK(ok, _mm256_div_pd(dz, sz), dz);
+    } else {
+      vx = _mm256_set1_pd(A.view[0]);
+      vy = _mm256_set1_pd(A.view[1]);
+      vz = _mm256_set1_pd(A.view[2]);
+    }
+    const __m256d ndotv =
+        FABRICA_DOT(vx, vy, vz, FABRICA_LD(k.n[0]), FABRICA_LD(k.n[1]), FABRICA_LD(k.n[2]));
+    const __m256d u =
+        FABRICA_DOT(vx, vy, vz, FABRICA_LD(k.e1[0]), FABRICA_LD(k.e1[1]), FABRICA_LD(k.e1[2]));
+    const __m256d w =
+        FABRICA_DOT(vx, vy, vz, FABRICA_LD(k.e2[0]), FABRICA_LD(k.e2[1]), FABRICA_LD(k.e2[2]));
+    const __m256d k1 = FABRICA_LD(k.k1), k2 = FABRICA_LD(k.k2);
+    const __m256d u2 = _mm256_mul_pd(u, u), w2 = _mm256_mul_pd(w, w);
+    const __m256d kr = _mm256_add_pd(_mm256_mul_pd(k1, u2), _mm256_mul_pd(k2, w2));
+    const __m256d sin2 = _mm256_add_pd(u2, w2);
+    const __m256d csc2 = FABRICA_PICK(_mm256_cmp_pd(sin2, _mm256_set1_pd(1e-300), _CMP_GT_OQ),
+                                      _mm256_div_pd(one, sin2), zero);
+    const __m256d csc_pos = _mm256_cmp_pd(csc2, zero, _CMP_GT_OQ);
+    _mm256_storeu_pd(A.ndotv + i, ndotv);
+    _mm256_storeu_pd(A.kr + i, kr);
+    if (A.want_sc) {
+      const __m256d a = FABRICA_LD(k.a), bb = FABRICA_LD(k.b), c = FABRICA_LD(k.c),
+                    d = FABRICA_LD(k.d);
+      __m256d num = _mm256_add_pd(
+          _mm256_mul_pd(
+              u2, _mm256_add_pd(_mm256_mul_pd(u, a), _mm256_mul_pd(_mm256_mul_pd(three, w), bb))),
+          _mm256_mul_pd(
+              w2, _mm256_add_pd(_mm256_mul_pd(_mm256_mul_pd(three, u), c), _mm256_mul_pd(w, d))));
+      num = _mm256_mul_pd(num, csc2);
+      const __m256d tr =
+          _mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(_mm256_sub_pd(k2, k1), u), w), csc2);
+      num = _mm256_sub_pd(
+          num, _mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(_mm256_set1_pd(2.0), ndotv), tr), tr));
+      const __m256i dbits = _mm256_set1_epi64x((valid[b] >> 4) & 0xF);
+      const __m256d dvalid =
+          _mm256_castsi256_pd(_mm256_cmpeq_epi64(_mm256_and_si256(dbits, lane_bits), lane_bits));
+      _mm256_storeu_pd(A.sc_num + i, FABRICA_PICK(_mm256_and_pd(dvalid, csc_pos), num, zero));
+    }
+    const int m_pos = _mm256_movemask_pd(_mm256_cmp_pd(ndotv, zero, _CMP_GT_OQ));
+    const int m_neg = _mm256_movemask_pd(_mm256_cmp_pd(ndotv, zero, _CMP_LT_OQ));
+    const int m_front = _mm256_movemask_pd(_mm256_cmp_pd(ndotv, zero, _CMP_NLE_UQ));
+    const int m_krp = _mm256_movemask_pd(_mm256_cmp_pd(kr, zero, _CMP_GT_OQ));
+    const int m_krn = _mm256_movemask_pd(_mm256_cmp_pd(kr, zero, _CMP_LT_OQ));
+    int m_q1 = 0;
+    if (A.want_app) {
+      const __m256d an = _mm256_andnot_pd(neg0, ndotv);
+      const __m256d sec = FABRICA_PICK(_mm256_cmp_pd(an, zero, _CMP_GT_OQ),
+                                       _mm256_sub_pd(_mm256_div_pd(one, an), one), zero);
+      const __m256d hu2 = FABRICA_PICK(csc_pos, _mm256_mul_pd(u2, csc2), one);
+      const __m256d huv = FABRICA_PICK(csc_pos, _mm256_mul_pd(_mm256_mul_pd(u, w), csc2), zero);
+      const __m256d hw2 = FABRICA_PICK(csc_pos, _mm256_mul_pd(w2, csc2), zero);
+      const __m256d Q11 = _mm256_mul_pd(k1, _mm256_add_pd(one, _mm256_mul_pd(sec, hu2)));
+      const __m256d Q12 = _mm256_mul_pd(k1, _mm256_mul_pd(sec, huv));
+      const __m256d Q21 = _mm256_mul_pd(k2, _mm256_mul_pd(sec, huv));
+      const __m256d Q22 = _mm256_mul_pd(k2, _mm256_add_pd(one, _mm256_mul_pd(sec, hw2)));
+      const __m256d m11 = _mm256_add_pd(_mm256_mul_pd(Q11, Q11), _mm256_mul_pd(Q21, Q21));
+      const __m256d m12 = _mm256_add_pd(_mm256_mul_pd(Q11, Q12), _mm256_mul_pd(Q21, Q22));
+      const __m256d m22 = _mm256_add_pd(_mm256_mul_pd(Q12, Q12), _mm256_mul_pd(Q22, Q22));
+      const __m256d mean = _mm256_mul_pd(_mm256_set1_pd(0.5), _mm256_add_pd(m11, m22));
+      const __m256d dm = _mm256_sub_pd(m22, m11);
+      const __m256d q1 =
+          _mm256_add_pd(mean, _mm256_sqrt_pd(_mm256_add_pd(
+                                  _mm256_mul_pd(m12, m12),
+                                  _mm256_mul_pd(_mm256_mul_pd(_mm256_set1_pd(0.25), dm), dm))));
+      _mm256_storeu_pd(A.q1 + i, q1);
+      if (A.cull)
+        m_q1 = _mm256_movemask_pd(_mm256_cmp_pd(q1, _mm256_set1_pd(A.cull_t), _CMP_NLE_UQ));
+      // t1: view_dependent_direction.
+      const __m256d a0 = _mm256_sub_pd(m22, q1), a1 = _mm256_xor_pd(m12, neg0);
+      const __m256d c0 = m12, c1 = _mm256_sub_pd(q1, m11);
+      const __m256d sa = _mm256_add_pd(_mm256_mul_pd(a0, a0), _mm256_mul_pd(a1, a1));
+      const __m256d sb = _mm256_add_pd(_mm256_mul_pd(c0, c0), _mm256_mul_pd(c1, c1));
+      const __m256d use_a = _mm256_cmp_pd(sa, sb, _CMP_GE_OQ);
+      const __m256d f0 = FABRICA_PICK(use_a, a0, c0), f1 = FABRICA_PICK(use_a, a1, c1);
+      const __m256d len =
+          _mm256_sqrt_pd(_mm256_add_pd(_mm256_mul_pd(f0, f0), _mm256_mul_pd(f1, f1)));
+      const __m256d ok = _mm256_cmp_pd(len, zero, _CMP_GT_OQ);
+      const __m256d t0 = FABRICA_PICK(ok, _mm256_div_pd(f0, len), one);
+      const __m256d t1 = FABRICA_PICK(ok, _mm256_div_pd(f1, len), zero);
+      const __m256d lo = _mm256_unpacklo_pd(t0, t1), hi = _mm256_unpackhi_pd(t0, t1);
+      double* t1p = A.t1[i].data();
+      _mm256_storeu_pd(t1p, _mm256_permute2f128_pd(lo, hi, 0x20));
+      _mm256_storeu_pd(t1p + 4, _mm256_permute2f128_pd(lo, hi, 0x31));
+      // t1_world = t1[0] e1 + t1[1] e2.
+      alignas(32) double wt[3][4];
+      for (int c = 0; c < 3; ++c)
+        _mm256_store_pd(wt[c], _mm256_add_pd(_mm256_mul_pd(t0, FABRICA_LD(k.e1[c])),
+                                             _mm256_mul_pd(t1, FABRICA_LD(k.e2[c]))));
+      double* wp = A.t1_world[i].data();
+      for (int l = 0; l < 4; ++l) {
+        wp[3 * l] = wt[0][l];
+        wp[3 * l + 1] = wt[1][l];
+        wp[3 * l + 2] = wt[2][l];
+      }
+    }
+#undef FABRICA_LD
+#undef FABRICA_PICK
+#undef FABRICA_DOT
+    for (int l = 0; l < 4; ++l)
+      A.signs[i + static_cast<std::size_t>(l)] = static_cast<std::uint8_t>(
+          ((m_pos >> l) & 1) * kNdotvPositive | ((m_neg >> l) & 1) * kNdotvNegative |
+          ((m_front >> l) & 1) * kNdotvNotBack | ((m_krp >> l) & 1) * kKrPositive |
+          ((m_krn >> l) & 1) * kKrNegative | ((m_q1 >> l) & 1) * kQ1Above);
+  }
+}
+#endif
 
 }  // namespace
 
@@ -283,42 +449,81 @@ void update_view_fields(ViewFields& fields, const Surface& surface, const Camera
       }
     };
 #endif
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 2048),
-                      [&](const tbb::blocked_range<std::size_t>& r) {
-                        constexpr std::size_t kBlock = 64;
-                        ViewCurvature m[kBlock];
-                        bool has[kBlock];
-                        Vec2 t1[kBlock];
-                        for (std::size_t b = r.begin(); b < r.end(); b += kBlock) {
-                          const std::size_t cnt = std::min(kBlock, r.end() - b);
-                          std::size_t k = 0;
+#if defined(FABRICA_VERTEX_PASS_AVX2)
+    if (precompute && vertex_pass_has_avx2()) {
+      const LinePrecompute::VertexBlocks& vb = precompute->vertex_blocks();
+      VertexPassArgs args{};
+      args.nv = nv;
+      args.perspective = camera.projection == Projection::perspective;
+      args.want_sc = want_sc;
+      args.want_app = want_app;
+      args.cull = cull;
+      args.cull_t = cull_t;
+      const Vec3 view = camera.view_vector(Vec3::Zero());
+      for (int c = 0; c < 3; ++c) {
+        args.eye[c] = camera.eye[c];
+        args.view[c] = view[c];
+      }
+      args.ndotv = fields.ndotv.data();
+      args.kr = fields.kr.data();
+      args.sc_num = want_sc ? fields.sc_num.data() : nullptr;
+      args.q1 = want_app ? fields.q1.data() : nullptr;
+      args.t1 = want_app ? fields.t1.data() : nullptr;
+      args.t1_world = want_app ? fields.t1_world.data() : nullptr;
+      args.signs = fields.signs.data();
+      // Blocks with an invalid vertex (or the partial last one): per vertex.
+      auto other = [&](std::size_t b) {
+        for (std::size_t i = 4 * b; i < std::min(nv, 4 * b + 4); ++i) {
+          ViewCurvature m{0.0, 0.0, 0.0, 0.0};
+          if (!vertex(i, m)) continue;
+          const Vec2 t = view_dependent_direction(m);
+          fields.t1[i] = t;
+          fields.t1_world[i] = t[0] * curv.e1[i] + t[1] * curv.e2[i];
+        }
+      };
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vb.block.size(), 512),
+                        [&](const tbb::blocked_range<std::size_t>& r) {
+                          vertex_pass_avx2(vb.block.data(), vb.valid.data(), r.begin(), r.end(),
+                                           args, other);
+                        });
+    } else
+#endif
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 2048),
+                        [&](const tbb::blocked_range<std::size_t>& r) {
+                          constexpr std::size_t kBlock = 64;
+                          ViewCurvature m[kBlock];
+                          bool has[kBlock];
+                          Vec2 t1[kBlock];
+                          for (std::size_t b = r.begin(); b < r.end(); b += kBlock) {
+                            const std::size_t cnt = std::min(kBlock, r.end() - b);
+                            std::size_t k = 0;
 #if defined(__SSE2__)
-                          for (; k + 2 <= cnt; k += 2) {
-                            const std::size_t i = b + k;
-                            if (curv.valid[i] && curv.valid[i + 1]) {
-                              vertex_pair(i, m + k);
-                              has[k] = has[k + 1] = want_app;
-                            } else {
-                              m[k] = m[k + 1] = {0.0, 0.0, 0.0, 0.0};
-                              has[k] = vertex(i, m[k]);
-                              has[k + 1] = vertex(i + 1, m[k + 1]);
+                            for (; k + 2 <= cnt; k += 2) {
+                              const std::size_t i = b + k;
+                              if (curv.valid[i] && curv.valid[i + 1]) {
+                                vertex_pair(i, m + k);
+                                has[k] = has[k + 1] = want_app;
+                              } else {
+                                m[k] = m[k + 1] = {0.0, 0.0, 0.0, 0.0};
+                                has[k] = vertex(i, m[k]);
+                                has[k + 1] = vertex(i + 1, m[k + 1]);
+                              }
+                            }
+#endif
+                            for (; k < cnt; ++k) {
+                              m[k] = {0.0, 0.0, 0.0, 0.0};
+                              has[k] = vertex(b + k, m[k]);
+                            }
+                            if (!want_app) continue;
+                            view_dependent_directions(m, cnt, t1);
+                            for (std::size_t k = 0; k < cnt; ++k) {
+                              if (!has[k]) continue;
+                              const std::size_t i = b + k;
+                              fields.t1[i] = t1[k];
+                              fields.t1_world[i] = t1[k][0] * curv.e1[i] + t1[k][1] * curv.e2[i];
                             }
                           }
-#endif
-                          for (; k < cnt; ++k) {
-                            m[k] = {0.0, 0.0, 0.0, 0.0};
-                            has[k] = vertex(b + k, m[k]);
-                          }
-                          if (!want_app) continue;
-                          view_dependent_directions(m, cnt, t1);
-                          for (std::size_t k = 0; k < cnt; ++k) {
-                            if (!has[k]) continue;
-                            const std::size_t i = b + k;
-                            fields.t1[i] = t1[k];
-                            fields.t1_world[i] = t1[k][0] * curv.e1[i] + t1[k][1] * curv.e2[i];
-                          }
-                        }
-                      });
+                        });
     if (want_app) detail::update_dt1q1(fields, surface, cull, precompute);
   }
 

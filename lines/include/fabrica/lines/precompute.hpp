@@ -80,6 +80,22 @@ class LinePrecompute {
     std::vector<Entry> entry;
   };
   const TangentRing& tangent_ring() const;
+  /// The per-vertex inputs of the per-view vertex pass (view_fields.cpp:
+  /// position, normal, principal frame, curvatures, derivative tensor)
+  /// packed in blocks of four vertices, each quantity as four consecutive
+  /// doubles, so a 256-bit SIMD pass loads them directly instead of
+  /// gathering from nine arrays. The last block is padded with zeros.
+  struct alignas(32) VertexBlock {
+    double p[3][4], n[3][4], e1[3][4], e2[3][4];
+    double k1[4], k2[4], a[4], b[4], c[4], d[4];
+  };
+  struct VertexBlocks {
+    std::vector<VertexBlock> block;  ///< ceil(vertex count / 4)
+    /// Per block: bit l set when vertex 4 b + l has valid curvature, bit
+    /// 4 + l when it has valid curvature derivatives.
+    std::vector<std::uint8_t> valid;
+  };
+  const VertexBlocks& vertex_blocks() const;
 
  private:
   struct Cache;
