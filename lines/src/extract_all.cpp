@@ -72,7 +72,9 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
   detail::set_light_support(req, has(LineFamily::pel) ? &options_.pel : nullptr,
                             has(LineFamily::laplacian) ? &options_.laplacian : nullptr,
                             feature_size_);
-  update_view_fields(fields_, *surface_, camera, req, precompute_.get());
+  // D_t1 q1 (the apparent ridges' second field pass) is computed in the
+  // apparent-ridge task below, concurrently with the other families.
+  detail::update_view_fields(fields_, *surface_, camera, req, precompute_.get(), true);
 
   const double fs = feature_size_;
   // The families are independent given the fields: run them concurrently
@@ -104,6 +106,8 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
         out[k] = extract_valleys(*precompute_, fields_, fs, options_.valley);
         break;
       case LineFamily::apparent:
+        detail::update_dt1q1(fields_, *surface_, fields_.apparent_cull_threshold.has_value(),
+                             precompute_.get());
         out[k] = extract_apparent_ridges(*surface_, fields_, fs, options_.apparent);
         break;
       case LineFamily::pel:

@@ -268,6 +268,12 @@ template <class Other>
 
 void update_view_fields(ViewFields& fields, const Surface& surface, const Camera& camera,
                         const ViewFieldsRequest& request, const LinePrecompute* precompute) {
+  detail::update_view_fields(fields, surface, camera, request, precompute, false);
+}
+
+void detail::update_view_fields(ViewFields& fields, const Surface& surface, const Camera& camera,
+                                const ViewFieldsRequest& request, const LinePrecompute* precompute,
+                                bool defer_dt1q1) {
   validate_camera(camera);
   const std::size_t nv = surface.vertex_count();
   fields.camera = camera;
@@ -524,7 +530,7 @@ void update_view_fields(ViewFields& fields, const Surface& surface, const Camera
                             }
                           }
                         });
-    if (want_app) detail::update_dt1q1(fields, surface, cull, precompute);
+    if (want_app && !defer_dt1q1) detail::update_dt1q1(fields, surface, cull, precompute);
   }
 
   detail::update_light_fields(fields, surface, camera, request, precompute, radial);

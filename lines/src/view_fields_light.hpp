@@ -34,6 +34,13 @@ void update_light_fields(ViewFields& fields, const Surface& surface, const Camer
                          const ViewFieldsRequest& request, const LinePrecompute* precompute,
                          bool radial);
 
+/// update_view_fields(), optionally leaving fields.dt1q1 unset (sized, not
+/// computed) so the caller can compute it with update_dt1q1() concurrently
+/// with the families that do not need it.
+void update_view_fields(ViewFields& fields, const Surface& surface, const Camera& camera,
+                        const ViewFieldsRequest& request, const LinePrecompute* precompute,
+                        bool defer_dt1q1);
+
 /// D_t1 q1 (fields.dt1q1) from the filled q1, t1, t1_world, ndotv and
 /// signs: Judd's one-sided finite differences along t1 (ALGORITHMS.md §6.2).
 /// With `cull`, only at vertices of faces with a corner carrying kQ1Above
