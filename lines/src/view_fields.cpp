@@ -5,9 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && \
     !defined(FABRICA_NO_MULTIVERSION)
 #include <immintrin.h>
@@ -52,42 +49,6 @@ inline Vec2 view_dependent_direction(const ViewCurvature& m) {
   const Vec2& e = a.squaredNorm() >= b.squaredNorm() ? a : b;
   const double len = e.norm();
   return len > 0.0 ? Vec2(e / len) : Vec2(1.0, 0.0);
-}
-
-// view_dependent_direction for n vertices, two at a time where SSE2 is
-// available (the same IEEE operations in the same order: the same bits).
-// Run over a block after the rest of the vertex pass, the sqrt/divide chains
-// of neighbouring vertices overlap instead of stalling the loop one by one.
-inline void view_dependent_directions(const ViewCurvature* m, std::size_t n, Vec2* out) {
-  std::size_t k = 0;
-#if defined(__SSE2__)
-  const __m128d neg0 = _mm_set1_pd(-0.0), zero = _mm_setzero_pd(), one = _mm_set1_pd(1.0);
-  auto pick = [](__m128d mask, __m128d x, __m128d y) {
-    return _mm_or_pd(_mm_and_pd(mask, x), _mm_andnot_pd(mask, y));
-  };
-  for (; k + 2 <= n; k += 2) {
-    const __m128d m11 = _mm_set_pd(m[k + 1].m11, m[k].m11);
-    const __m128d m12 = _mm_set_pd(m[k + 1].m12, m[k].m12);
-    const __m128d m22 = _mm_set_pd(m[k + 1].m22, m[k].m22);
-    const __m128d q1 = _mm_set_pd(m[k + 1].q1, m[k].q1);
-    const __m128d a0 = _mm_sub_pd(m22, q1), a1 = _mm_xor_pd(m12, neg0);
-    const __m128d b0 = m12, b1 = _mm_sub_pd(q1, m11);
-    const __m128d sa = _mm_add_pd(_mm_mul_pd(a0, a0), _mm_mul_pd(a1, a1));
-    const __m128d sb = _mm_add_pd(_mm_mul_pd(b0, b0), _mm_mul_pd(b1, b1));
-    const __m128d use_a = _mm_cmpge_pd(sa, sb);
-    const __m128d e0 = pick(use_a, a0, b0), e1 = pick(use_a, a1, b1);
-    const __m128d len = _mm_sqrt_pd(_mm_add_pd(_mm_mul_pd(e0, e0), _mm_mul_pd(e1, e1)));
-    const __m128d ok = _mm_cmpgt_pd(len, zero);
-    const __m128d t0 = pick(ok, _mm_div_pd(e0, len), one);
-    const __m128d t1 = pick(ok, _mm_div_pd(e1, len), zero);
-    alignas(16) double r0[2], r1[2];
-    _mm_store_pd(r0, t0);
-    _mm_store_pd(r1, t1);
-    out[k] = Vec2(r0[0], r1[0]);
-    out[k + 1] = Vec2(r0[1], r1[1]);
-  }
-#endif
-  for (; k < n; ++k) out[k] = view_dependent_direction(m[k]);
 }
 
 // view_dependent_curvature from u = v·e1, w = v·e2 (u2 = u², w2 = w²)
@@ -299,8 +260,7 @@ void detail::update_view_fields(ViewFields& fields, const Surface& surface, cons
     const bool cull = want_app && request.apparent_cull_threshold.has_value();
     const double cull_t = cull ? *request.apparent_cull_threshold : 0.0;
     // Pass 1: n·v, K_r, the suggestive-contour numerator, q1 and the sign
-    // bits per vertex; t1 per block of vertices afterwards. Returns whether
-    // m (for t1) was filled.
+    // bits per vertex. Returns whether m (for t1) was filled.
     auto vertex = [&](std::size_t i, ViewCurvature& m) -> bool {
       const Vec3 v = camera.view_vector(pos[i]);
       const double ndotv = v.dot(normals[i]);
@@ -350,111 +310,14 @@ void detail::update_view_fields(ViewFields& fields, const Surface& surface, cons
       fields.signs[i] = static_cast<std::uint8_t>(bits);
       return true;
     };
-#if defined(__SSE2__)
-    // `vertex` for two vertices with valid curvature at once: the same IEEE
-    // operations in the same order (Eigen's Vec3 dot is (x x' + y y') + z z'),
-    // so the same bits; the branches become selects.
-    const bool perspective = camera.projection == Projection::perspective;
-    const Vec3 ortho_v = camera.view_vector(Vec3::Zero());
-    auto vertex_pair = [&](std::size_t i, ViewCurvature* m) {
-      const std::size_t j = i + 1;
-      auto set = [](double lo, double hi) { return _mm_set_pd(hi, lo); };
-      auto pick = [](__m128d mask, __m128d x, __m128d y) {
-        return _mm_or_pd(_mm_and_pd(mask, x), _mm_andnot_pd(mask, y));
-      };
-      auto dot = [](__m128d ax, __m128d ay, __m128d az, __m128d bx, __m128d by, __m128d bz) {
-        return _mm_add_pd(_mm_add_pd(_mm_mul_pd(ax, bx), _mm_mul_pd(ay, by)), _mm_mul_pd(az, bz));
-      };
-      const __m128d zero = _mm_setzero_pd(), one = _mm_set1_pd(1.0);
-      __m128d vx, vy, vz;
-      if (perspective) {
-        const __m128d dx = _mm_sub_pd(_mm_set1_pd(camera.eye[0]), set(pos[i][0], pos[j][0]));
-        const __m128d dy = _mm_sub_pd(_mm_set1_pd(camera.eye[1]), set(pos[i][1], pos[j][1]));
-        const __m128d dz = _mm_sub_pd(_mm_set1_pd(camera.eye[2]), set(pos[i][2], pos[j][2]));
-        const __m128d z = dot(dx, dy, dz, dx, dy, dz);
-        const __m128d sz = _mm_sqrt_pd(z);
-        const __m128d ok = _mm_cmpgt_pd(z, zero);
-        vx = pick(ok, _mm_div_pd(dx, sz), dx);
-        vy = pick(ok, _mm_div_pd(dy, sz), dy);
-        vz = pick(ok, _mm_div_pd(dz, sz), dz);
-      } else {
-        vx = _mm_set1_pd(ortho_v[0]);
-        vy = _mm_set1_pd(ortho_v[1]);
-        vz = _mm_set1_pd(ortho_v[2]);
-      }
-      const Vec3 &ni = normals[i], &nj = normals[j];
-      const __m128d ndotv =
-          dot(vx, vy, vz, set(ni[0], nj[0]), set(ni[1], nj[1]), set(ni[2], nj[2]));
-      const Vec3 &ai = curv.e1[i], &aj = curv.e1[j], &bi = curv.e2[i], &bj = curv.e2[j];
-      const __m128d u = dot(vx, vy, vz, set(ai[0], aj[0]), set(ai[1], aj[1]), set(ai[2], aj[2]));
-      const __m128d w = dot(vx, vy, vz, set(bi[0], bj[0]), set(bi[1], bj[1]), set(bi[2], bj[2]));
-      const __m128d k1 = set(curv.k1[i], curv.k1[j]), k2 = set(curv.k2[i], curv.k2[j]);
-      const __m128d u2 = _mm_mul_pd(u, u), w2 = _mm_mul_pd(w, w);
-      const __m128d kr = _mm_add_pd(_mm_mul_pd(k1, u2), _mm_mul_pd(k2, w2));
-      const __m128d sin2 = _mm_add_pd(u2, w2);
-      const __m128d csc2 =
-          pick(_mm_cmpgt_pd(sin2, _mm_set1_pd(1e-300)), _mm_div_pd(one, sin2), zero);
-      const __m128d csc_pos = _mm_cmpgt_pd(csc2, zero);
-      alignas(16) double out_nd[2], out_kr[2], out_sc[2], out_q[4][2];
-      _mm_store_pd(out_nd, ndotv);
-      _mm_store_pd(out_kr, kr);
-      if (want_sc) {
-        const __m128d three = _mm_set1_pd(3.0);
-        const __m128d a = set(dcurv.a[i], dcurv.a[j]), b = set(dcurv.b[i], dcurv.b[j]);
-        const __m128d c = set(dcurv.c[i], dcurv.c[j]), d = set(dcurv.d[i], dcurv.d[j]);
-        __m128d num = _mm_add_pd(
-            _mm_mul_pd(u2, _mm_add_pd(_mm_mul_pd(u, a), _mm_mul_pd(_mm_mul_pd(three, w), b))),
-            _mm_mul_pd(w2, _mm_add_pd(_mm_mul_pd(_mm_mul_pd(three, u), c), _mm_mul_pd(w, d))));
-        num = _mm_mul_pd(num, csc2);
-        const __m128d tr = _mm_mul_pd(_mm_mul_pd(_mm_mul_pd(_mm_sub_pd(k2, k1), u), w), csc2);
-        num = _mm_sub_pd(num, _mm_mul_pd(_mm_mul_pd(_mm_mul_pd(_mm_set1_pd(2.0), ndotv), tr), tr));
-        const __m128d dvalid =
-            _mm_castsi128_pd(_mm_set_epi64x(dcurv.valid[j] ? -1 : 0, dcurv.valid[i] ? -1 : 0));
-        _mm_store_pd(out_sc, pick(_mm_and_pd(dvalid, csc_pos), num, zero));
-      }
-      if (want_app) {
-        const __m128d an = _mm_andnot_pd(_mm_set1_pd(-0.0), ndotv);
-        const __m128d sec =
-            pick(_mm_cmpgt_pd(an, zero), _mm_sub_pd(_mm_div_pd(one, an), one), zero);
-        const __m128d hu2 = pick(csc_pos, _mm_mul_pd(u2, csc2), one);
-        const __m128d huv = pick(csc_pos, _mm_mul_pd(_mm_mul_pd(u, w), csc2), zero);
-        const __m128d hw2 = pick(csc_pos, _mm_mul_pd(w2, csc2), zero);
-        const __m128d Q11 = _mm_mul_pd(k1, _mm_add_pd(one, _mm_mul_pd(sec, hu2)));
-        const __m128d Q12 = _mm_mul_pd(k1, _mm_mul_pd(sec, huv));
-        const __m128d Q21 = _mm_mul_pd(k2, _mm_mul_pd(sec, huv));
-        const __m128d Q22 = _mm_mul_pd(k2, _mm_add_pd(one, _mm_mul_pd(sec, hw2)));
-        const __m128d m11 = _mm_add_pd(_mm_mul_pd(Q11, Q11), _mm_mul_pd(Q21, Q21));
-        const __m128d m12 = _mm_add_pd(_mm_mul_pd(Q11, Q12), _mm_mul_pd(Q21, Q22));
-        const __m128d m22 = _mm_add_pd(_mm_mul_pd(Q12, Q12), _mm_mul_pd(Q22, Q22));
-        const __m128d mean = _mm_mul_pd(_mm_set1_pd(0.5), _mm_add_pd(m11, m22));
-        const __m128d dm = _mm_sub_pd(m22, m11);
-        const __m128d lam = _mm_add_pd(
-            mean, _mm_sqrt_pd(_mm_add_pd(_mm_mul_pd(m12, m12),
-                                         _mm_mul_pd(_mm_mul_pd(_mm_set1_pd(0.25), dm), dm))));
-        _mm_store_pd(out_q[0], m11);
-        _mm_store_pd(out_q[1], m12);
-        _mm_store_pd(out_q[2], m22);
-        _mm_store_pd(out_q[3], lam);
-      }
-      for (int l = 0; l < 2; ++l) {
-        const std::size_t k = i + static_cast<std::size_t>(l);
-        const double nd = out_nd[l];
-        fields.ndotv[k] = nd;
-        fields.kr[k] = out_kr[l];
-        if (want_sc) fields.sc_num[k] = out_sc[l];
-        unsigned bits = unsigned(nd > 0.0) * kNdotvPositive | unsigned(nd < 0.0) * kNdotvNegative |
-                        unsigned(!(nd <= 0.0)) * kNdotvNotBack |
-                        unsigned(out_kr[l] > 0.0) * kKrPositive |
-                        unsigned(out_kr[l] < 0.0) * kKrNegative;
-        if (want_app) {
-          m[l] = {out_q[0][l], out_q[1][l], out_q[2][l], out_q[3][l]};
-          fields.q1[k] = m[l].q1;
-          bits |= unsigned(cull && !(m[l].q1 <= cull_t)) * kQ1Above;
-        }
-        fields.signs[k] = static_cast<std::uint8_t>(bits);
-      }
+    // `vertex` and, where it filled m, t1 and t1_world.
+    auto vertex_and_direction = [&](std::size_t i) {
+      ViewCurvature m{0.0, 0.0, 0.0, 0.0};
+      if (!vertex(i, m)) return;
+      const Vec2 t = view_dependent_direction(m);
+      fields.t1[i] = t;
+      fields.t1_world[i] = t[0] * curv.e1[i] + t[1] * curv.e2[i];
     };
-#endif
 #if defined(FABRICA_VERTEX_PASS_AVX2)
     if (precompute && vertex_pass_has_avx2()) {
       const LinePrecompute::VertexBlocks& vb = precompute->vertex_blocks();
@@ -479,13 +342,7 @@ void detail::update_view_fields(ViewFields& fields, const Surface& surface, cons
       args.signs = fields.signs.data();
       // Blocks with an invalid vertex (or the partial last one): per vertex.
       auto other = [&](std::size_t b) {
-        for (std::size_t i = 4 * b; i < std::min(nv, 4 * b + 4); ++i) {
-          ViewCurvature m{0.0, 0.0, 0.0, 0.0};
-          if (!vertex(i, m)) continue;
-          const Vec2 t = view_dependent_direction(m);
-          fields.t1[i] = t;
-          fields.t1_world[i] = t[0] * curv.e1[i] + t[1] * curv.e2[i];
-        }
+        for (std::size_t i = 4 * b; i < std::min(nv, 4 * b + 4); ++i) vertex_and_direction(i);
       };
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vb.block.size(), 512),
                         [&](const tbb::blocked_range<std::size_t>& r) {
@@ -494,42 +351,8 @@ void detail::update_view_fields(ViewFields& fields, const Surface& surface, cons
                         });
     } else
 #endif
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 2048),
-                        [&](const tbb::blocked_range<std::size_t>& r) {
-                          constexpr std::size_t kBlock = 64;
-                          ViewCurvature m[kBlock];
-                          bool has[kBlock];
-                          Vec2 t1[kBlock];
-                          for (std::size_t b = r.begin(); b < r.end(); b += kBlock) {
-                            const std::size_t cnt = std::min(kBlock, r.end() - b);
-                            std::size_t k = 0;
-#if defined(__SSE2__)
-                            for (; k + 2 <= cnt; k += 2) {
-                              const std::size_t i = b + k;
-                              if (curv.valid[i] && curv.valid[i + 1]) {
-                                vertex_pair(i, m + k);
-                                has[k] = has[k + 1] = want_app;
-                              } else {
-                                m[k] = m[k + 1] = {0.0, 0.0, 0.0, 0.0};
-                                has[k] = vertex(i, m[k]);
-                                has[k + 1] = vertex(i + 1, m[k + 1]);
-                              }
-                            }
-#endif
-                            for (; k < cnt; ++k) {
-                              m[k] = {0.0, 0.0, 0.0, 0.0};
-                              has[k] = vertex(b + k, m[k]);
-                            }
-                            if (!want_app) continue;
-                            view_dependent_directions(m, cnt, t1);
-                            for (std::size_t k = 0; k < cnt; ++k) {
-                              if (!has[k]) continue;
-                              const std::size_t i = b + k;
-                              fields.t1[i] = t1[k];
-                              fields.t1_world[i] = t1[k][0] * curv.e1[i] + t1[k][1] * curv.e2[i];
-                            }
-                          }
-                        });
+      // Portable: one vertex at a time (the reference the AVX2 pass matches).
+      detail::parallel_range(nv, vertex_and_direction);
     if (want_app && !defer_dt1q1) detail::update_dt1q1(fields, surface, cull, precompute);
   }
 
