@@ -5,15 +5,11 @@
 
 #include <algorithm>
 #include <cmath>
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && \
-    !defined(FABRICA_NO_MULTIVERSION)
-#include <immintrin.h>
-#define FABRICA_VERTEX_PASS_AVX2 1
-#endif
 
 #include "fabrica/core/error.hpp"
 #include "fabrica/lines/precompute.hpp"
 #include "parallel.hpp"
+#include "simd_avx2.hpp"
 #include "view_fields_light.hpp"
 
 namespace fabrica {
@@ -64,7 +60,7 @@ inline ViewCurvature view_curvature_at(double k1, double k2, double ndotv, doubl
   return view_dependent_curvature(k1, k2, ndotv, hu2, huv, hw2);
 }
 
-#if defined(FABRICA_VERTEX_PASS_AVX2)
+#if defined(FABRICA_LINES_AVX2)
 // The vertex pass four vertices at a time with 256-bit vectors, from
 // LinePrecompute::vertex_blocks(): the same IEEE operations in the same
 // order as `vertex` and view_dependent_direction below (Eigen's Vec3 dot is
@@ -72,19 +68,14 @@ inline ViewCurvature view_curvature_at(double k1, double k2, double ndotv, doubl
 // for AVX2 and called only when the CPU has it (vertex_pass_has_avx2).
 struct VertexPassArgs {
   std::size_t nv;
-  bool perspective, want_sc, want_app, cull;
-  double cull_t;
-  double eye[3], view[3];  // eye (perspective) or the constant view vector
-  double *ndotv, *kr, *sc_num, *q1;
-  Vec2* t1;
-  Vec3* t1_world;
-  std::uint8_t* signs;
+  detail::ViewVector4 view;
+  bool want_sc = false, want_app = false, cull = false;
+  double cull_t = 0.0;
+  double *ndotv = nullptr, *kr = nullptr, *sc_num = nullptr, *q1 = nullptr;
+  Vec2* t1 = nullptr;
+  Vec3* t1_world = nullptr;
+  std::uint8_t* signs = nullptr;
 };
-
-bool vertex_pass_has_avx2() {
-  static const bool has = __builtin_cpu_supports("avx2");
-  return has;
-}
 
 // Blocks [b0, b1) whose four vertices all have valid curvature; the others
 // go to `other(b)`.
@@ -104,25 +95,10 @@ template <class Other>
     const LinePrecompute::VertexBlock& k = blocks[b];
     const std::size_t i = 4 * b;
 #define FABRICA_LD(x) _mm256_load_pd(x)
-#define FABRICA_PICK(mask, x, y) _mm256_blendv_pd((y), (x), (mask))
-#define FABRICA_DOT(ax, ay, az, bx, by, bz) \
-  _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(ax, bx), _mm256_mul_pd(ay, by)), _mm256_mul_pd(az, bz))
+#define FABRICA_PICK(mask, x, y) detail::pick4((mask), (x), (y))
+#define FABRICA_DOT(ax, ay, az, bx, by, bz) detail::dot4(ax, ay, az, bx, by, bz)
     __m256d vx, vy, vz;
-    if (A.perspective) {
-      const __m256d dx = _mm256_sub_pd(_mm256_set1_pd(A.eye[0]), FABRICA_LD(k.p[0]));
-      const __m256d dy = _mm256_sub_pd(_mm256_set1_pd(A.eye[1]), FABRICA_LD(k.p[1]));
-      const __m256d dz = _mm256_sub_pd(_mm256_set1_pd(A.eye[2]), FABRICA_LD(k.p[2]));
-      const __m256d z = FABRICA_DOT(dx, dy, dz, dx, dy, dz);
-      const __m256d sz = _mm256_sqrt_pd(z);
-      const __m256d ok = _mm256_cmp_pd(z, zero, _CMP_GT_OQ);
-      vx = FABRICA_PICK(ok, _mm256_div_pd(dx, sz), dx);
-      vy = FABRICA_PICK(ok, _mm256_div_pd(dy, sz), dy);
-      vz = FABRICA_PICK(ok, _mm256_div_pd(dz, sz), dz);
-    } else {
-      vx = _mm256_set1_pd(A.view[0]);
-      vy = _mm256_set1_pd(A.view[1]);
-      vz = _mm256_set1_pd(A.view[2]);
-    }
+    A.view(FABRICA_LD(k.p[0]), FABRICA_LD(k.p[1]), FABRICA_LD(k.p[2]), vx, vy, vz);
     const __m256d ndotv =
         FABRICA_DOT(vx, vy, vz, FABRICA_LD(k.n[0]), FABRICA_LD(k.n[1]), FABRICA_LD(k.n[2]));
     const __m256d u =
@@ -318,21 +294,14 @@ void detail::update_view_fields(ViewFields& fields, const Surface& surface, cons
       fields.t1[i] = t;
       fields.t1_world[i] = t[0] * curv.e1[i] + t[1] * curv.e2[i];
     };
-#if defined(FABRICA_VERTEX_PASS_AVX2)
-    if (precompute && vertex_pass_has_avx2()) {
+#if defined(FABRICA_LINES_AVX2)
+    if (precompute && detail::cpu_has_avx2()) {
       const LinePrecompute::VertexBlocks& vb = precompute->vertex_blocks();
-      VertexPassArgs args{};
-      args.nv = nv;
-      args.perspective = camera.projection == Projection::perspective;
+      VertexPassArgs args{nv, detail::ViewVector4(camera)};
       args.want_sc = want_sc;
       args.want_app = want_app;
       args.cull = cull;
       args.cull_t = cull_t;
-      const Vec3 view = camera.view_vector(Vec3::Zero());
-      for (int c = 0; c < 3; ++c) {
-        args.eye[c] = camera.eye[c];
-        args.view[c] = view[c];
-      }
       args.ndotv = fields.ndotv.data();
       args.kr = fields.kr.data();
       args.sc_num = want_sc ? fields.sc_num.data() : nullptr;

@@ -1,10 +1,10 @@
-// The per-view vertex pass (n·v, K_r, the suggestive numerator, q1, t1 and
-// the sign bytes) has two implementations: four vertices at a time with
-// 256-bit vectors from LinePrecompute::vertex_blocks() (used when a
-// precompute is given and the CPU has AVX2), and the portable one (two at a
-// time with SSE2, or one by one). Both must give the same bits, on every
-// vertex, including vertices whose curvature is invalid and the partial
-// last block.
+// The per-view passes of ViewFields have two implementations: four vertices
+// at a time with 256-bit vectors (AVX2, from LinePrecompute::vertex_blocks(),
+// used when the CPU has it) and the portable scalar passes. Both must give
+// the same bits, on every vertex, including vertices whose curvature is
+// invalid and the partial last block: the vertex pass (n·v, K_r, the
+// suggestive numerator, q1, t1, the sign bytes) and the illumination pass
+// (f, Δf, ∇f, |∇f|, the PEL derivatives, the listed faces).
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -16,6 +16,7 @@
 #include "fabrica/io/mesh_io.hpp"
 #include "fabrica/io/repair.hpp"
 #include "fabrica/lines/extract.hpp"
+#include "simd_avx2.hpp"
 #include "test_support.hpp"
 
 using namespace fabrica;
@@ -30,19 +31,59 @@ std::size_t differing_bits(const std::vector<T>& a, const std::vector<T>& b) {
   return n;
 }
 
-void expect_same_vertex_pass(const Surface& surface, const Camera& camera, bool cull) {
-  LinePrecompute pre(surface);
+#define EXPECT_SAME_FIELD(a, b, name)                           \
+  do {                                                          \
+    EXPECT_FALSE((a).name.empty()) << #name;                    \
+    EXPECT_EQ(differing_bits((a).name, (b).name), 0u) << #name; \
+  } while (0)
+
+// The fields with the AVX2 passes (where the CPU has them) and with the
+// portable passes, from the same precompute.
+std::pair<ViewFields, ViewFields> both_ways(const Surface& surface, const LinePrecompute& pre,
+                                            const Camera& camera, const ViewFieldsRequest& req) {
+  ViewFields simd = compute_view_fields(surface, camera, req, &pre);
+#if defined(FABRICA_LINES_AVX2)
+  const bool had = detail::avx2_enabled().exchange(false);
+#endif
+  ViewFields portable = compute_view_fields(surface, camera, req, &pre);
+#if defined(FABRICA_LINES_AVX2)
+  detail::avx2_enabled() = had;
+#endif
+  return {std::move(simd), std::move(portable)};
+}
+
+void expect_same_vertex_pass(const Surface& surface, const LinePrecompute& pre,
+                             const Camera& camera, bool cull) {
   ViewFieldsRequest req;
   req.apparent_cull_threshold = cull ? std::optional<double>(1.0e3) : std::nullopt;
-  const ViewFields simd = compute_view_fields(surface, camera, req, &pre);
-  const ViewFields portable = compute_view_fields(surface, camera, req, nullptr);
-  EXPECT_EQ(differing_bits(simd.ndotv, portable.ndotv), 0u);
-  EXPECT_EQ(differing_bits(simd.kr, portable.kr), 0u);
-  EXPECT_EQ(differing_bits(simd.sc_num, portable.sc_num), 0u);
-  EXPECT_EQ(differing_bits(simd.q1, portable.q1), 0u);
-  EXPECT_EQ(differing_bits(simd.t1, portable.t1), 0u);
-  EXPECT_EQ(differing_bits(simd.t1_world, portable.t1_world), 0u);
-  EXPECT_EQ(differing_bits(simd.signs, portable.signs), 0u);
+  const auto [simd, portable] = both_ways(surface, pre, camera, req);
+  EXPECT_SAME_FIELD(simd, portable, ndotv);
+  EXPECT_SAME_FIELD(simd, portable, kr);
+  EXPECT_SAME_FIELD(simd, portable, sc_num);
+  EXPECT_SAME_FIELD(simd, portable, q1);
+  EXPECT_SAME_FIELD(simd, portable, t1);
+  EXPECT_SAME_FIELD(simd, portable, t1_world);
+  EXPECT_SAME_FIELD(simd, portable, signs);
+  EXPECT_SAME_FIELD(simd, portable, dt1q1);
+}
+
+void expect_same_light_pass(const Surface& surface, const LinePrecompute& pre, const Camera& camera,
+                            std::optional<Vec3> light, double threshold) {
+  ViewFieldsRequest req;
+  req.radial = req.sc_test = req.apparent = false;
+  req.light = req.pel = true;
+  req.light_direction = light;
+  req.light_threshold = threshold;
+  req.light_cull_backfaces = true;
+  const auto [simd, portable] = both_ways(surface, pre, camera, req);
+  EXPECT_SAME_FIELD(simd, portable, ndotv);
+  EXPECT_SAME_FIELD(simd, portable, light);
+  EXPECT_SAME_FIELD(simd, portable, light_laplacian);
+  EXPECT_SAME_FIELD(simd, portable, light_gradient);
+  EXPECT_SAME_FIELD(simd, portable, light_gradient_norm);
+  EXPECT_SAME_FIELD(simd, portable, pel_h);
+  EXPECT_SAME_FIELD(simd, portable, pel_maximum);
+  EXPECT_SAME_FIELD(simd, portable, light_faces);
 }
 
 // With `degenerate`, five vertices at one point joined by two zero-area
@@ -65,14 +106,21 @@ Surface load(const char* rel, bool degenerate) {
 
 }  // namespace
 
-TEST(LinesViewFields, VertexPassSameBitsWithAndWithoutVertexBlocks) {
+TEST(LinesViewFields, SimdAndPortablePassesGiveTheSameBits) {
+#if !defined(FABRICA_LINES_AVX2)
+  GTEST_SKIP() << "no AVX2 passes in this build";
+#else
+  if (!detail::cpu_has_avx2()) GTEST_SKIP() << "this CPU has no AVX2";
+#endif
   for (const char* rel : {"meshes/anatomy/bones/gfxmorph_femur.stl", "meshes/classic/c3d_cow.obj",
                           "meshes/classic/libigl_camelhead.off"}) {
     SCOPED_TRACE(rel);
     const Surface surface = load(rel, std::string(rel).find("classic") != std::string::npos);
+    const LinePrecompute pre(surface);
     const auto& valid = surface.curvature().valid;
     std::size_t invalid = 0;
     for (auto v : valid) invalid += v == 0;
+    std::printf("%s: %zu vertices, %zu with invalid curvature\n", rel, valid.size(), invalid);
     const BoundingBox box = bounding_box(surface.positions());
     Camera c;
     c.center = box.center();
@@ -80,10 +128,13 @@ TEST(LinesViewFields, VertexPassSameBitsWithAndWithoutVertexBlocks) {
     c.up = Vec3::UnitY();
     c.fov_deg = 30.0;
     c.width = c.height = 512;
-    expect_same_vertex_pass(surface, c, true);
-    expect_same_vertex_pass(surface, c, false);
+    const double t = 0.2 / surface.feature_size();
+    expect_same_vertex_pass(surface, pre, c, true);
+    expect_same_vertex_pass(surface, pre, c, false);
+    expect_same_light_pass(surface, pre, c, std::nullopt, t);
+    expect_same_light_pass(surface, pre, c, Vec3(1.0, 2.0, 0.5), t);
     c.projection = Projection::orthographic;
-    expect_same_vertex_pass(surface, c, true);
-    std::printf("%s: %zu vertices, %zu with invalid curvature\n", rel, valid.size(), invalid);
+    expect_same_vertex_pass(surface, pre, c, true);
+    expect_same_light_pass(surface, pre, c, std::nullopt, t);
   }
 }
