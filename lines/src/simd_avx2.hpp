@@ -75,6 +75,11 @@ struct ViewVector4 {
   }
 };
 
+/// `value` in the lanes where `mask` is set, 0 elsewhere (64-bit lanes).
+[[gnu::target("avx2"), gnu::always_inline]] inline __m256i mask_bits4(__m256d mask, int value) {
+  return _mm256_and_si256(_mm256_castpd_si256(mask), _mm256_set1_epi64x(value));
+}
+
 /// Four AoS Vec3 (x y z x y z ...) as three vectors of x, y and z.
 [[gnu::target("avx2"), gnu::always_inline]] inline void load_vec3x4(const double* p, __m256d& x,
                                                                     __m256d& y, __m256d& z) {

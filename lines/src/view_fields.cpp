@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include "fabrica/core/error.hpp"
 #include "fabrica/lines/precompute.hpp"
@@ -132,12 +133,14 @@ template <class Other>
           _mm256_castsi256_pd(_mm256_cmpeq_epi64(_mm256_and_si256(dbits, lane_bits), lane_bits));
       _mm256_storeu_pd(A.sc_num + i, FABRICA_PICK(_mm256_and_pd(dvalid, csc_pos), num, zero));
     }
-    const int m_pos = _mm256_movemask_pd(_mm256_cmp_pd(ndotv, zero, _CMP_GT_OQ));
-    const int m_neg = _mm256_movemask_pd(_mm256_cmp_pd(ndotv, zero, _CMP_LT_OQ));
-    const int m_front = _mm256_movemask_pd(_mm256_cmp_pd(ndotv, zero, _CMP_NLE_UQ));
-    const int m_krp = _mm256_movemask_pd(_mm256_cmp_pd(kr, zero, _CMP_GT_OQ));
-    const int m_krn = _mm256_movemask_pd(_mm256_cmp_pd(kr, zero, _CMP_LT_OQ));
-    int m_q1 = 0;
+    // The sign byte of each lane: the compare masks ANDed with their bits.
+    __m256i sbits = _mm256_or_si256(
+        _mm256_or_si256(detail::mask_bits4(_mm256_cmp_pd(ndotv, zero, _CMP_GT_OQ), kNdotvPositive),
+                        detail::mask_bits4(_mm256_cmp_pd(ndotv, zero, _CMP_LT_OQ), kNdotvNegative)),
+        _mm256_or_si256(
+            detail::mask_bits4(_mm256_cmp_pd(ndotv, zero, _CMP_NLE_UQ), kNdotvNotBack),
+            _mm256_or_si256(detail::mask_bits4(_mm256_cmp_pd(kr, zero, _CMP_GT_OQ), kKrPositive),
+                            detail::mask_bits4(_mm256_cmp_pd(kr, zero, _CMP_LT_OQ), kKrNegative))));
     if (A.want_app) {
       const __m256d an = _mm256_andnot_pd(neg0, ndotv);
       const __m256d sec = FABRICA_PICK(_mm256_cmp_pd(an, zero, _CMP_GT_OQ),
@@ -160,7 +163,9 @@ template <class Other>
                                   _mm256_mul_pd(_mm256_mul_pd(_mm256_set1_pd(0.25), dm), dm))));
       _mm256_storeu_pd(A.q1 + i, q1);
       if (A.cull)
-        m_q1 = _mm256_movemask_pd(_mm256_cmp_pd(q1, _mm256_set1_pd(A.cull_t), _CMP_NLE_UQ));
+        sbits = _mm256_or_si256(
+            sbits,
+            detail::mask_bits4(_mm256_cmp_pd(q1, _mm256_set1_pd(A.cull_t), _CMP_NLE_UQ), kQ1Above));
       // t1: view_dependent_direction.
       const __m256d a0 = _mm256_sub_pd(m22, q1), a1 = _mm256_xor_pd(m12, neg0);
       const __m256d c0 = m12, c1 = _mm256_sub_pd(q1, m11);
@@ -178,25 +183,29 @@ template <class Other>
       _mm256_storeu_pd(t1p, _mm256_permute2f128_pd(lo, hi, 0x20));
       _mm256_storeu_pd(t1p + 4, _mm256_permute2f128_pd(lo, hi, 0x31));
       // t1_world = t1[0] e1 + t1[1] e2.
-      alignas(32) double wt[3][4];
+      __m256d wc[3];
       for (int c = 0; c < 3; ++c)
-        _mm256_store_pd(wt[c], _mm256_add_pd(_mm256_mul_pd(t0, FABRICA_LD(k.e1[c])),
-                                             _mm256_mul_pd(t1, FABRICA_LD(k.e2[c]))));
+        wc[c] = _mm256_add_pd(_mm256_mul_pd(t0, FABRICA_LD(k.e1[c])),
+                              _mm256_mul_pd(t1, FABRICA_LD(k.e2[c])));
+      // (x, y, z) x 4 lanes -> x0 y0 z0 x1 | y1 z1 x2 y2 | z2 x3 y3 z3.
+      const __m256d xy = _mm256_unpacklo_pd(wc[0], wc[1]);      // x0 y0 | x2 y2
+      const __m256d zx = _mm256_shuffle_pd(wc[2], wc[0], 0xA);  // z0 x1 | z2 x3
+      const __m256d yz = _mm256_shuffle_pd(wc[1], wc[2], 0xF);  // y1 z1 | y3 z3
       double* wp = A.t1_world[i].data();
-      for (int l = 0; l < 4; ++l) {
-        wp[3 * l] = wt[0][l];
-        wp[3 * l + 1] = wt[1][l];
-        wp[3 * l + 2] = wt[2][l];
-      }
+      _mm256_storeu_pd(wp, _mm256_permute2f128_pd(xy, zx, 0x20));
+      _mm256_storeu_pd(wp + 4, _mm256_permute2f128_pd(yz, xy, 0x30));
+      _mm256_storeu_pd(wp + 8, _mm256_permute2f128_pd(zx, yz, 0x31));
     }
 #undef FABRICA_LD
 #undef FABRICA_PICK
 #undef FABRICA_DOT
-    for (int l = 0; l < 4; ++l)
-      A.signs[i + static_cast<std::size_t>(l)] = static_cast<std::uint8_t>(
-          ((m_pos >> l) & 1) * kNdotvPositive | ((m_neg >> l) & 1) * kNdotvNegative |
-          ((m_front >> l) & 1) * kNdotvNotBack | ((m_krp >> l) & 1) * kKrPositive |
-          ((m_krn >> l) & 1) * kKrNegative | ((m_q1 >> l) & 1) * kQ1Above);
+    // The low byte of each 64-bit lane, as four consecutive bytes.
+    const __m256i packed = _mm256_shuffle_epi8(
+        sbits, _mm256_setr_epi8(0, 8, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, 0, 8,
+                                -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1));
+    const std::uint32_t four = static_cast<std::uint32_t>(_mm256_extract_epi16(packed, 0)) |
+                               static_cast<std::uint32_t>(_mm256_extract_epi16(packed, 8)) << 16;
+    std::memcpy(A.signs + i, &four, 4);
   }
 }
 #endif
