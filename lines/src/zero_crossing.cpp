@@ -293,31 +293,48 @@ struct VectorInputs {
   const VectorCrossingOptions& o;
 };
 
+// Crossing of the vector kernel on the edge joining corners ca and cb:
+// corners ordered by vertex index (lo < hi), fraction t from lo, and the
+// interpolated magnitude m.
+struct EdgeCut {
+  int lo, hi;
+  double t, m;
+};
+inline EdgeCut vector_edge(const VectorInputs& in, const int v[3], int ca, int cb) {
+  if (v[ca] > v[cb]) std::swap(ca, cb);
+  const double ma = in.mag[v[ca]], mb = in.mag[v[cb]];
+  const double da = std::abs(in.delta[v[ca]]), db = std::abs(in.delta[v[cb]]);
+  const double t = da + db > 0.0 ? da / (da + db) : 0.5;
+  const double m = std::abs((1.0 - t) * ma + t * mb);
+  return EdgeCut{ca, cb, t, m};
+}
+
+inline void set_edge_end(SegmentEnd& e, std::int32_t f, const EdgeCut& c, const Vec3& p,
+                         std::int32_t edge) {
+  e.anchor.face = f;
+  e.anchor.bary = Vec3::Zero();
+  e.anchor.bary[c.lo] = 1.0 - c.t;
+  e.anchor.bary[c.hi] = c.t;
+  e.position = p;
+  e.element = edge;
+  e.kind = EndKind::edge;
+}
+
 // rtsc's draw_segment_ridge / draw_segment_app_ridge for corners (c0,c1,c2)
 // of face f (vertices v): crossing on edge c0-c1 joined to the crossing on
 // c1-c2 (or the centroid). The threshold and the maximum test are decided
 // from the edge fractions and positions before any endpoint is built.
-void vector_segment(const VectorInputs& in, std::size_t f, const int v[3], int c0, int c1, int c2,
-                    const Vec3 E[3], bool to_center, std::vector<LineSegment>& out) {
+template <bool ToCenter>
+inline void vector_segment(const VectorInputs& in, std::size_t f, const int v[3], int c0, int c1,
+                           int c2, const Vec3 E[3], std::vector<LineSegment>& out) {
   const Vec3* pos = in.m.pos;
-  struct EdgeCut {
-    int lo, hi;
-    double t, m;
-  };
-  auto edge = [&](int ca, int cb) {
-    if (v[ca] > v[cb]) std::swap(ca, cb);
-    const double da = std::abs(in.delta[v[ca]]), db = std::abs(in.delta[v[cb]]);
-    const double t = da + db > 0.0 ? da / (da + db) : 0.5;
-    const double m = std::abs((1.0 - t) * in.mag[v[ca]] + t * in.mag[v[cb]]);
-    return EdgeCut{ca, cb, t, m};
-  };
-  const EdgeCut a = edge(c0, c1);
+  const EdgeCut a = vector_edge(in, v, c0, c1);
   EdgeCut b{0, 0, 0.0, 0.0};
   double m12;
-  if (to_center) {
+  if constexpr (ToCenter) {
     m12 = std::abs(in.mag[v[0]] + in.mag[v[1]] + in.mag[v[2]]) / 3.0;
   } else {
-    b = edge(c1, c2);
+    b = vector_edge(in, v, c1, c2);
     m12 = b.m;
   }
   const double m01 = a.m;
@@ -325,43 +342,56 @@ void vector_segment(const VectorInputs& in, std::size_t f, const int v[3], int c
   const double k01 = std::max(m01 - t, 0.0), k12 = std::max(m12 - t, 0.0);
   if (k01 == 0.0 && k12 == 0.0) return;
   const Vec3 pa = (1.0 - a.t) * pos[v[a.lo]] + a.t * pos[v[a.hi]];
-  const Vec3 pb = to_center ? Vec3((pos[v[0]] + pos[v[1]] + pos[v[2]]) / 3.0)
-                            : Vec3((1.0 - b.t) * pos[v[b.lo]] + b.t * pos[v[b.hi]]);
+  Vec3 pb;
+  if constexpr (ToCenter)
+    pb = (pos[v[0]] + pos[v[1]] + pos[v[2]]) / 3.0;
+  else
+    pb = (1.0 - b.t) * pos[v[b.lo]] + b.t * pos[v[b.hi]];
   if (in.o.test == ExtremumTest::perpendicular) {
     const Vec3 n = (pos[v[1]] - pos[v[0]]).cross(pos[v[2]] - pos[v[0]]);
     const Vec3 perp = n.cross(pa - pb);
     if (E[c0].dot(perp) <= 0.0 || E[c1].dot(perp) >= 0.0 || E[c2].dot(perp) <= 0.0) return;
   }
+  const auto fi = static_cast<std::int32_t>(f);
+  const Topology& topo = *in.m.topo;
   LineSegment& seg = out.emplace_back();
-  seg.face = static_cast<std::int32_t>(f);
-  SegmentEnd& ea = seg.end[0];
-  ea.anchor.face = static_cast<std::int32_t>(f);
-  ea.anchor.bary = Vec3::Zero();
-  ea.anchor.bary[a.lo] = 1.0 - a.t;
-  ea.anchor.bary[a.hi] = a.t;
-  ea.position = pa;
-  ea.element = in.m.topo->face_edge(f, 3 - a.lo - a.hi);
-  ea.kind = EndKind::edge;
+  seg.face = fi;
+  set_edge_end(seg.end[0], fi, a, pa, topo.face_edge(f, 3 - a.lo - a.hi));
   SegmentEnd& eb = seg.end[1];
-  eb.anchor.face = static_cast<std::int32_t>(f);
-  eb.position = pb;
-  if (to_center) {
+  if constexpr (ToCenter) {
+    eb.anchor.face = fi;
     eb.anchor.bary = Vec3::Constant(1.0 / 3.0);
+    eb.position = pb;
     eb.kind = EndKind::centroid;
-    eb.element = static_cast<std::int32_t>(f);
+    eb.element = fi;
   } else {
-    eb.anchor.bary = Vec3::Zero();
-    eb.anchor.bary[b.lo] = 1.0 - b.t;
-    eb.anchor.bary[b.hi] = b.t;
-    eb.element = in.m.topo->face_edge(f, 3 - b.lo - b.hi);
-    eb.kind = EndKind::edge;
+    set_edge_end(eb, fi, b, pb, topo.face_edge(f, 3 - b.lo - b.hi));
   }
   if (in.o.keep_raw_magnitude) {
-    ea.strength = static_cast<float>(m01);
+    seg.end[0].strength = static_cast<float>(m01);
     eb.strength = static_cast<float>(m12);
   } else {
-    ea.strength = t > 0.0 ? static_cast<float>(k01 / (k01 + t)) : 1.0f;
+    seg.end[0].strength = t > 0.0 ? static_cast<float>(k01 / (k01 + t)) : 1.0f;
     eb.strength = t > 0.0 ? static_cast<float>(k12 / (k12 + t)) : 1.0f;
+  }
+}
+
+// The segments of face f (vertices v, E_i = delta_i dir_i) given which
+// edges cross (zij: E_i·E_j <= 0, and the maximum test where it applies):
+// at least two of them.
+[[gnu::noinline]] void vector_face_segments(const VectorInputs& in, std::size_t f, const int v[3],
+                                            const Vec3 E[3], bool z01, bool z12, bool z20,
+                                            std::vector<LineSegment>& out) {
+  if (!z01) {
+    vector_segment<false>(in, f, v, 1, 2, 0, E, out);
+  } else if (!z12) {
+    vector_segment<false>(in, f, v, 2, 0, 1, E, out);
+  } else if (!z20) {
+    vector_segment<false>(in, f, v, 0, 1, 2, E, out);
+  } else {
+    vector_segment<true>(in, f, v, 1, 2, 0, E, out);
+    vector_segment<true>(in, f, v, 2, 0, 1, E, out);
+    vector_segment<true>(in, f, v, 0, 1, 2, E, out);
   }
 }
 
@@ -390,17 +420,7 @@ void vector_segment(const VectorInputs& in, std::size_t f, const int v[3], int c
     z20 = z20 && (E[2].dot(d20) >= 0.0 || E[0].dot(d20) <= 0.0);
     if (int(z01) + int(z12) + int(z20) < 2) return;
   }
-  if (!z01) {
-    vector_segment(in, f, v, 1, 2, 0, E, false, out);
-  } else if (!z12) {
-    vector_segment(in, f, v, 2, 0, 1, E, false, out);
-  } else if (!z20) {
-    vector_segment(in, f, v, 0, 1, 2, E, false, out);
-  } else {
-    vector_segment(in, f, v, 1, 2, 0, E, true, out);
-    vector_segment(in, f, v, 2, 0, 1, E, true, out);
-    vector_segment(in, f, v, 0, 1, 2, E, true, out);
-  }
+  vector_face_segments(in, f, v, E, z01, z12, z20, out);
 }
 
 }  // namespace
@@ -452,6 +472,7 @@ void vector_zero_crossings(const Surface& surface, std::span<const double> deriv
   }
   const VectorInputs in{MeshArrays(surface), derivative.data(), direction.data(), magnitude.data(),
                         options};
+  const VectorCrossingOptions& o = options;
   detail::parallel_chunks<LineSegment>(
       surface.face_count(),
       [&](std::size_t b, std::size_t e, std::vector<LineSegment>& part) {
@@ -460,23 +481,39 @@ void vector_zero_crossings(const Surface& surface, std::span<const double> deriv
         // vector_face's first test (at least two edges where E_i·E_j <= 0),
         // evaluated for the whole batch without branches and compacted, so
         // its hard-to-predict outcome does not cost a mispredicted branch
-        // per face; vector_face repeats it on the survivors.
+        // per face. Without culling, vertex mask or edge test (apparent
+        // ridges), the survivors go straight to their segments with the E
+        // and the crossings computed here.
+        const bool direct = o.cull.empty() && o.vertex_mask.empty() && o.test != ExtremumTest::edge;
         auto flush = [&] {
-          std::size_t keep[CandidateBatch::kSize];
+          struct Kept {
+            std::size_t f;
+            int v[3];
+            Vec3 E[3];
+            bool z01, z12, z20;
+          } keep[CandidateBatch::kSize];
           int nk = 0;
           for (int k = 0; k < batch.n; ++k) {
-            const std::size_t g = batch.face[k];
-            const Face& fg = faces[g];
-            const Vec3 E0 = in.delta[fg[0]] * in.dir[fg[0]];
-            const Vec3 E1 = in.delta[fg[1]] * in.dir[fg[1]];
-            const Vec3 E2 = in.delta[fg[2]] * in.dir[fg[2]];
-            const int zeros =
-                int(E0.dot(E1) <= 0.0) + int(E1.dot(E2) <= 0.0) + int(E2.dot(E0) <= 0.0);
-            keep[nk] = g;
-            nk += int(zeros >= 2);
+            Kept& kf = keep[nk];
+            kf.f = batch.face[k];
+            const Face& fg = faces[kf.f];
+            for (int c = 0; c < 3; ++c) {
+              kf.v[c] = fg[c];
+              kf.E[c] = in.delta[fg[c]] * in.dir[fg[c]];
+            }
+            kf.z01 = kf.E[0].dot(kf.E[1]) <= 0.0;
+            kf.z12 = kf.E[1].dot(kf.E[2]) <= 0.0;
+            kf.z20 = kf.E[2].dot(kf.E[0]) <= 0.0;
+            nk += int(int(kf.z01) + int(kf.z12) + int(kf.z20) >= 2);
           }
           batch.n = 0;
-          for (int k = 0; k < nk; ++k) vector_face(in, keep[k], part);
+          for (int k = 0; k < nk; ++k) {
+            const Kept& kf = keep[k];
+            if (direct)
+              vector_face_segments(in, kf.f, kf.v, kf.E, kf.z01, kf.z12, kf.z20, part);
+            else
+              vector_face(in, kf.f, part);
+          }
         };
         for (std::size_t f = b; f < e; ++f) {
           const Face& face = faces[f];
