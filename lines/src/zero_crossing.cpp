@@ -22,7 +22,8 @@ struct MeshArrays {
 
 // An endpoint on the edge joining corners ca and cb of face f, at fraction
 // t from vertex face[ca] (already canonicalised by the caller).
-inline SegmentEnd edge_end(const MeshArrays& m, std::size_t f, int ca, int cb, double t) {
+[[gnu::always_inline]] inline SegmentEnd edge_end(const MeshArrays& m, std::size_t f, int ca,
+                                                  int cb, double t) {
   const Face& face = m.faces[f];
   SegmentEnd e;
   e.anchor.face = static_cast<std::int32_t>(f);
@@ -258,8 +259,11 @@ void scalar_crossings(const ScalarInputs& in, const Num& num, std::size_t face_c
           for (std::size_t f = b; f < e; ++f) {
             const Face& face = faces[f];
             const unsigned a0 = sg[face[0]], a1 = sg[face[1]], a2 = sg[face[2]];
-            const unsigned all = a0 & a1 & a2, any = a0 | a1 | a2;
-            if ((all & (neg | pos)) | (~any & cull) || !(any & (neg | pos))) continue;
+            // All three on one side (most faces) first, then no sign at
+            // all or culled.
+            if ((a0 & a1 & a2) & (neg | pos)) continue;
+            const unsigned any = a0 | a1 | a2;
+            if (!(any & (neg | pos)) || (~any & cull)) continue;
             for (int k = 0; k < 3; ++k) {
               __builtin_prefetch(&in.m.pos[face[k]]);
               __builtin_prefetch(&val[face[k]]);
@@ -519,8 +523,6 @@ void vector_zero_crossings(const Surface& surface, std::span<const double> deriv
           const Face& face = faces[f];
           if (!((signs[face[0]] | signs[face[1]] | signs[face[2]]) & above_bit)) continue;
           for (int k = 0; k < 3; ++k) {
-            __builtin_prefetch(&in.m.pos[face[k]]);
-            __builtin_prefetch(&in.mag[face[k]]);
             __builtin_prefetch(&in.delta[face[k]]);
             __builtin_prefetch(&in.dir[face[k]]);
           }
