@@ -65,24 +65,72 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
     const CornerRing& r = corner_ring();
     const auto& pos = surface_->positions();
     const auto& curv = surface_->curvature();
+    const std::size_t nv = surface_->vertex_count();
     TangentRing& t = cache_->tangent_ring;
-    t.offset = r.offset;
-    t.entry.resize(r.opposite.size());
-    detail::parallel_range(surface_->vertex_count(), [&](std::size_t i) {
+    // Offset of neighbour v of vertex i along e1 (axis 0) or e2 (axis 1).
+    auto offset = [&](std::size_t i, std::int32_t v, int axis) {
+      const Vec3 d = pos[static_cast<std::size_t>(v)] - pos[i];
+      return static_cast<float>(d.dot(axis ? curv.e2[i] : curv.e1[i]));
+    };
+    // Fan order first: rank of each fan face (the chain that follows each
+    // face's second opposite corner to the face whose first one it is).
+    std::vector<std::uint8_t> order(r.opposite.size());
+    t.fan.assign(nv, 0);
+    detail::parallel_range(nv, [&](std::size_t i) {
+      const auto* o = r.opposite.data() + r.offset[i];
+      const std::int32_t k = r.offset[i + 1] - r.offset[i];
+      if (k < 1 || k > 64) return;
+      std::uint64_t used = 0;
+      std::int32_t f = 0;
+      for (std::int32_t j = 0; j < k; ++j) {
+        if (used >> f & 1) return;
+        used |= std::uint64_t{1} << f;
+        order[static_cast<std::size_t>(r.offset[i] + j)] = static_cast<std::uint8_t>(f);
+        std::int32_t next = -1;
+        for (std::int32_t g = 0; g < k; ++g) {
+          if (o[g][0] != o[f][1]) continue;
+          if (next >= 0) return;  // not a fan: a corner opens two faces
+          next = g;
+        }
+        if (next < 0) return;
+        f = next;
+      }
+      if (f != 0) return;  // the chain does not close after k faces
+      if (curv.valid[i])
+        for (std::int32_t g = 0; g < k; ++g)
+          if (!std::isfinite(offset(i, o[g][0], 0)) || !std::isfinite(offset(i, o[g][0], 1)))
+            return;
+      t.fan[i] = 1;
+    });
+    t.offset.resize(nv + 1);
+    t.offset[0] = 0;
+    for (std::size_t i = 0; i < nv; ++i)
+      t.offset[i + 1] = t.offset[i] + (r.offset[i + 1] - r.offset[i]) * (t.fan[i] ? 1 : 2);
+    const auto total = static_cast<std::size_t>(t.offset[nv]);
+    t.vertex.resize(total);
+    t.rank.assign(total, 0);
+    t.x.assign(total + 2, 0.0f);
+    t.y.assign(total + 2, 0.0f);
+    detail::parallel_range(nv, [&](std::size_t i) {
       const bool ok = curv.valid[i] != 0;
-      for (std::int32_t j = r.offset[i]; j < r.offset[i + 1]; ++j) {
-        const auto [i1, i2] = r.opposite[static_cast<std::size_t>(j)];
-        TangentRing::Entry& e = t.entry[static_cast<std::size_t>(j)];
-        e.i1 = i1;
-        e.i2 = i2;
-        e.x1 = e.y1 = e.x2 = e.y2 = 0.0f;
-        if (!ok) continue;
-        const Vec3 d1 = pos[static_cast<std::size_t>(i1)] - pos[i];
-        const Vec3 d2 = pos[static_cast<std::size_t>(i2)] - pos[i];
-        e.x1 = static_cast<float>(d1.dot(curv.e1[i]));
-        e.y1 = static_cast<float>(d1.dot(curv.e2[i]));
-        e.x2 = static_cast<float>(d2.dot(curv.e1[i]));
-        e.y2 = static_cast<float>(d2.dot(curv.e2[i]));
+      auto put = [&](std::int32_t n, std::int32_t v) {
+        const auto s = static_cast<std::size_t>(n);
+        t.vertex[s] = v;
+        if (!ok) return;
+        t.x[s] = offset(i, v, 0);
+        t.y[s] = offset(i, v, 1);
+      };
+      const auto* o = r.opposite.data() + r.offset[i];
+      const std::int32_t k = r.offset[i + 1] - r.offset[i], n = t.offset[i];
+      for (std::int32_t j = 0; j < k; ++j) {
+        if (t.fan[i]) {
+          const std::uint8_t f = order[static_cast<std::size_t>(r.offset[i] + j)];
+          t.rank[static_cast<std::size_t>(n + j)] = f;
+          put(n + j, o[f][0]);
+        } else {
+          put(n + 2 * j, o[j][0]);
+          put(n + 2 * j + 1, o[j][1]);
+        }
       }
     });
   });

@@ -1,5 +1,8 @@
 // D_t1 q1 (ViewFields::dt1q1), the second pass of the apparent-ridge
 // fields: see view_fields_light.hpp.
+#include <emmintrin.h>
+
+#include <bit>
 #include <cmath>
 #include <cstdint>
 
@@ -8,6 +11,213 @@
 #include "view_fields_light.hpp"
 
 namespace fabrica::detail {
+
+namespace {
+
+// w1 = num / den, the weight of the first corner where the line crosses a
+// face's opposite edge, when in [0, 1); false otherwise. Exact early
+// rejections before the division: |num| >= |den| (also den == 0 or NaN)
+// gives |w1| >= 1, and opposite signs give w1 < 0 unless the quotient
+// underflows to -0 (only possible when |num| <= |den| 2^-900).
+inline bool crossing_weight(double num, double den, double& w1) {
+  if (!(std::abs(num) < std::abs(den))) return false;
+  if ((num < 0.0) != (den < 0.0) && std::abs(num) > std::abs(den) * 0x1p-900) return false;
+  w1 = num / den;
+  return w1 >= 0.0 && w1 < 1.0;
+}
+
+constexpr int kMaxFan = 64;
+
+// Two floats (8 bytes, any alignment) into the low half.
+inline __m128 load2(const float* f) {
+  return _mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(f)));
+}
+
+// On a fan of m <= 64 faces (face j: neighbours j, j+1 mod m) with
+// neighbour offsets (x, y): p[j] = c y_j - sn x_j (the neighbour's p·t2),
+// and a superset of the faces for which crossing_weight(p[j+1],
+// p[j+1] - p[j]) holds: those whose two p differ in sign bit, or whose
+// p[j+1] is tiny. With the same sign bit (and no NaN, which never crosses),
+// |den| <= max |p| or |num| >= |den|, and a crossing with opposite signs of
+// num and den needs |num| <= |den| 2^-900; with |c|, |sn| <= 2 and finite
+// float offsets |p| <= 2^130, so "tiny" is |p| <= 2^-770 (anything
+// otherwise). Reads x, y up to index m (padded).
+inline std::uint64_t candidate_faces(const float* x, const float* y, int m, double c, double sn,
+                                     double* p) {
+  const __m128d vc = _mm_set1_pd(c), vs = _mm_set1_pd(sn);
+  const __m128d abs_mask = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffff));
+  __m128d vmin = _mm_set1_pd(HUGE_VAL);
+  std::uint64_t neg = 0;
+  for (int j = 0; j < m; j += 2) {
+    const __m128d vx = _mm_cvtps_pd(load2(x + j)), vy = _mm_cvtps_pd(load2(y + j));
+    const __m128d v = _mm_sub_pd(_mm_mul_pd(vc, vy), _mm_mul_pd(vs, vx));
+    _mm_store_pd(p + j, v);
+    vmin = _mm_min_pd(_mm_and_pd(v, abs_mask), vmin);  // NaN lanes keep the accumulator
+    neg |= std::uint64_t(_mm_movemask_pd(v)) << j;
+  }
+  const std::uint64_t all = ~std::uint64_t{0} >> (64 - m);
+  auto next = [&](std::uint64_t b) { return (b >> 1 | b << (m - 1)) & all; };
+  neg &= all;
+  std::uint64_t cand = neg ^ next(neg);
+  const double tiny = std::abs(c) <= 2.0 && std::abs(sn) <= 2.0 ? 0x1p-770 : HUGE_VAL;
+  if (_mm_cvtsd_f64(_mm_min_sd(vmin, _mm_unpackhi_pd(vmin, vmin))) <= tiny) {
+    std::uint64_t small = 0;
+    for (int j = 0; j < m; ++j) small |= std::uint64_t(std::abs(p[j]) <= tiny) << j;
+    cand |= next(small);
+  }
+  return cand;
+}
+
+// The sum of the one-sided differences of fan faces j0 and j1 (j1 only when
+// `two`), halved when both count: what the face-order loop gives when they
+// are the only candidates (each lane is crossing_weight and the difference
+// of that loop, in the same operations; see update_dt1q1).
+inline double two_faces(const float* x, const float* y, const double* p, const std::int32_t* nbr,
+                        const double* q1, int m, int j0, int j1, bool two, double c, double sn,
+                        double an, double q0) {
+  const int k0 = j0 + 1 == m ? 0 : j0 + 1, k1 = j1 + 1 == m ? 0 : j1 + 1;
+  const __m128d zero = _mm_setzero_pd(), one = _mm_set1_pd(1.0);
+  const __m128d abs_mask = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffff));
+  const __m128d num = _mm_set_pd(p[k1], p[k0]);
+  const __m128d den = _mm_sub_pd(num, _mm_set_pd(p[j1], p[j0]));
+  const __m128d anum = _mm_and_pd(num, abs_mask), aden = _mm_and_pd(den, abs_mask);
+  const __m128d sign_differs = _mm_xor_pd(_mm_cmplt_pd(num, zero), _mm_cmplt_pd(den, zero));
+  const __m128d w1 = _mm_div_pd(num, den);
+  __m128d ok = _mm_and_pd(_mm_cmplt_pd(anum, aden), _mm_cmpge_pd(w1, zero));
+  ok = _mm_and_pd(ok, _mm_cmplt_pd(w1, one));
+  ok = _mm_andnot_pd(
+      _mm_and_pd(sign_differs, _mm_cmpgt_pd(anum, _mm_mul_pd(aden, _mm_set1_pd(0x1p-900)))), ok);
+  const __m128d w2 = _mm_sub_pd(one, w1);
+  const __m128d x1 = _mm_set_pd(x[j1], x[j0]), x2 = _mm_set_pd(x[k1], x[k0]);
+  const __m128d y1 = _mm_set_pd(y[j1], y[j0]), y2 = _mm_set_pd(y[k1], y[k0]);
+  const __m128d along =
+      _mm_add_pd(_mm_mul_pd(_mm_set1_pd(c), _mm_add_pd(_mm_mul_pd(w1, x1), _mm_mul_pd(w2, x2))),
+                 _mm_mul_pd(_mm_set1_pd(sn), _mm_add_pd(_mm_mul_pd(w1, y1), _mm_mul_pd(w2, y2))));
+  const __m128d dist = _mm_mul_pd(along, _mm_set1_pd(an));
+  ok = _mm_and_pd(ok, _mm_cmpneq_pd(dist, zero));
+  const __m128d qa = _mm_set_pd(q1[nbr[j1]], q1[nbr[j0]]),
+                qb = _mm_set_pd(q1[nbr[k1]], q1[nbr[k0]]);
+  const __m128d q = _mm_add_pd(_mm_mul_pd(w1, qa), _mm_mul_pd(w2, qb));
+  const __m128d d = _mm_div_pd(_mm_sub_pd(q, _mm_set1_pd(q0)), dist);
+  // Lanes that do not count add -0, which leaves any sum unchanged.
+  const __m128d neg0 = _mm_set1_pd(-0.0);
+  const __m128d term = _mm_or_pd(_mm_and_pd(ok, d), _mm_andnot_pd(ok, neg0));
+  const int okm = _mm_movemask_pd(ok) & (two ? 3 : 1);
+  const double t0 = _mm_cvtsd_f64(term);
+  const double t1 = okm & 2 ? _mm_cvtsd_f64(_mm_unpackhi_pd(term, term)) : -0.0;
+  const double sum = (0.0 + t0) + t1;
+  return okm == 3 ? sum * 0.5 : sum;
+}
+
+// D_t1 q1 over vertices [b, e) from the tangent ring (see update_dt1q1).
+struct RingPass {
+  const std::int32_t *off, *nbr;
+  const float *xs, *ys;
+  const std::uint8_t *fan, *rank, *sg;
+  const double* q1;
+  const Vec2* t1;
+  const Vec3* t1_world;
+  const double* ndotv;
+  double* out;
+  bool cull;
+
+  // The faces of vertex i with neighbours (a, b) (relative to the ring) in
+  // the order given by `next` (returns false at the end), one at a time, as
+  // the face-order loop: the average of the first two differences.
+  template <class Next>
+  static double in_order(const float* x, const float* y, const std::int32_t* nbr, const double* q1,
+                         double c, double sn, double an, double q0, Next&& next) {
+    double result = 0.0;
+    int n = 0;
+    int a, b;
+    double pa, pb;
+    while (next(a, b, pa, pb)) {
+      double w1;
+      if (!crossing_weight(pb, pb - pa, w1)) continue;
+      const double x1 = x[a], y1 = y[a], x2 = x[b], y2 = y[b];
+      const double w2 = 1.0 - w1;
+      const double dist = (c * (w1 * x1 + w2 * x2) + sn * (w1 * y1 + w2 * y2)) * an;
+      if (dist == 0.0) continue;
+      const double q = w1 * q1[nbr[a]] + w2 * q1[nbr[b]];
+      result += (q - q0) / dist;
+      if (++n == 2) return result * 0.5;
+    }
+    return result;
+  }
+
+  // Not a fan, or a fan with more than two candidate faces (p, cand).
+  [[gnu::noinline]] double general(std::size_t i, const double* p, std::uint64_t cand, double c,
+                                   double sn, double an, double q0) const {
+    const std::int32_t jb = off[i], m = off[i + 1] - jb;
+    const float *x = xs + jb, *y = ys + jb;
+    if (!fan[i]) {
+      int j = 0;
+      return in_order(x, y, nbr + jb, q1, c, sn, an, q0,
+                      [&](int& a, int& b, double& pa, double& pb) {
+                        if (j >= m) return false;
+                        a = j, b = j + 1, j += 2;
+                        pa = c * y[a] - sn * x[a], pb = c * y[b] - sn * x[b];
+                        return true;
+                      });
+    }
+    int key[kMaxFan], nk = 0;  // candidates by rank (face order)
+    for (; cand; cand &= cand - 1) {
+      const int j = std::countr_zero(cand);
+      int v = rank[jb + j] << 8 | j, k = nk++;
+      for (; k > 0 && key[k - 1] > v; --k) key[k] = key[k - 1];
+      key[k] = v;
+    }
+    int k = 0;
+    return in_order(x, y, nbr + jb, q1, c, sn, an, q0, [&](int& a, int& b, double& pa, double& pb) {
+      if (k >= nk) return false;
+      a = key[k++] & 0xff, b = a + 1 == m ? 0 : a + 1;
+      pa = p[a], pb = p[b];
+      return true;
+    });
+  }
+
+  void operator()(std::size_t b, std::size_t e) const {
+    for (std::size_t i = b; i < e; ++i) {
+      const std::int32_t jb = off[i], je = off[i + 1];
+      if (cull && !(sg[i] & kQ1Above)) {
+        unsigned any = 0;  // branch-free over the ring (bytes)
+        std::int32_t j = jb;
+        for (; j + 2 <= je; j += 2) any |= sg[nbr[j]] | sg[nbr[j + 1]];
+        if (j < je) any |= sg[nbr[j]];
+        if (!(any & kQ1Above)) {
+          out[i] = 0.0;
+          continue;
+        }
+      }
+      if (t1_world[i].squaredNorm() == 0.0) {
+        out[i] = 0.0;
+        continue;
+      }
+      const double c = t1[i][0], sn = t1[i][1];
+      const double q0 = q1[i], an = std::abs(ndotv[i]);
+      const std::int32_t m = je - jb;
+      double result = 0.0;
+      if (fan[i]) {
+        alignas(16) double p[kMaxFan + 2];
+        const std::uint64_t cand = candidate_faces(xs + jb, ys + jb, m, c, sn, p);
+        const std::uint64_t rest = cand & (cand - 1);
+        if (rest & (rest - 1)) {
+          result = general(i, p, cand, c, sn, an, q0);
+        } else if (cand) {
+          // At most two crossings: their sum does not depend on the order.
+          const int j0 = std::countr_zero(cand), j1 = rest ? std::countr_zero(rest) : j0;
+          result =
+              two_faces(xs + jb, ys + jb, p, nbr + jb, q1, m, j0, j1, rest != 0, c, sn, an, q0);
+        }
+      } else {
+        result = general(i, nullptr, 0, c, sn, an, q0);
+      }
+      out[i] = std::isfinite(result) ? result : 0.0;
+    }
+  }
+};
+
+}  // namespace
 
 void update_dt1q1(ViewFields& fields, const Surface& surface, bool cull,
                   const LinePrecompute* precompute) {
@@ -28,56 +238,29 @@ void update_dt1q1(ViewFields& fields, const Surface& surface, bool cull,
   const double* q1 = fields.q1.data();
   const std::uint8_t* sg = fields.signs.data();
   if (precompute) {
-    // With the precomputed tangent ring: each incident face's opposite
-    // corners as offsets (x, y) in the vertex's principal frame, so with
-    // t1 = (c, s) in that frame, t2 = n × t1 = ±(-s, c) (the sign cancels
-    // in w1) and every product is two-dimensional; one streamed array
-    // instead of gathered positions. Same formulas as below, evaluated
-    // from float offsets (relative differences ~1e-7).
+    // With the precomputed tangent ring: each neighbour's offset (x, y) in
+    // the vertex's principal frame, so with t1 = (c, s) in that frame,
+    // t2 = n × t1 = ±(-s, c) (the sign cancels in w1) and every product is
+    // two-dimensional. Same formulas as below, evaluated from float offsets
+    // (relative differences ~1e-7). On a fan each neighbour's p·t2 is
+    // computed once for its two faces, and only the faces whose corners
+    // can give a crossing (a superset, see candidate_faces) are tested.
     const LinePrecompute::TangentRing& tr = precompute->tangent_ring();
-    const auto* ent = tr.entry.data();
-    const std::int32_t* off = tr.offset.data();
-    detail::parallel_range(nv, [&](std::size_t i) {
-      const std::int32_t jb = off[i], je = off[i + 1];
-      if (cull && !(sg[i] & kQ1Above)) {
-        unsigned any = 0;  // branch-free over the ring (bytes)
-        for (std::int32_t j = jb; j < je; ++j)
-          any |= unsigned(sg[ent[j].i1]) | unsigned(sg[ent[j].i2]);
-        if (!(any & kQ1Above)) {
-          fields.dt1q1[i] = 0.0;
-          return;
-        }
-      }
-      if (fields.t1_world[i].squaredNorm() == 0.0) {
-        fields.dt1q1[i] = 0.0;
-        return;
-      }
-      const double c = fields.t1[i][0], sn = fields.t1[i][1];
-      const double q0 = q1[i];
-      const double an = std::abs(fields.ndotv[i]);
-      double result = 0.0;
-      int n = 0;
-      for (std::int32_t j = jb; j < je; ++j) {
-        const auto& e = ent[j];
-        const double x1 = e.x1, y1 = e.y1, x2 = e.x2, y2 = e.y2;
-        const double p1_t2 = c * y1 - sn * x1, p2_t2 = c * y2 - sn * x2;
-        const double num = p2_t2, den = p2_t2 - p1_t2;
-        if (!(std::abs(num) < std::abs(den))) continue;
-        if ((num < 0.0) != (den < 0.0) && std::abs(num) > std::abs(den) * 0x1p-900) continue;
-        const double w1 = num / den;
-        if (!(w1 >= 0.0 && w1 < 1.0)) continue;
-        const double w2 = 1.0 - w1;
-        const double dist = (c * (w1 * x1 + w2 * x2) + sn * (w1 * y1 + w2 * y2)) * an;
-        if (dist == 0.0) continue;
-        const double q = w1 * q1[e.i1] + w2 * q1[e.i2];
-        result += (q - q0) / dist;
-        if (++n == 2) {
-          result *= 0.5;
-          break;
-        }
-      }
-      fields.dt1q1[i] = std::isfinite(result) ? result : 0.0;
-    });
+    const RingPass pass{tr.offset.data(),
+                        tr.vertex.data(),
+                        tr.x.data(),
+                        tr.y.data(),
+                        tr.fan.data(),
+                        tr.rank.data(),
+                        sg,
+                        q1,
+                        fields.t1.data(),
+                        fields.t1_world.data(),
+                        fields.ndotv.data(),
+                        fields.dt1q1.data(),
+                        cull};
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 2048),
+                      [&](const tbb::blocked_range<std::size_t>& r) { pass(r.begin(), r.end()); });
   } else {
     detail::parallel_range(nv, [&](std::size_t i) {
       if (cull && !(sg[i] & kQ1Above)) {
@@ -113,15 +296,8 @@ void update_dt1q1(ViewFields& fields, const Surface& surface, bool cull,
         const Vec3& p1 = pos[i1];
         const Vec3& p2 = pos[i2];
         const double p1_t2 = p1.dot(t2w), p2_t2 = p2.dot(t2w);
-        const double num = p2_t2 - p0_t2, den = p2_t2 - p1_t2;
-        // Exact early rejections of w1 = num/den outside [0, 1) before the
-        // division: |num| >= |den| (also den == 0 or NaN) gives |w1| >= 1,
-        // and opposite signs give w1 < 0 unless the quotient underflows to
-        // -0 (only possible when |num| <= |den| 2^-900).
-        if (!(std::abs(num) < std::abs(den))) return false;
-        if ((num < 0.0) != (den < 0.0) && std::abs(num) > std::abs(den) * 0x1p-900) return false;
-        const double w1 = num / den;
-        if (!(w1 >= 0.0 && w1 < 1.0)) return false;
+        double w1;
+        if (!crossing_weight(p2_t2 - p0_t2, p2_t2 - p1_t2, w1)) return false;
         const double w2 = 1.0 - w1;
         const Vec3 p = w1 * p1 + w2 * p2;
         const double q = w1 * q1[i1] + w2 * q1[i2];

@@ -67,17 +67,23 @@ class LinePrecompute {
     std::vector<std::array<std::int32_t, 2>> opposite;
   };
   const CornerRing& corner_ring() const;
-  /// corner_ring() with each opposite corner's offset d = p_k - p_i in
-  /// vertex i's principal frame, (d·e1, d·e2), as float (zeros where the
-  /// curvature is invalid): the per-view D_t1 q1 differences then stream
-  /// one array and work in the tangent plane instead of gathering positions.
+  /// corner_ring() as neighbour offsets d = p_k - p_i in vertex i's
+  /// principal frame, (d·e1, d·e2), as float (zeros where the curvature is
+  /// invalid): the per-view D_t1 q1 differences then stream a few small
+  /// arrays and work in the tangent plane instead of gathering positions.
+  /// Neighbours of vertex i are [offset[i], offset[i+1]) of vertex, x, y
+  /// (x and y padded by two entries for pairwise loads). When fan[i] (a
+  /// closed, consistently oriented fan of at most 64 faces) there is one
+  /// neighbour per face, n_0..n_{k-1} in cyclic order: fan face j has the
+  /// opposite corners (n_j, n_{j+1 mod k}) and is face rank[offset[i] + j]
+  /// in corner_ring() order. Otherwise there are two neighbours per face,
+  /// (i1, i2) of each face in corner_ring() order (rank unused).
   struct TangentRing {
-    struct Entry {
-      std::int32_t i1, i2;
-      float x1, y1, x2, y2;
-    };
-    std::vector<std::int32_t> offset;  ///< = corner_ring().offset
-    std::vector<Entry> entry;
+    std::vector<std::int32_t> offset;
+    std::vector<std::uint8_t> fan;
+    std::vector<std::int32_t> vertex;
+    std::vector<float> x, y;
+    std::vector<std::uint8_t> rank;
   };
   const TangentRing& tangent_ring() const;
   /// The per-vertex inputs of the per-view vertex pass (view_fields.cpp:
