@@ -105,7 +105,8 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
     t.offset.resize(nv + 1);
     t.offset[0] = 0;
     for (std::size_t i = 0; i < nv; ++i)
-      t.offset[i + 1] = t.offset[i] + (r.offset[i + 1] - r.offset[i]) * (t.fan[i] ? 1 : 2);
+      t.offset[i + 1] = t.offset[i] + (t.fan[i] ? r.offset[i + 1] - r.offset[i] + 1
+                                                : 2 * (r.offset[i + 1] - r.offset[i]));
     const auto total = static_cast<std::size_t>(t.offset[nv]);
     t.vertex.resize(total);
     t.rank.assign(total, 0);
@@ -127,6 +128,7 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
           const std::uint8_t f = order[static_cast<std::size_t>(r.offset[i] + j)];
           t.rank[static_cast<std::size_t>(n + j)] = f;
           put(n + j, o[f][0]);
+          if (j == k - 1) put(n + k, o[f][1]);  // n_0 again
         } else {
           put(n + 2 * j, o[j][0]);
           put(n + 2 * j + 1, o[j][1]);

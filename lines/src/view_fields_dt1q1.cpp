@@ -10,6 +10,16 @@
 #include "parallel.hpp"
 #include "view_fields_light.hpp"
 
+// The pass is compiled for x86-64-v3 (AVX2, three-operand forms) and the
+// baseline, picked at load time as core's FABRICA_MULTIVERSION kernels; the
+// file has -ffp-contract=off, so both give the same bits.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) && \
+    !defined(FABRICA_NO_MULTIVERSION)
+#define FABRICA_DT1Q1_MULTIVERSION __attribute__((target_clones("arch=x86-64-v3", "default")))
+#else
+#define FABRICA_DT1Q1_MULTIVERSION
+#endif
+
 namespace fabrica::detail {
 
 namespace {
@@ -33,15 +43,16 @@ inline __m128 load2(const float* f) {
   return _mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(f)));
 }
 
-// On a fan of m <= 64 faces (face j: neighbours j, j+1 mod m) with
-// neighbour offsets (x, y): p[j] = c y_j - sn x_j (the neighbour's p·t2),
+// On a fan of m <= 64 faces (face j: neighbours j, j+1; neighbour m is
+// neighbour 0) with neighbour offsets (x, y): p[j] = c y_j - sn x_j (the
+// neighbour's p·t2, j <= m),
 // and a superset of the faces for which crossing_weight(p[j+1],
 // p[j+1] - p[j]) holds: those whose two p differ in sign bit, or whose
 // p[j+1] is tiny. With the same sign bit (and no NaN, which never crosses),
 // |den| <= max |p| or |num| >= |den|, and a crossing with opposite signs of
 // num and den needs |num| <= |den| 2^-900; with |c|, |sn| <= 2 and finite
 // float offsets |p| <= 2^130, so "tiny" is |p| <= 2^-770 (anything
-// otherwise). Reads x, y up to index m (padded).
+// otherwise).
 inline std::uint64_t candidate_faces(const float* x, const float* y, int m, double c, double sn,
                                      double* p) {
   const __m128d vc = _mm_set1_pd(c), vs = _mm_set1_pd(sn);
@@ -55,6 +66,7 @@ inline std::uint64_t candidate_faces(const float* x, const float* y, int m, doub
     vmin = _mm_min_pd(_mm_and_pd(v, abs_mask), vmin);  // NaN lanes keep the accumulator
     neg |= std::uint64_t(_mm_movemask_pd(v)) << j;
   }
+  p[m] = p[0];
   const std::uint64_t all = ~std::uint64_t{0} >> (64 - m);
   auto next = [&](std::uint64_t b) { return (b >> 1 | b << (m - 1)) & all; };
   neg &= all;
@@ -71,15 +83,16 @@ inline std::uint64_t candidate_faces(const float* x, const float* y, int m, doub
 // The sum of the one-sided differences of fan faces j0 and j1 (j1 only when
 // `two`), halved when both count: what the face-order loop gives when they
 // are the only candidates (each lane is crossing_weight and the difference
-// of that loop, in the same operations; see update_dt1q1).
+// of that loop, in the same operations; see RingPass::in_order). Fan face j
+// has the neighbours j, j + 1 (x, y, p, nbr).
 inline double two_faces(const float* x, const float* y, const double* p, const std::int32_t* nbr,
-                        const double* q1, int m, int j0, int j1, bool two, double c, double sn,
-                        double an, double q0) {
-  const int k0 = j0 + 1 == m ? 0 : j0 + 1, k1 = j1 + 1 == m ? 0 : j1 + 1;
+                        const double* q1, int j0, int j1, bool two, double c, double sn, double an,
+                        double q0) {
   const __m128d zero = _mm_setzero_pd(), one = _mm_set1_pd(1.0);
   const __m128d abs_mask = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffff));
-  const __m128d num = _mm_set_pd(p[k1], p[k0]);
-  const __m128d den = _mm_sub_pd(num, _mm_set_pd(p[j1], p[j0]));
+  const __m128d p0 = _mm_loadu_pd(p + j0), p1 = _mm_loadu_pd(p + j1);
+  const __m128d num = _mm_unpackhi_pd(p0, p1);
+  const __m128d den = _mm_sub_pd(num, _mm_unpacklo_pd(p0, p1));
   const __m128d anum = _mm_and_pd(num, abs_mask), aden = _mm_and_pd(den, abs_mask);
   const __m128d sign_differs = _mm_xor_pd(_mm_cmplt_pd(num, zero), _mm_cmplt_pd(den, zero));
   const __m128d w1 = _mm_div_pd(num, den);
@@ -88,15 +101,17 @@ inline double two_faces(const float* x, const float* y, const double* p, const s
   ok = _mm_andnot_pd(
       _mm_and_pd(sign_differs, _mm_cmpgt_pd(anum, _mm_mul_pd(aden, _mm_set1_pd(0x1p-900)))), ok);
   const __m128d w2 = _mm_sub_pd(one, w1);
-  const __m128d x1 = _mm_set_pd(x[j1], x[j0]), x2 = _mm_set_pd(x[k1], x[k0]);
-  const __m128d y1 = _mm_set_pd(y[j1], y[j0]), y2 = _mm_set_pd(y[k1], y[k0]);
+  const __m128d x0 = _mm_cvtps_pd(load2(x + j0)), x1 = _mm_cvtps_pd(load2(x + j1));
+  const __m128d y0 = _mm_cvtps_pd(load2(y + j0)), y1 = _mm_cvtps_pd(load2(y + j1));
   const __m128d along =
-      _mm_add_pd(_mm_mul_pd(_mm_set1_pd(c), _mm_add_pd(_mm_mul_pd(w1, x1), _mm_mul_pd(w2, x2))),
-                 _mm_mul_pd(_mm_set1_pd(sn), _mm_add_pd(_mm_mul_pd(w1, y1), _mm_mul_pd(w2, y2))));
+      _mm_add_pd(_mm_mul_pd(_mm_set1_pd(c), _mm_add_pd(_mm_mul_pd(w1, _mm_unpacklo_pd(x0, x1)),
+                                                       _mm_mul_pd(w2, _mm_unpackhi_pd(x0, x1)))),
+                 _mm_mul_pd(_mm_set1_pd(sn), _mm_add_pd(_mm_mul_pd(w1, _mm_unpacklo_pd(y0, y1)),
+                                                        _mm_mul_pd(w2, _mm_unpackhi_pd(y0, y1)))));
   const __m128d dist = _mm_mul_pd(along, _mm_set1_pd(an));
   ok = _mm_and_pd(ok, _mm_cmpneq_pd(dist, zero));
-  const __m128d qa = _mm_set_pd(q1[nbr[j1]], q1[nbr[j0]]),
-                qb = _mm_set_pd(q1[nbr[k1]], q1[nbr[k0]]);
+  const __m128d qa = _mm_set_pd(q1[nbr[j1]], q1[nbr[j0]]);
+  const __m128d qb = _mm_set_pd(q1[nbr[j1 + 1]], q1[nbr[j0 + 1]]);
   const __m128d q = _mm_add_pd(_mm_mul_pd(w1, qa), _mm_mul_pd(w2, qb));
   const __m128d d = _mm_div_pd(_mm_sub_pd(q, _mm_set1_pd(q0)), dist);
   // Lanes that do not count add -0, which leaves any sum unchanged.
@@ -170,13 +185,13 @@ struct RingPass {
     int k = 0;
     return in_order(x, y, nbr + jb, q1, c, sn, an, q0, [&](int& a, int& b, double& pa, double& pb) {
       if (k >= nk) return false;
-      a = key[k++] & 0xff, b = a + 1 == m ? 0 : a + 1;
+      a = key[k++] & 0xff, b = a + 1;
       pa = p[a], pb = p[b];
       return true;
     });
   }
 
-  void operator()(std::size_t b, std::size_t e) const {
+  FABRICA_DT1Q1_MULTIVERSION void operator()(std::size_t b, std::size_t e) const {
     for (std::size_t i = b; i < e; ++i) {
       const std::int32_t jb = off[i], je = off[i + 1];
       if (cull && !(sg[i] & kQ1Above)) {
@@ -195,9 +210,9 @@ struct RingPass {
       }
       const double c = t1[i][0], sn = t1[i][1];
       const double q0 = q1[i], an = std::abs(ndotv[i]);
-      const std::int32_t m = je - jb;
       double result = 0.0;
       if (fan[i]) {
+        const std::int32_t m = je - jb - 1;
         alignas(16) double p[kMaxFan + 2];
         const std::uint64_t cand = candidate_faces(xs + jb, ys + jb, m, c, sn, p);
         const std::uint64_t rest = cand & (cand - 1);
@@ -206,8 +221,7 @@ struct RingPass {
         } else if (cand) {
           // At most two crossings: their sum does not depend on the order.
           const int j0 = std::countr_zero(cand), j1 = rest ? std::countr_zero(rest) : j0;
-          result =
-              two_faces(xs + jb, ys + jb, p, nbr + jb, q1, m, j0, j1, rest != 0, c, sn, an, q0);
+          result = two_faces(xs + jb, ys + jb, p, nbr + jb, q1, j0, j1, rest != 0, c, sn, an, q0);
         }
       } else {
         result = general(i, nullptr, 0, c, sn, an, q0);
