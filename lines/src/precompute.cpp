@@ -79,7 +79,7 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
     detail::parallel_range(nv, [&](std::size_t i) {
       const auto* o = r.opposite.data() + r.offset[i];
       const std::int32_t k = r.offset[i + 1] - r.offset[i];
-      if (k < 1 || k > 64) return;
+      if (k < 1 || k > 63) return;
       std::uint64_t used = 0;
       std::int32_t f = 0;
       for (std::int32_t j = 0; j < k; ++j) {

@@ -36,14 +36,14 @@ inline bool crossing_weight(double num, double den, double& w1) {
   return w1 >= 0.0 && w1 < 1.0;
 }
 
-constexpr int kMaxFan = 64;
+constexpr int kMaxFan = 63;
 
 // Two floats (8 bytes, any alignment) into the low half.
 inline __m128 load2(const float* f) {
   return _mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(f)));
 }
 
-// On a fan of m <= 64 faces (face j: neighbours j, j+1; neighbour m is
+// On a fan of m <= 63 faces (face j: neighbours j, j+1; neighbour m is
 // neighbour 0) with neighbour offsets (x, y): p[j] = c y_j - sn x_j (the
 // neighbour's p·t2, j <= m),
 // and a superset of the faces for which crossing_weight(p[j+1],
@@ -53,9 +53,8 @@ inline __m128 load2(const float* f) {
 // num and den needs |num| <= |den| 2^-900; with |c|, |sn| <= 2 and finite
 // float offsets |p| <= 2^130, so "tiny" is |p| <= 2^-770 (anything
 // otherwise).
-inline std::uint64_t candidate_faces(const float* x, const float* y, int m, double c, double sn,
-                                     double* p) {
-  const __m128d vc = _mm_set1_pd(c), vs = _mm_set1_pd(sn);
+inline std::uint64_t candidate_faces(const float* x, const float* y, int m, __m128d cs, double* p) {
+  const __m128d vc = _mm_unpacklo_pd(cs, cs), vs = _mm_unpackhi_pd(cs, cs);
   const __m128d abs_mask = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffff));
   __m128d vmin = _mm_set1_pd(HUGE_VAL);
   std::uint64_t neg = 0;
@@ -67,15 +66,18 @@ inline std::uint64_t candidate_faces(const float* x, const float* y, int m, doub
     neg |= std::uint64_t(_mm_movemask_pd(v)) << j;
   }
   p[m] = p[0];
-  const std::uint64_t all = ~std::uint64_t{0} >> (64 - m);
-  auto next = [&](std::uint64_t b) { return (b >> 1 | b << (m - 1)) & all; };
-  neg &= all;
-  std::uint64_t cand = neg ^ next(neg);
-  const double tiny = std::abs(c) <= 2.0 && std::abs(sn) <= 2.0 ? 0x1p-770 : HUGE_VAL;
+  // Bit j of cand: bits j and j + 1 of b (bit m is bit 0) differ.
+  const std::uint64_t all = (std::uint64_t{1} << m) - 1;
+  auto pairs = [&](std::uint64_t b) { return b | (b & 1) << m; };
+  neg = pairs(neg);
+  std::uint64_t cand = (neg ^ neg >> 1) & all;
+  const bool bounded =
+      _mm_movemask_pd(_mm_cmple_pd(_mm_and_pd(cs, abs_mask), _mm_set1_pd(2.0))) == 3;
+  const double tiny = bounded ? 0x1p-770 : HUGE_VAL;
   if (_mm_cvtsd_f64(_mm_min_sd(vmin, _mm_unpackhi_pd(vmin, vmin))) <= tiny) {
     std::uint64_t small = 0;
     for (int j = 0; j < m; ++j) small |= std::uint64_t(std::abs(p[j]) <= tiny) << j;
-    cand |= next(small);
+    cand |= pairs(small) >> 1 & all;
   }
   return cand;
 }
@@ -192,13 +194,18 @@ struct RingPass {
   }
 
   FABRICA_DT1Q1_MULTIVERSION void operator()(std::size_t b, std::size_t e) const {
+    const RingPass r = *this;  // in registers, not reloaded after the stores
+    r.run(b, e);
+  }
+
+  [[gnu::always_inline]] inline void run(std::size_t b, std::size_t e) const {
     for (std::size_t i = b; i < e; ++i) {
       const std::int32_t jb = off[i], je = off[i + 1];
       if (cull && !(sg[i] & kQ1Above)) {
-        unsigned any = 0;  // branch-free over the ring (bytes)
-        std::int32_t j = jb;
-        for (; j + 2 <= je; j += 2) any |= sg[nbr[j]] | sg[nbr[j + 1]];
-        if (j < je) any |= sg[nbr[j]];
+        // Branch-free over the ring (bytes), by pairs: a ring of odd size
+        // is a fan whose last neighbour repeats the first.
+        unsigned any = 0;
+        for (std::int32_t j = jb; j + 2 <= je; j += 2) any |= sg[nbr[j]] | sg[nbr[j + 1]];
         if (!(any & kQ1Above)) {
           out[i] = 0.0;
           continue;
@@ -208,13 +215,14 @@ struct RingPass {
         out[i] = 0.0;
         continue;
       }
-      const double c = t1[i][0], sn = t1[i][1];
+      const __m128d cs = _mm_loadu_pd(t1[i].data());
+      const double c = _mm_cvtsd_f64(cs), sn = t1[i][1];
       const double q0 = q1[i], an = std::abs(ndotv[i]);
       double result = 0.0;
       if (fan[i]) {
         const std::int32_t m = je - jb - 1;
         alignas(16) double p[kMaxFan + 2];
-        const std::uint64_t cand = candidate_faces(xs + jb, ys + jb, m, c, sn, p);
+        const std::uint64_t cand = candidate_faces(xs + jb, ys + jb, m, cs, p);
         const std::uint64_t rest = cand & (cand - 1);
         if (rest & (rest - 1)) {
           result = general(i, p, cand, c, sn, an, q0);

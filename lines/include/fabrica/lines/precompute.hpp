@@ -73,7 +73,7 @@ class LinePrecompute {
   /// arrays and work in the tangent plane instead of gathering positions.
   /// Neighbours of vertex i are [offset[i], offset[i+1]) of vertex, x, y
   /// (x and y padded by two entries for pairwise loads). When fan[i] (a
-  /// closed, consistently oriented fan of at most 64 faces, finite offsets)
+  /// closed, consistently oriented fan of at most 63 faces, finite offsets)
   /// there are k + 1 neighbours for k faces, n_0..n_{k-1}, n_0 in cyclic
   /// order: fan face j has the opposite corners (n_j, n_{j+1}) and is face
   /// rank[offset[i] + j] in corner_ring() order. Otherwise there are two
