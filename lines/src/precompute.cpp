@@ -110,8 +110,8 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
     const auto total = static_cast<std::size_t>(t.offset[nv]);
     t.vertex.resize(total);
     t.rank.assign(total, 0);
-    t.x.assign(total + 2, 0.0f);
-    t.y.assign(total + 2, 0.0f);
+    t.x.assign(total, 0.0f);
+    t.y.assign(total, 0.0f);
     detail::parallel_range(nv, [&](std::size_t i) {
       const bool ok = curv.valid[i] != 0;
       auto put = [&](std::int32_t n, std::int32_t v) {

@@ -72,13 +72,12 @@ class LinePrecompute {
   /// invalid): the per-view D_t1 q1 differences then stream a few small
   /// arrays and work in the tangent plane instead of gathering positions.
   /// Neighbours of vertex i are [offset[i], offset[i+1]) of vertex, x, y
-  /// (x and y padded by two entries for pairwise loads). When fan[i] (a
-  /// closed, consistently oriented fan of at most 63 faces, finite offsets)
-  /// there are k + 1 neighbours for k faces, n_0..n_{k-1}, n_0 in cyclic
-  /// order: fan face j has the opposite corners (n_j, n_{j+1}) and is face
-  /// rank[offset[i] + j] in corner_ring() order. Otherwise there are two
-  /// neighbours per face, (i1, i2) of each face in corner_ring() order
-  /// (rank unused).
+  /// (an odd count only on a fan). When fan[i] (a closed, consistently
+  /// oriented fan of at most 63 faces, finite offsets) there are k + 1
+  /// neighbours for k faces, n_0..n_{k-1}, n_0 in cyclic order: fan face j
+  /// has the opposite corners (n_j, n_{j+1}) and is face rank[offset[i] + j]
+  /// in corner_ring() order. Otherwise there are two neighbours per face,
+  /// (i1, i2) of each face in corner_ring() order (rank unused).
   struct TangentRing {
     std::vector<std::int32_t> offset;
     std::vector<std::uint8_t> fan;
