@@ -136,6 +136,7 @@ struct RingPass {
   const Vec3* t1_world;
   const double* ndotv;
   double* out;
+  Vec3* field;  // out * t1_world
   bool cull;
 
   // The faces of vertex i with neighbours (a, b) (relative to the ring) in
@@ -208,11 +209,13 @@ struct RingPass {
         for (std::int32_t j = jb; j + 2 <= je; j += 2) any |= sg[nbr[j]] | sg[nbr[j + 1]];
         if (!(any & kQ1Above)) {
           out[i] = 0.0;
+          field[i] = 0.0 * t1_world[i];
           continue;
         }
       }
       if (t1_world[i].squaredNorm() == 0.0) {
         out[i] = 0.0;
+        field[i] = 0.0 * t1_world[i];
         continue;
       }
       const __m128d cs = _mm_loadu_pd(t1[i].data());
@@ -235,6 +238,7 @@ struct RingPass {
         result = general(i, nullptr, 0, c, sn, an, q0);
       }
       out[i] = std::isfinite(result) ? result : 0.0;
+      field[i] = out[i] * t1_world[i];
     }
   }
 };
@@ -280,6 +284,7 @@ void update_dt1q1(ViewFields& fields, const Surface& surface, bool cull,
                         fields.t1_world.data(),
                         fields.ndotv.data(),
                         fields.dt1q1.data(),
+                        fields.apparent_field.data(),
                         cull};
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 2048),
                       [&](const tbb::blocked_range<std::size_t>& r) { pass(r.begin(), r.end()); });
@@ -342,6 +347,9 @@ void update_dt1q1(ViewFields& fields, const Surface& surface, bool cull,
         }
       }
       fields.dt1q1[i] = std::isfinite(result) ? result : 0.0;
+    });
+    detail::parallel_range(nv, [&](std::size_t i) {
+      fields.apparent_field[i] = fields.dt1q1[i] * fields.t1_world[i];
     });
   }
 }

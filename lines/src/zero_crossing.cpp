@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "parallel.hpp"
+#include "simd_avx2.hpp"
 #include "zero_crossing_internal.hpp"
 
 namespace fabrica {
@@ -289,6 +290,57 @@ void scalar_crossings(const ScalarInputs& in, const Num& num, std::size_t face_c
       out);
 }
 
+// Crossing bits of the vector kernel for n faces from E per vertex: bit 0
+// when E_0·E_1 <= 0, bit 1 when E_1·E_2 <= 0, bit 2 when E_2·E_0 <= 0
+// (Eigen's dot: (x x' + y y') + z z').
+inline unsigned crossing_bits_of(const Face& f, const Vec3* E) {
+  const Vec3 &e0 = E[f[0]], &e1 = E[f[1]], &e2 = E[f[2]];
+  return unsigned(e0.dot(e1) <= 0.0) | unsigned(e1.dot(e2) <= 0.0) << 1 |
+         unsigned(e2.dot(e0) <= 0.0) << 2;
+}
+
+#if defined(FABRICA_LINES_AVX2)
+[[gnu::target("avx2")]] void crossing_bits_avx2(const Face* faces, const std::size_t* face, int n,
+                                                const Vec3* E, std::uint8_t* out) {
+  int k = 0;
+  for (; k + 4 <= n; k += 4) {
+    __m256d x[3], y[3], z[3];
+    for (int c = 0; c < 3; ++c) {
+      const double* a = E[faces[face[k]][c]].data();
+      const double* b = E[faces[face[k + 1]][c]].data();
+      const double* d = E[faces[face[k + 2]][c]].data();
+      const double* e = E[faces[face[k + 3]][c]].data();
+      x[c] = _mm256_set_pd(e[0], d[0], b[0], a[0]);
+      y[c] = _mm256_set_pd(e[1], d[1], b[1], a[1]);
+      z[c] = _mm256_set_pd(e[2], d[2], b[2], a[2]);
+    }
+    const __m256d zero = _mm256_setzero_pd();
+    const int m01 = _mm256_movemask_pd(
+        _mm256_cmp_pd(detail::dot4(x[0], y[0], z[0], x[1], y[1], z[1]), zero, _CMP_LE_OQ));
+    const int m12 = _mm256_movemask_pd(
+        _mm256_cmp_pd(detail::dot4(x[1], y[1], z[1], x[2], y[2], z[2]), zero, _CMP_LE_OQ));
+    const int m20 = _mm256_movemask_pd(
+        _mm256_cmp_pd(detail::dot4(x[2], y[2], z[2], x[0], y[0], z[0]), zero, _CMP_LE_OQ));
+    for (int l = 0; l < 4; ++l)
+      out[k + l] = static_cast<std::uint8_t>(((m01 >> l) & 1) | ((m12 >> l) & 1) << 1 |
+                                             ((m20 >> l) & 1) << 2);
+  }
+  for (; k < n; ++k) out[k] = static_cast<std::uint8_t>(crossing_bits_of(faces[face[k]], E));
+}
+#endif
+
+inline void crossing_bits(const Face* faces, const std::size_t* face, int n, const Vec3* E,
+                          std::uint8_t* out) {
+#if defined(FABRICA_LINES_AVX2)
+  if (detail::cpu_has_avx2()) {
+    crossing_bits_avx2(faces, face, n, E, out);
+    return;
+  }
+#endif
+  for (int k = 0; k < n; ++k)
+    out[k] = static_cast<std::uint8_t>(crossing_bits_of(faces[face[k]], E));
+}
+
 struct VectorInputs {
   MeshArrays m;
   const double* delta;
@@ -469,7 +521,7 @@ void suggestive_zero_crossings(const Surface& surface, std::span<const double> k
 void vector_zero_crossings(const Surface& surface, std::span<const double> derivative,
                            std::span<const Vec3> direction, std::span<const double> magnitude,
                            const VectorCrossingOptions& options, const std::uint8_t* signs,
-                           unsigned above_bit, std::vector<LineSegment>& out) {
+                           unsigned above_bit, std::vector<LineSegment>& out, const Vec3* field) {
   if (!signs) {
     fabrica::vector_zero_crossings(surface, derivative, direction, magnitude, options, out);
     return;
@@ -497,18 +549,39 @@ void vector_zero_crossings(const Surface& surface, std::span<const double> deriv
             bool z01, z12, z20;
           } keep[CandidateBatch::kSize];
           int nk = 0;
-          for (int k = 0; k < batch.n; ++k) {
-            Kept& kf = keep[nk];
-            kf.f = batch.face[k];
-            const Face& fg = faces[kf.f];
-            for (int c = 0; c < 3; ++c) {
-              kf.v[c] = fg[c];
-              kf.E[c] = in.delta[fg[c]] * in.dir[fg[c]];
+          if (field) {
+            // The crossing bits of the whole batch first (four faces at a
+            // time with AVX2), then only the survivors' data.
+            std::uint8_t zb[CandidateBatch::kSize];
+            crossing_bits(faces, batch.face, batch.n, field, zb);
+            for (int k = 0; k < batch.n; ++k) {
+              const unsigned z = zb[k];
+              if (z != 3 && z < 5) continue;  // fewer than two crossing edges
+              Kept& kf = keep[nk++];
+              kf.f = batch.face[k];
+              const Face& fg = faces[kf.f];
+              for (int c = 0; c < 3; ++c) {
+                kf.v[c] = fg[c];
+                kf.E[c] = field[fg[c]];
+              }
+              kf.z01 = z & 1;
+              kf.z12 = (z >> 1) & 1;
+              kf.z20 = (z >> 2) & 1;
             }
-            kf.z01 = kf.E[0].dot(kf.E[1]) <= 0.0;
-            kf.z12 = kf.E[1].dot(kf.E[2]) <= 0.0;
-            kf.z20 = kf.E[2].dot(kf.E[0]) <= 0.0;
-            nk += int(int(kf.z01) + int(kf.z12) + int(kf.z20) >= 2);
+          } else {
+            for (int k = 0; k < batch.n; ++k) {
+              Kept& kf = keep[nk];
+              kf.f = batch.face[k];
+              const Face& fg = faces[kf.f];
+              for (int c = 0; c < 3; ++c) {
+                kf.v[c] = fg[c];
+                kf.E[c] = in.delta[fg[c]] * in.dir[fg[c]];
+              }
+              kf.z01 = kf.E[0].dot(kf.E[1]) <= 0.0;
+              kf.z12 = kf.E[1].dot(kf.E[2]) <= 0.0;
+              kf.z20 = kf.E[2].dot(kf.E[0]) <= 0.0;
+              nk += int(int(kf.z01) + int(kf.z12) + int(kf.z20) >= 2);
+            }
           }
           batch.n = 0;
           for (int k = 0; k < nk; ++k) {
@@ -523,8 +596,12 @@ void vector_zero_crossings(const Surface& surface, std::span<const double> deriv
           const Face& face = faces[f];
           if (!((signs[face[0]] | signs[face[1]] | signs[face[2]]) & above_bit)) continue;
           for (int k = 0; k < 3; ++k) {
-            __builtin_prefetch(&in.delta[face[k]]);
-            __builtin_prefetch(&in.dir[face[k]]);
+            if (field) {
+              __builtin_prefetch(&field[face[k]]);
+            } else {
+              __builtin_prefetch(&in.delta[face[k]]);
+              __builtin_prefetch(&in.dir[face[k]]);
+            }
           }
           if (batch.add(f)) flush();
         }

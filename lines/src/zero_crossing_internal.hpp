@@ -38,10 +38,13 @@ void suggestive_zero_crossings(const Surface& surface, std::span<const double> k
 
 /// vector_zero_crossings where `above_bit` of signs[v] is set exactly when
 /// !(magnitude[v] <= options.threshold): faces without it are skipped from
-/// the bytes. signs == nullptr: the plain kernel.
+/// the bytes. signs == nullptr: the plain kernel. `field`, when given, holds
+/// E_v = derivative[v] · direction[v] at least at the corners of those
+/// faces (ViewFields::apparent_field), so the kernel does not form it.
 void vector_zero_crossings(const Surface& surface, std::span<const double> derivative,
                            std::span<const Vec3> direction, std::span<const double> magnitude,
                            const VectorCrossingOptions& options, const std::uint8_t* signs,
-                           unsigned above_bit, std::vector<LineSegment>& out);
+                           unsigned above_bit, std::vector<LineSegment>& out,
+                           const Vec3* field = nullptr);
 
 }  // namespace fabrica::detail

@@ -65,6 +65,14 @@ void expect_same_vertex_pass(const Surface& surface, const LinePrecompute& pre,
   EXPECT_SAME_FIELD(simd, portable, t1_world);
   EXPECT_SAME_FIELD(simd, portable, signs);
   EXPECT_SAME_FIELD(simd, portable, dt1q1);
+  EXPECT_SAME_FIELD(simd, portable, apparent_field);
+  // The apparent-ridge kernel's E is D_t1 q1 times t1, bit for bit.
+  std::size_t wrong = 0;
+  for (std::size_t i = 0; i < simd.apparent_field.size(); ++i) {
+    const Vec3 e = simd.dt1q1[i] * simd.t1_world[i];
+    wrong += std::memcmp(e.data(), simd.apparent_field[i].data(), sizeof(Vec3)) != 0;
+  }
+  EXPECT_EQ(wrong, 0u);
 }
 
 void expect_same_light_pass(const Surface& surface, const LinePrecompute& pre, const Camera& camera,

@@ -17,6 +17,7 @@
 //   t1             its unit eigenvector in principal coordinates
 //   t1_world       t1[0] e1 + t1[1] e2 (unit tangent vector)
 //   dt1q1          D_t1 q1 by Judd's one-sided finite differences (§6.2), 1/mm³
+//   apparent_field dt1q1 · t1_world (the apparent-ridge kernel's E)
 //   light          f = n·l (headlight l = v, or a fixed direction), unclamped
 //   light_gradient ∇f at the vertex (1/mm); light_laplacian Δf (1/mm²)
 // Vertices where the Surface marks curvature invalid get zeros.
@@ -46,8 +47,8 @@ struct ViewFieldsRequest {
   /// threshold reads, and is 0 elsewhere; ViewFields::signs gets kQ1Above.
   /// q1, t1 and t1_world are always computed everywhere. nullopt: everywhere.
   std::optional<double> apparent_cull_threshold;
-  bool light = false;    ///< light, light_gradient(_norm), light_laplacian, light_faces
-  bool pel = false;      ///< pel_h, pel_maximum (PELs): D_w|∇f| and -D_w D_w|∇f|
+  bool light = false;  ///< light, light_gradient(_norm), light_laplacian, light_faces
+  bool pel = false;    ///< pel_h, pel_maximum (PELs): D_w|∇f| and -D_w D_w|∇f|
   /// Light direction (towards the light) for PELs / Laplacian lines;
   /// nullopt = headlight (v at each vertex).
   std::optional<Vec3> light_direction;
@@ -64,12 +65,12 @@ struct ViewFieldsRequest {
 /// group, so face loops can reject most faces from a small array. Exact
 /// comparisons (NaN sets neither of a > 0 / < 0 pair).
 enum ViewSign : std::uint8_t {
-  kNdotvPositive = 1,     ///< n·v > 0
-  kNdotvNegative = 2,     ///< n·v < 0
-  kNdotvNotBack = 4,      ///< !(n·v <= 0): not culled as back-facing
-  kKrPositive = 8,        ///< K_r > 0
-  kKrNegative = 16,       ///< K_r < 0
-  kQ1Above = 32,          ///< !(q1 <= apparent_cull_threshold) (only with a threshold)
+  kNdotvPositive = 1,  ///< n·v > 0
+  kNdotvNegative = 2,  ///< n·v < 0
+  kNdotvNotBack = 4,   ///< !(n·v <= 0): not culled as back-facing
+  kKrPositive = 8,     ///< K_r > 0
+  kKrNegative = 16,    ///< K_r < 0
+  kQ1Above = 32,       ///< !(q1 <= apparent_cull_threshold) (only with a threshold)
 };
 
 struct ViewFields {
@@ -78,7 +79,11 @@ struct ViewFields {
   std::vector<double> q1, dt1q1;
   std::vector<Vec2> t1;
   std::vector<Vec3> t1_world;
-  std::vector<std::uint8_t> signs;  ///< ViewSign bits (with the radial group)
+  /// E = dt1q1 · t1_world, the sign-free field whose zero set the
+  /// apparent-ridge kernel extracts (1/mm³; filled with dt1q1, 0 where
+  /// dt1q1 was not computed).
+  std::vector<Vec3> apparent_field;
+  std::vector<std::uint8_t> signs;                ///< ViewSign bits (with the radial group)
   std::optional<double> apparent_cull_threshold;  ///< as requested
   std::vector<double> light, light_laplacian;
   std::vector<Vec3> light_gradient;
@@ -94,7 +99,7 @@ struct ViewFields {
   std::vector<double> light_gradient_norm, pel_h, pel_maximum;
   std::vector<std::int32_t> light_faces;
   double light_threshold = -std::numeric_limits<double>::infinity();  ///< as requested
-  bool light_cull_backfaces = false;                                   ///< as requested
+  bool light_cull_backfaces = false;                                  ///< as requested
 };
 
 /// Computes the requested fields for `camera` (validated first; InputError
