@@ -5,7 +5,9 @@
 // collected, so the instruction count per view can be read off directly.
 // It also prints a hash of every field of every segment of the last view:
 // an output-preserving change keeps it.
-//   drive_lines [views=50] [threads=2]
+//   drive_lines [views=50] [threads=2] [set=rtsc|light]
+// (rtsc: contour, suggestive, apparent, ridge, valley; light: PELs and
+// Laplacian lines with the headlight)
 #include <tbb/global_control.h>
 #include <valgrind/callgrind.h>
 
@@ -39,7 +41,11 @@ int main(int argc, char** argv) {
   c.fov_deg = 40.7329788;
   c.width = c.height = 1024;
   LineOptions o;
-  o.families = reference_families();
+  const std::string set = argc > 3 ? argv[3] : "rtsc";
+  if (set == "light")
+    o.families = {LineFamily::pel, LineFamily::laplacian};
+  else
+    o.families = reference_families();
   o.feature_size = 0.000873700483;
   LineExtractor ex(surface, o);
   std::vector<SegmentSoup> soups;
