@@ -31,6 +31,39 @@ inline Vec3 gradient_row_tail(const GradientOperator& g, std::size_t k, std::siz
 }
 
 #if defined(FABRICA_LINES_AVX2)
+/// Rows i and i + 1 at once (out[0], out[1]): each row's products and sums
+/// in its own order, as gradient_row_avx2, but the two accumulation chains
+/// interleaved so their addition latencies overlap.
+[[gnu::target("avx2")]] inline void gradient_rows2_avx2(const GradientOperator& g, std::size_t i,
+                                                        const double* f, Vec3* out) {
+  const std::int32_t* col = g.column.data();
+  const float* c = g.coeff.data();
+  const std::size_t last = g.coeff.size() / 3 - 1;  // see gradient_row_avx2
+  std::size_t ka = static_cast<std::size_t>(g.offset[i]);
+  std::size_t kb = static_cast<std::size_t>(g.offset[i + 1]);
+  const std::size_t ea = kb, eb = static_cast<std::size_t>(g.offset[i + 2]);
+  const std::size_t ea4 = std::min(ea, last), eb4 = std::min(eb, last);
+  __m256d acc_a = _mm256_setzero_pd(), acc_b = _mm256_setzero_pd();
+  const std::size_t both = std::min(ea4 - std::min(ka, ea4), eb4 - std::min(kb, eb4));
+  for (std::size_t n = 0; n < both; ++n, ++ka, ++kb) {
+    const __m256d va = _mm256_broadcast_sd(f + col[ka]);
+    const __m256d vb = _mm256_broadcast_sd(f + col[kb]);
+    acc_a = _mm256_add_pd(acc_a, _mm256_mul_pd(_mm256_cvtps_pd(_mm_loadu_ps(c + 3 * ka)), va));
+    acc_b = _mm256_add_pd(acc_b, _mm256_mul_pd(_mm256_cvtps_pd(_mm_loadu_ps(c + 3 * kb)), vb));
+  }
+  for (; ka < ea4; ++ka)
+    acc_a = _mm256_add_pd(acc_a, _mm256_mul_pd(_mm256_cvtps_pd(_mm_loadu_ps(c + 3 * ka)),
+                                               _mm256_broadcast_sd(f + col[ka])));
+  for (; kb < eb4; ++kb)
+    acc_b = _mm256_add_pd(acc_b, _mm256_mul_pd(_mm256_cvtps_pd(_mm_loadu_ps(c + 3 * kb)),
+                                               _mm256_broadcast_sd(f + col[kb])));
+  alignas(32) double ra[4], rb[4];
+  _mm256_store_pd(ra, acc_a);
+  _mm256_store_pd(rb, acc_b);
+  out[0] = gradient_row_tail(g, ka, ea, f, ra[0], ra[1], ra[2]);
+  out[1] = gradient_row_tail(g, kb, eb, f, rb[0], rb[1], rb[2]);
+}
+
 [[gnu::target("avx2")]] inline Vec3 gradient_row_avx2(const GradientOperator& g, std::size_t i,
                                                       const double* f) {
   const std::int32_t* col = g.column.data();

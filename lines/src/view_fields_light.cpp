@@ -93,10 +93,17 @@ inline std::uint8_t light_byte(double g, const double* ndotv, std::size_t i, dou
                                                 std::size_t e, const double* f, Vec3* gradient,
                                                 double* g, const double* ndotv, double limit,
                                                 std::uint8_t* bytes) {
-  for (std::size_t i = b; i < e; ++i) {
-    const Vec3 gi = gradient_row_avx2(grad, i, f);
-    gradient[i] = gi;
-    g[i] = gi.norm();
+  std::size_t i = b;
+  for (; i + 2 <= e; i += 2) {
+    gradient_rows2_avx2(grad, i, f, gradient + i);
+    for (std::size_t j = i; j < i + 2; ++j) {
+      g[j] = gradient[j].norm();
+      bytes[j] = light_byte(g[j], ndotv, j, limit);
+    }
+  }
+  for (; i < e; ++i) {
+    gradient[i] = gradient_row_avx2(grad, i, f);
+    g[i] = gradient[i].norm();
     bytes[i] = light_byte(g[i], ndotv, i, limit);
   }
 }
