@@ -349,86 +349,169 @@ struct VectorInputs {
   const VectorCrossingOptions& o;
 };
 
+// The options the segment builder reads, copied out of VectorInputs once
+// per face (stores into the output cannot make them stale).
+struct SegmentParams {
+  double threshold;
+  bool perpendicular, raw;
+};
+
 // Crossing of the vector kernel on the edge joining corners ca and cb:
-// corners ordered by vertex index (lo < hi), fraction t from lo, and the
-// interpolated magnitude m.
+// corners (and their vertices) ordered by vertex index (lo < hi), fraction
+// t from lo, and the interpolated magnitude m.
 struct EdgeCut {
   int lo, hi;
+  std::size_t vlo, vhi;
   double t, m;
 };
-inline EdgeCut vector_edge(const VectorInputs& in, const int v[3], int ca, int cb) {
-  if (v[ca] > v[cb]) std::swap(ca, cb);
-  const double ma = in.mag[v[ca]], mb = in.mag[v[cb]];
-  const double da = std::abs(in.delta[v[ca]]), db = std::abs(in.delta[v[cb]]);
-  const double t = da + db > 0.0 ? da / (da + db) : 0.5;
-  const double m = std::abs((1.0 - t) * ma + t * mb);
-  return EdgeCut{ca, cb, t, m};
+[[gnu::always_inline]] inline EdgeCut vector_edge(const VectorInputs& in, const int v[3], int ca,
+                                                  int cb) {
+  const int va = v[ca], vb = v[cb];
+  const bool s = va > vb;
+  EdgeCut c;
+  c.lo = s ? cb : ca;
+  c.hi = s ? ca : cb;
+  c.vlo = static_cast<std::size_t>(s ? vb : va);
+  c.vhi = static_cast<std::size_t>(s ? va : vb);
+  const double da = std::abs(in.delta[c.vlo]), db = std::abs(in.delta[c.vhi]);
+  const double sum = da + db;
+  c.t = sum > 0.0 ? da / sum : 0.5;
+  c.m = std::abs((1.0 - c.t) * in.mag[c.vlo] + c.t * in.mag[c.vhi]);
+  return c;
 }
 
-inline void set_edge_end(SegmentEnd& e, std::int32_t f, const EdgeCut& c, const Vec3& p,
-                         std::int32_t edge) {
-  e.anchor.face = f;
-  e.anchor.bary = Vec3::Zero();
+// The point of a cut, (1 - t) p_lo + t p_hi per component (as the Eigen
+// expression evaluates it).
+[[gnu::always_inline]] inline void cut_point(const Vec3* pos, const EdgeCut& c, double p[3]) {
+  const double s = 1.0 - c.t;
+  const Vec3 &a = pos[c.vlo], &b = pos[c.vhi];
+  p[0] = s * a[0] + c.t * b[0];
+  p[1] = s * a[1] + c.t * b[1];
+  p[2] = s * a[2] + c.t * b[2];
+}
+
+// rtsc's perpendicular maximum test for the segment pa-pb of face (p0,p1,p2):
+// with n = (p1 - p0) x (p2 - p0) and q = n x (pa - pb), true (reject) when
+// E0·q <= 0, E1·q >= 0 or E2·q <= 0 (the Eigen cross and dot products'
+// operations, in the same order).
+[[gnu::always_inline]] inline bool perpendicular_rejects(const Vec3& p0, const Vec3& p1,
+                                                         const Vec3& p2, const double pa[3],
+                                                         const double pb[3], const Vec3& e0,
+                                                         const Vec3& e1, const Vec3& e2) {
+  const double u0 = p1[0] - p0[0], u1 = p1[1] - p0[1], u2 = p1[2] - p0[2];
+  const double w0 = p2[0] - p0[0], w1 = p2[1] - p0[1], w2 = p2[2] - p0[2];
+  const double n0 = u1 * w2 - u2 * w1, n1 = u2 * w0 - u0 * w2, n2 = u0 * w1 - u1 * w0;
+  const double d0 = pa[0] - pb[0], d1 = pa[1] - pb[1], d2 = pa[2] - pb[2];
+  const double q0 = n1 * d2 - n2 * d1, q1 = n2 * d0 - n0 * d2, q2 = n0 * d1 - n1 * d0;
+  if ((e0[0] * q0 + e0[1] * q1) + e0[2] * q2 <= 0.0) return true;
+  if ((e1[0] * q0 + e1[1] * q1) + e1[2] * q2 >= 0.0) return true;
+  return (e2[0] * q0 + e2[1] * q1) + e2[2] * q2 <= 0.0;
+}
+
+[[gnu::always_inline]] inline float ridge_strength(const SegmentParams& sp, double m, double k) {
+  if (sp.raw) return static_cast<float>(m);
+  return sp.threshold > 0.0 ? static_cast<float>(k / (k + sp.threshold)) : 1.0f;
+}
+
+// An endpoint on the edge of a cut: barycentrics 1 - t at lo, t at hi.
+[[gnu::always_inline]] inline SegmentEnd set_edge_end(std::int32_t f, const EdgeCut& c,
+                                                      const double p[3], std::int32_t edge,
+                                                      float strength) {
+  SegmentEnd e{SurfacePoint{f, Vec3::Zero()}, Vec3(p[0], p[1], p[2]), edge, EndKind::edge,
+               strength};
   e.anchor.bary[c.lo] = 1.0 - c.t;
   e.anchor.bary[c.hi] = c.t;
-  e.position = p;
-  e.element = edge;
-  e.kind = EndKind::edge;
+  return e;
 }
+
+// A kept segment's fields, converted into the LineSegment in place by
+// emplace_back (aggregate initialisation: each field is written once,
+// nothing is value-initialised first).
+template <bool ToCenter>
+struct SegmentRecord {
+  std::int32_t face;
+  const EdgeCut &a, &b;
+  const double *pa, *pb;
+  std::int32_t ea, eb;
+  float sa, sb;
+  operator LineSegment() const {
+    if constexpr (ToCenter) {
+      return LineSegment{face,
+                         {set_edge_end(face, a, pa, ea, sa),
+                          SegmentEnd{SurfacePoint{face, Vec3::Constant(1.0 / 3.0)},
+                                     Vec3(pb[0], pb[1], pb[2]), face, EndKind::centroid, sb}}};
+    } else {
+      return LineSegment{face,
+                         {set_edge_end(face, a, pa, ea, sa), set_edge_end(face, b, pb, eb, sb)}};
+    }
+  }
+};
+
+// The far end of a segment joined to the centroid, shared by the three
+// segments of such a face: magnitude, threshold excess and position.
+struct CentroidEnd {
+  double m, k;
+  double p[3];
+};
 
 // rtsc's draw_segment_ridge / draw_segment_app_ridge for corners (c0,c1,c2)
 // of face f (vertices v): crossing on edge c0-c1 joined to the crossing on
 // c1-c2 (or the centroid). The threshold and the maximum test are decided
-// from the edge fractions and positions before any endpoint is built.
+// in plain doubles before the record is built.
 template <bool ToCenter>
-inline void vector_segment(const VectorInputs& in, std::size_t f, const int v[3], int c0, int c1,
-                           int c2, const Vec3 E[3], std::vector<LineSegment>& out) {
-  const Vec3* pos = in.m.pos;
+[[gnu::always_inline]] inline void vector_segment(const VectorInputs& in, const SegmentParams& sp,
+                                                  std::size_t f, const int v[3], int c0, int c1,
+                                                  int c2, const Vec3 E[3], const CentroidEnd& ce,
+                                                  std::vector<LineSegment>& out) {
   const EdgeCut a = vector_edge(in, v, c0, c1);
-  EdgeCut b{0, 0, 0.0, 0.0};
-  double m12;
+  EdgeCut b{};
+  double m12, k12;
   if constexpr (ToCenter) {
-    m12 = std::abs(in.mag[v[0]] + in.mag[v[1]] + in.mag[v[2]]) / 3.0;
+    m12 = ce.m;
+    k12 = ce.k;
   } else {
     b = vector_edge(in, v, c1, c2);
     m12 = b.m;
+    k12 = std::max(m12 - sp.threshold, 0.0);
   }
   const double m01 = a.m;
-  const double t = in.o.threshold;
-  const double k01 = std::max(m01 - t, 0.0), k12 = std::max(m12 - t, 0.0);
+  const double k01 = std::max(m01 - sp.threshold, 0.0);
   if (k01 == 0.0 && k12 == 0.0) return;
-  const Vec3 pa = (1.0 - a.t) * pos[v[a.lo]] + a.t * pos[v[a.hi]];
-  Vec3 pb;
-  if constexpr (ToCenter)
-    pb = (pos[v[0]] + pos[v[1]] + pos[v[2]]) / 3.0;
-  else
-    pb = (1.0 - b.t) * pos[v[b.lo]] + b.t * pos[v[b.hi]];
-  if (in.o.test == ExtremumTest::perpendicular) {
-    const Vec3 n = (pos[v[1]] - pos[v[0]]).cross(pos[v[2]] - pos[v[0]]);
-    const Vec3 perp = n.cross(pa - pb);
-    if (E[c0].dot(perp) <= 0.0 || E[c1].dot(perp) >= 0.0 || E[c2].dot(perp) <= 0.0) return;
+  const Vec3* pos = in.m.pos;
+  double pa[3], pb[3];
+  cut_point(pos, a, pa);
+  if constexpr (ToCenter) {
+    pb[0] = ce.p[0];
+    pb[1] = ce.p[1];
+    pb[2] = ce.p[2];
+  } else {
+    cut_point(pos, b, pb);
   }
+  if (sp.perpendicular &&
+      perpendicular_rejects(pos[v[0]], pos[v[1]], pos[v[2]], pa, pb, E[c0], E[c1], E[c2]))
+    return;
   const auto fi = static_cast<std::int32_t>(f);
   const Topology& topo = *in.m.topo;
-  LineSegment& seg = out.emplace_back();
-  seg.face = fi;
-  set_edge_end(seg.end[0], fi, a, pa, topo.face_edge(f, 3 - a.lo - a.hi));
-  SegmentEnd& eb = seg.end[1];
-  if constexpr (ToCenter) {
-    eb.anchor.face = fi;
-    eb.anchor.bary = Vec3::Constant(1.0 / 3.0);
-    eb.position = pb;
-    eb.kind = EndKind::centroid;
-    eb.element = fi;
-  } else {
-    set_edge_end(eb, fi, b, pb, topo.face_edge(f, 3 - b.lo - b.hi));
-  }
-  if (in.o.keep_raw_magnitude) {
-    seg.end[0].strength = static_cast<float>(m01);
-    eb.strength = static_cast<float>(m12);
-  } else {
-    seg.end[0].strength = t > 0.0 ? static_cast<float>(k01 / (k01 + t)) : 1.0f;
-    eb.strength = t > 0.0 ? static_cast<float>(k12 / (k12 + t)) : 1.0f;
+  const std::int32_t ea = topo.face_edge(f, 3 - a.lo - a.hi);
+  const std::int32_t eb = ToCenter ? fi : topo.face_edge(f, 3 - b.lo - b.hi);
+  out.emplace_back(SegmentRecord<ToCenter>{fi, a, b, pa, pb, ea, eb, ridge_strength(sp, m01, k01),
+                                           ridge_strength(sp, m12, k12)});
+}
+
+// The three segments of a face crossed on all three edges, each joined to
+// the centroid (rare: kept out of the common path).
+[[gnu::noinline]] void vector_centroid_segments(const VectorInputs& in, const SegmentParams& sp,
+                                                std::size_t f, const int v[3], const Vec3 E[3],
+                                                std::vector<LineSegment>& out) {
+  const Vec3 &p0 = in.m.pos[v[0]], &p1 = in.m.pos[v[1]], &p2 = in.m.pos[v[2]];
+  CentroidEnd ce;
+  ce.m = std::abs(in.mag[v[0]] + in.mag[v[1]] + in.mag[v[2]]) / 3.0;
+  ce.k = std::max(ce.m - sp.threshold, 0.0);
+  for (int k = 0; k < 3; ++k) ce.p[k] = (p0[k] + p1[k] + p2[k]) / 3.0;
+  // (c0,c1,c2) = (1,2,0), (2,0,1), (0,1,2), in this order.
+  for (int k = 0; k < 3; ++k) {
+    const int c0 = k == 2 ? 0 : k + 1, c1 = c0 == 2 ? 0 : c0 + 1;
+    vector_segment<true>(in, sp, f, v, c0, c1, 3 - c0 - c1, E, ce, out);
   }
 }
 
@@ -438,17 +521,17 @@ inline void vector_segment(const VectorInputs& in, std::size_t f, const int v[3]
 [[gnu::noinline]] void vector_face_segments(const VectorInputs& in, std::size_t f, const int v[3],
                                             const Vec3 E[3], bool z01, bool z12, bool z20,
                                             std::vector<LineSegment>& out) {
-  if (!z01) {
-    vector_segment<false>(in, f, v, 1, 2, 0, E, out);
-  } else if (!z12) {
-    vector_segment<false>(in, f, v, 2, 0, 1, E, out);
-  } else if (!z20) {
-    vector_segment<false>(in, f, v, 0, 1, 2, E, out);
-  } else {
-    vector_segment<true>(in, f, v, 1, 2, 0, E, out);
-    vector_segment<true>(in, f, v, 2, 0, 1, E, out);
-    vector_segment<true>(in, f, v, 0, 1, 2, E, out);
+  const SegmentParams sp{in.o.threshold, in.o.test == ExtremumTest::perpendicular,
+                         in.o.keep_raw_magnitude};
+  if (z01 && z12 && z20) {
+    vector_centroid_segments(in, sp, f, v, E, out);
+    return;
   }
+  // The one edge without a crossing is opposite the middle corner c1 of
+  // the segment (c0,c1,c2) = (1,2,0), (2,0,1) or (0,1,2).
+  const int c0 = !z01 ? 1 : !z12 ? 2 : 0;
+  const int c1 = c0 == 2 ? 0 : c0 + 1, c2 = c1 == 2 ? 0 : c1 + 1;
+  vector_segment<false>(in, sp, f, v, c0, c1, c2, E, CentroidEnd{}, out);
 }
 
 // The rest of vector_face for a face with a corner above the threshold.
