@@ -7,6 +7,7 @@
 #include "fabrica/lines/extract.hpp"
 #include "parallel.hpp"
 #include "view_fields_light.hpp"
+#include "zero_crossing_internal.hpp"
 
 namespace fabrica {
 
@@ -81,8 +82,23 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
   // (each is itself a deterministic parallel loop), one output slot each,
   // so small families and the tails of large ones share the threads.
   std::vector<SegmentSoup> out(options_.families.size());
+  // Contours and suggestive contours together: one scan over the faces'
+  // sign bytes (in the contour's task) gives both soups.
+  const auto& fam = options_.families;
+  const auto contour_at = std::find(fam.begin(), fam.end(), LineFamily::contour);
+  const auto suggestive_at = std::find(fam.begin(), fam.end(), LineFamily::suggestive);
+  const bool fused = contour_at != fam.end() && suggestive_at != fam.end();
+  const auto fused_contour = static_cast<std::size_t>(contour_at - fam.begin());
+  const auto fused_suggestive = static_cast<std::size_t>(suggestive_at - fam.begin());
   auto run = [&](std::size_t k) {
     const LineFamily f = options_.families[k];
+    if (fused && (k == fused_contour || k == fused_suggestive)) {
+      if (k == fused_contour)
+        detail::extract_contours_and_suggestive(*surface_, fields_, options_.contour, fs,
+                                                options_.suggestive, out[fused_contour],
+                                                out[fused_suggestive]);
+      return;
+    }
     switch (f) {
       case LineFamily::contour:
         out[k] = extract_contours(*surface_, fields_, options_.contour);

@@ -57,11 +57,49 @@ SegmentSoup edge_soup(const Surface& s, LineFamily family, Pred&& keep) {
   return soup;
 }
 
+// Interpolated contours: the zeros of n·v (trimmed by K_r >= 0), with the
+// sign bits when the fields have them.
+detail::SignBits contour_setup(const Surface& surface, const ViewFields& fields,
+                               const ContourOptions& options, ScalarCrossingOptions& o) {
+  const std::size_t nv = surface.vertex_count();
+  require_field(fields.ndotv, nv, "ndotv");
+  if (options.trim_concave) {
+    require_field(fields.kr, nv, "kr");
+    o.test_num = fields.kr;
+  }
+  detail::SignBits bits;
+  if (fields.signs.size() == nv) bits = {fields.signs.data(), kNdotvNegative, kNdotvPositive, 0};
+  return bits;
+}
+
+// Suggestive contours and highlights: the zeros of K_r with the test N/D,
+// N = ±sc_num - t n·v and D = n·v, N evaluated only at the corners of faces
+// where K_r changes sign.
+detail::SignBits suggestive_setup(const Surface& surface, const ViewFields& fields, double fs,
+                                  double threshold, double fade, bool cull, bool highlight,
+                                  detail::SuggestiveTest& test) {
+  const std::size_t nv = surface.vertex_count();
+  require_field(fields.kr, nv, "kr");
+  require_field(fields.sc_num, nv, "sc_num");
+  require_field(fields.ndotv, nv, "ndotv");
+  if (!(fs > 0.0)) throw InputError("feature size must be positive");
+  test.kr = fields.kr;
+  test.sc_num = fields.sc_num;
+  test.ndotv = fields.ndotv;
+  test.negate = highlight;
+  test.shift = threshold / (fs * fs);
+  test.cull = cull;
+  test.fade = fade / (fs * fs);
+  detail::SignBits bits;
+  if (fields.signs.size() == nv)
+    bits = {fields.signs.data(), kKrNegative, kKrPositive, cull ? unsigned(kNdotvNotBack) : 0u};
+  return bits;
+}
+
 }  // namespace
 
 SegmentSoup extract_contours(const Surface& surface, const ViewFields& fields,
                              const ContourOptions& options) {
-  const std::size_t nv = surface.vertex_count();
   if (options.mesh_edges) {
     const auto& fn = surface.face_normals();
     const Topology& topo = surface.topology();
@@ -76,16 +114,10 @@ SegmentSoup extract_contours(const Surface& surface, const ViewFields& fields,
       return (a > 0.0) != (b > 0.0);
     });
   }
-  require_field(fields.ndotv, nv, "ndotv");
   SegmentSoup soup;
   soup.family = LineFamily::contour;
   ScalarCrossingOptions o;
-  if (options.trim_concave) {
-    require_field(fields.kr, nv, "kr");
-    o.test_num = fields.kr;
-  }
-  detail::SignBits bits;
-  if (fields.signs.size() == nv) bits = {fields.signs.data(), kNdotvNegative, kNdotvPositive, 0};
+  const detail::SignBits bits = contour_setup(surface, fields, options, o);
   detail::scalar_zero_crossings(surface, fields.ndotv, o, bits, soup.segments);
   return soup;
 }
@@ -117,21 +149,12 @@ namespace {
 
 SegmentSoup suggestive_like(const Surface& surface, const ViewFields& fields, double fs,
                             double threshold, double fade, bool cull, bool highlight) {
-  const std::size_t nv = surface.vertex_count();
-  require_field(fields.kr, nv, "kr");
-  require_field(fields.sc_num, nv, "sc_num");
-  require_field(fields.ndotv, nv, "ndotv");
-  if (!(fs > 0.0)) throw InputError("feature size must be positive");
+  detail::SuggestiveTest test;
+  const detail::SignBits bits =
+      suggestive_setup(surface, fields, fs, threshold, fade, cull, highlight, test);
   SegmentSoup soup;
   soup.family = highlight ? LineFamily::highlight : LineFamily::suggestive;
-  // Test N/D with N = ±sc_num - t n·v and D = n·v, N evaluated only at the
-  // corners of faces where K_r changes sign.
-  detail::SignBits bits;
-  if (fields.signs.size() == nv)
-    bits = {fields.signs.data(), kKrNegative, kKrPositive, cull ? unsigned(kNdotvNotBack) : 0u};
-  detail::suggestive_zero_crossings(surface, fields.kr, fields.sc_num, highlight,
-                                    threshold / (fs * fs), fields.ndotv, cull, fade / (fs * fs),
-                                    bits, soup.segments);
+  detail::suggestive_zero_crossings(surface, test, bits, soup.segments);
   return soup;
 }
 
@@ -148,5 +171,31 @@ SegmentSoup extract_suggestive_highlights(const Surface& surface, const ViewFiel
   return suggestive_like(surface, fields, feature_size, options.threshold, options.fade,
                          options.cull_backfaces, true);
 }
+
+namespace detail {
+
+void extract_contours_and_suggestive(const Surface& surface, const ViewFields& fields,
+                                     const ContourOptions& contour, double feature_size,
+                                     const SuggestiveOptions& suggestive, SegmentSoup& contours,
+                                     SegmentSoup& suggestive_contours) {
+  if (contour.mesh_edges) {
+    contours = extract_contours(surface, fields, contour);
+    suggestive_contours = extract_suggestive_contours(surface, fields, feature_size, suggestive);
+    return;
+  }
+  ScalarCrossingOptions o;
+  const SignBits cbits = contour_setup(surface, fields, contour, o);
+  SuggestiveTest test;
+  const SignBits sbits = suggestive_setup(surface, fields, feature_size, suggestive.threshold,
+                                          suggestive.fade, suggestive.cull_backfaces, false, test);
+  contours = SegmentSoup{};
+  contours.family = LineFamily::contour;
+  suggestive_contours = SegmentSoup{};
+  suggestive_contours.family = LineFamily::suggestive;
+  contour_suggestive_zero_crossings(surface, fields.ndotv, o, cbits, test, sbits, contours.segments,
+                                    suggestive_contours.segments);
+}
+
+}  // namespace detail
 
 }  // namespace fabrica

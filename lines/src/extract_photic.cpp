@@ -10,35 +10,11 @@
 #include "fabrica/lines/zero_crossing.hpp"
 #include "parallel.hpp"
 #include "view_fields_light.hpp"
+#include "zero_crossing_internal.hpp"
 
 namespace fabrica {
 
 namespace {
-
-// Drops segments whose interpolated `magnitude` is <= t at both ends and
-// sets strength to the fade (m - t)/m, multiplied into the existing one.
-// In place (no per-view copy of the soup), order kept.
-void threshold_by_field(const Surface& surface, std::vector<LineSegment>& segs,
-                        const std::vector<double>& magnitude, double t) {
-  const auto& faces = surface.faces();
-  std::size_t kept = 0;
-  for (std::size_t j = 0; j < segs.size(); ++j) {
-    LineSegment& s = segs[j];
-    const Face& f = faces[static_cast<std::size_t>(s.face)];
-    double k[2];
-    for (int e = 0; e < 2; ++e) {
-      const Vec3& b = s.end[e].anchor.bary;
-      const double m = b[0] * magnitude[f[0]] + b[1] * magnitude[f[1]] + b[2] * magnitude[f[2]];
-      k[e] = std::max(m - t, 0.0);
-    }
-    if (k[0] == 0.0 && k[1] == 0.0) continue;
-    for (int e = 0; e < 2; ++e)
-      s.end[e].strength *= t > 0.0 ? static_cast<float>(k[e] / (k[e] + t)) : 1.0f;
-    if (kept != j) segs[kept] = s;
-    ++kept;
-  }
-  segs.resize(kept);
-}
 
 // The sparse illumination fields must cover everything `threshold` and
 // `cull` can keep (view_fields.hpp).
@@ -92,8 +68,10 @@ SegmentSoup extract_pels(const Surface& surface, const ViewFields& fields, doubl
   if (options.cull_backfaces) o.cull = fields.ndotv;
   if (fields.light_faces.empty()) return soup;  // no face can carry a kept line
   o.faces = fields.light_faces;
-  scalar_zero_crossings(surface, fields.pel_h, o, soup.segments);
-  threshold_by_field(surface, soup.segments, fields.light_gradient_norm, t);
+  // The threshold on |∇f| (fade (m - t)/m) is applied as the segments are
+  // made.
+  detail::scalar_zero_crossings(surface, fields.pel_h, o, fields.light_gradient_norm, t,
+                                soup.segments);
   return soup;
 }
 
@@ -111,8 +89,10 @@ SegmentSoup extract_laplacian_lines(const Surface& surface, const ViewFields& fi
   if (options.cull_backfaces) o.cull = fields.ndotv;
   if (fields.light_faces.empty()) return soup;  // no face can carry a kept line
   o.faces = fields.light_faces;
-  scalar_zero_crossings(surface, fields.light_laplacian, o, soup.segments);
-  threshold_by_field(surface, soup.segments, fields.light_gradient_norm, t);
+  // The threshold on |∇f| (fade (m - t)/m) is applied as the segments are
+  // made.
+  detail::scalar_zero_crossings(surface, fields.light_laplacian, o, fields.light_gradient_norm, t,
+                                soup.segments);
   return soup;
 }
 

@@ -21,43 +21,16 @@ struct MeshArrays {
       : faces(s.faces().data()), pos(s.positions().data()), topo(&s.topology()) {}
 };
 
-// An endpoint on the edge joining corners ca and cb of face f, at fraction
-// t from vertex face[ca] (already canonicalised by the caller).
-[[gnu::always_inline]] inline SegmentEnd edge_end(const MeshArrays& m, std::size_t f, int ca,
-                                                  int cb, double t) {
-  const Face& face = m.faces[f];
-  SegmentEnd e;
-  e.anchor.face = static_cast<std::int32_t>(f);
-  e.anchor.bary = Vec3::Zero();
-  e.anchor.bary[ca] = 1.0 - t;
-  e.anchor.bary[cb] = t;
-  e.position = (1.0 - t) * m.pos[face[ca]] + t * m.pos[face[cb]];
-  e.element = m.topo->face_edge(f, 3 - ca - cb);
-  e.kind = EndKind::edge;
-  return e;
-}
-
-inline SegmentEnd lerp_end(const SegmentEnd& a, const SegmentEnd& b, double z) {
-  SegmentEnd e;
-  e.anchor.face = a.anchor.face;
-  e.anchor.bary = (1.0 - z) * a.anchor.bary + z * b.anchor.bary;
-  e.position = (1.0 - z) * a.position + z * b.position;
-  e.kind = EndKind::interior;
-  e.element = -1;
-  return e;
-}
-
-inline float fade_strength(double num, double den, double fade) {
-  if (fade <= 0.0) return 1.0f;
-  const double d = den * fade + num;
-  if (d == 0.0) return 0.0f;
-  const double s = num / d;
-  return static_cast<float>(std::clamp(std::isfinite(s) ? s : 0.0, 0.0, 1.0));
-}
-
-inline bool lone_sign(double a, double b, double c) {
-  return (a < 0.0 && b >= 0.0 && c >= 0.0) || (a > 0.0 && b <= 0.0 && c <= 0.0);
-}
+// An endpoint of the scalar kernel before it is written to its segment:
+// plain doubles (no Eigen temporaries, no default initialisation), copied
+// once into the output record.
+struct ScalarEnd {
+  double bary[3];
+  double pos[3];
+  std::int32_t element;
+  EndKind kind;
+  float strength;
+};
 
 // Fraction along the edge from the vertex with the lower index, from values
 // (va at ia, vb at ib): returns (corner of the lower vertex, t).
@@ -74,6 +47,47 @@ inline EdgeParam scalar_edge(const Face& face, int ca, int cb, double va, double
   double t = d != 0.0 ? va / d : 0.5;
   t = std::clamp(t, 0.0, 1.0);
   return {ca, cb, t};
+}
+
+// The endpoint on edge e of face f (vertices v): bary (1-t) at the lower
+// corner and t at the other, position (1-t) p_lo + t p_hi per component.
+[[gnu::always_inline]] inline void edge_end(const MeshArrays& m, std::size_t f, const int v[3],
+                                            const EdgeParam& e, ScalarEnd& p) {
+  const double u = 1.0 - e.t;
+  p.bary[0] = p.bary[1] = p.bary[2] = 0.0;
+  p.bary[e.c_lo] = u;
+  p.bary[e.c_hi] = e.t;
+  const Vec3& a = m.pos[v[e.c_lo]];
+  const Vec3& b = m.pos[v[e.c_hi]];
+  p.pos[0] = u * a[0] + e.t * b[0];
+  p.pos[1] = u * a[1] + e.t * b[1];
+  p.pos[2] = u * a[2] + e.t * b[2];
+  p.element = m.topo->face_edge(f, 3 - e.c_lo - e.c_hi);
+  p.kind = EndKind::edge;
+}
+
+// The point at fraction z from a to b inside the face (a test-function
+// clip), each component (1-z) a_k + z b_k.
+inline void lerp_end(const ScalarEnd& a, const ScalarEnd& b, double z, ScalarEnd& p) {
+  const double u = 1.0 - z;
+  for (int k = 0; k < 3; ++k) {
+    p.bary[k] = u * a.bary[k] + z * b.bary[k];
+    p.pos[k] = u * a.pos[k] + z * b.pos[k];
+  }
+  p.element = -1;
+  p.kind = EndKind::interior;
+}
+
+inline float fade_strength(double num, double den, double fade) {
+  if (fade <= 0.0) return 1.0f;
+  const double d = den * fade + num;
+  if (d == 0.0) return 0.0f;
+  const double s = num / d;
+  return static_cast<float>(std::clamp(std::isfinite(s) ? s : 0.0, 0.0, 1.0));
+}
+
+inline bool lone_sign(double a, double b, double c) {
+  return (a < 0.0 && b >= 0.0 && c >= 0.0) || (a > 0.0 && b <= 0.0 && c <= 0.0);
 }
 
 // Test numerators: stored per vertex, or N_i = ±sc_i - shift * D_i computed
@@ -116,17 +130,55 @@ struct ScalarInputs {
   const double* den;   // nullptr: denominator 1
   bool test;
   double fade;
+  // Optional threshold on a per-vertex magnitude interpolated at the ends
+  // (PELs, Laplacian lines): a segment whose ends both have m <= mag_t is
+  // dropped, and the strengths are multiplied by (m - t)/m. nullptr: none.
+  const double* mag = nullptr;
+  double mag_t = 0.0;
 };
+
+// Writes segment (a, b) of face f (vertices v), after the magnitude
+// threshold if any.
+inline void emit_segment(const ScalarInputs& in, std::size_t f, const int v[3], const ScalarEnd& a,
+                         const ScalarEnd& b, std::vector<LineSegment>& out) {
+  float sa = a.strength, sb = b.strength;
+  if (in.mag) {
+    const double* mg = in.mag;
+    const double t = in.mag_t;
+    const double ma = a.bary[0] * mg[v[0]] + a.bary[1] * mg[v[1]] + a.bary[2] * mg[v[2]];
+    const double mb = b.bary[0] * mg[v[0]] + b.bary[1] * mg[v[1]] + b.bary[2] * mg[v[2]];
+    const double ka = std::max(ma - t, 0.0), kb = std::max(mb - t, 0.0);
+    if (ka == 0.0 && kb == 0.0) return;
+    sa *= t > 0.0 ? static_cast<float>(ka / (ka + t)) : 1.0f;
+    sb *= t > 0.0 ? static_cast<float>(kb / (kb + t)) : 1.0f;
+  }
+  const auto fi = static_cast<std::int32_t>(f);
+  LineSegment& seg = out.emplace_back();
+  seg.face = fi;
+  const ScalarEnd* src[2] = {&a, &b};
+  const float strength[2] = {sa, sb};
+  for (int i = 0; i < 2; ++i) {
+    SegmentEnd& e = seg.end[i];
+    const ScalarEnd& p = *src[i];
+    e.anchor.face = fi;
+    e.anchor.bary = Vec3(p.bary[0], p.bary[1], p.bary[2]);
+    e.position = Vec3(p.pos[0], p.pos[1], p.pos[2]);
+    e.element = p.element;
+    e.kind = p.kind;
+    e.strength = strength[i];
+  }
+}
 
 // One face of the scalar kernel. The rejections (no lone sign, back-facing,
 // test function <= 0 at every corner) are independent predicates, so they
-// are tried cheapest and most selective first.
-// The rest of scalar_face for a face that passed the quick sign test.
+// are tried cheapest and most selective first; the endpoints are built only
+// for faces that produce a segment.
 template <class Num>
-[[gnu::noinline]] void scalar_face(const ScalarInputs& in, const Num& num, std::size_t f,
-                                   std::vector<LineSegment>& out) {
+[[gnu::always_inline]] inline void scalar_face_body(const ScalarInputs& in, const Num& num,
+                                                    std::size_t f, std::vector<LineSegment>& out) {
   const Face& face = in.m.faces[f];
-  const int i0 = face[0], i1 = face[1], i2 = face[2];
+  const int v[3] = {face[0], face[1], face[2]};
+  const int i0 = v[0], i1 = v[1], i2 = v[2];
   const double s[3] = {in.val[i0], in.val[i1], in.val[i2]};
   int k;
   if (lone_sign(s[0], s[1], s[2]))
@@ -158,11 +210,9 @@ template <class Num>
         return;
     }
   }
-  const int c0 = k, c1 = (k + 1) % 3, c2 = (k + 2) % 3;
+  const int c0 = k, c1 = k == 2 ? 0 : k + 1, c2 = k == 0 ? 2 : k - 1;
   const EdgeParam e1 = scalar_edge(face, c0, c1, s[c0], s[c1]);
   const EdgeParam e2 = scalar_edge(face, c0, c2, s[c0], s[c2]);
-  SegmentEnd p1 = edge_end(in.m, f, e1.c_lo, e1.c_hi, e1.t);
-  SegmentEnd p2 = edge_end(in.m, f, e2.c_lo, e2.c_hi, e2.t);
 
   double num1 = 1.0, num2 = 1.0, den1 = 1.0, den2 = 1.0;
   double z1 = 0.0, z2 = 0.0;
@@ -171,8 +221,8 @@ template <class Num>
     num1 = (1.0 - e1.t) * n_at[e1.c_lo] + e1.t * n_at[e1.c_hi];
     num2 = (1.0 - e2.t) * n_at[e2.c_lo] + e2.t * n_at[e2.c_hi];
     if (den) {
-      den1 = (1.0 - e1.t) * den[face[e1.c_lo]] + e1.t * den[face[e1.c_hi]];
-      den2 = (1.0 - e2.t) * den[face[e2.c_lo]] + e2.t * den[face[e2.c_hi]];
+      den1 = (1.0 - e1.t) * den[v[e1.c_lo]] + e1.t * den[v[e1.c_hi]];
+      den2 = (1.0 - e2.t) * den[v[e2.c_lo]] + e2.t * den[v[e2.c_hi]];
     }
     valid1 = (num1 >= 0.0) == (den1 >= 0.0);
     if ((num1 >= 0.0) != (num2 >= 0.0)) z1 = num1 / (num1 - num2);
@@ -186,31 +236,100 @@ template <class Num>
   }
   if (!valid1 && z1 == 0.0 && z2 == 0.0) return;
 
-  // Up to four points, consumed in pairs (rtsc's GL_LINES logic).
-  SegmentEnd pts[4];
-  int npts = 0;
+  // Up to four points, consumed in pairs (rtsc's GL_LINES logic): p1 when
+  // valid, the clip points at z1 and z2 when nonzero, p2 when the count is
+  // odd.
+  ScalarEnd p1, p2, q[2];
+  edge_end(in.m, f, v, e1, p1);
+  edge_end(in.m, f, v, e2, p2);
+  const double fade = in.fade;
+  const ScalarEnd* pts[4];
+  int npts = 0, nq = 0;
   if (valid1) {
-    p1.strength = fade_strength(num1, den1, in.fade);
-    pts[npts++] = p1;
+    p1.strength = fade_strength(num1, den1, fade);
+    pts[npts++] = &p1;
   }
-  auto clip = [&](double z) {
-    SegmentEnd e = lerp_end(p1, p2, z);
-    e.strength = fade_strength((1.0 - z) * num1 + z * num2, (1.0 - z) * den1 + z * den2, in.fade);
-    return e;
-  };
-  if (z1 != 0.0) pts[npts++] = clip(z1);
-  if (z2 != 0.0) pts[npts++] = clip(z2);
+  for (const double z : {z1, z2}) {
+    if (z == 0.0) continue;
+    ScalarEnd& c = q[nq++];
+    lerp_end(p1, p2, z, c);
+    c.strength = fade_strength((1.0 - z) * num1 + z * num2, (1.0 - z) * den1 + z * den2, fade);
+    pts[npts++] = &c;
+  }
   if (npts != 2) {
-    p2.strength = fade_strength(num2, den2, in.fade);
-    pts[npts++] = p2;
+    p2.strength = fade_strength(num2, den2, fade);
+    pts[npts++] = &p2;
   }
-  for (int i = 0; i + 1 < npts; i += 2) {
-    LineSegment& seg = out.emplace_back();
-    seg.face = static_cast<std::int32_t>(f);
-    seg.end[0] = pts[i];
-    seg.end[1] = pts[i + 1];
-  }
+  for (int i = 0; i + 1 < npts; i += 2) emit_segment(in, f, v, *pts[i], *pts[i + 1], out);
 }
+
+template <class Num>
+[[gnu::noinline]] void scalar_face(const ScalarInputs& in, const Num& num, std::size_t f,
+                                   std::vector<LineSegment>& out) {
+  scalar_face_body(in, num, f, out);
+}
+
+// Candidates of one family in a scan over the sign bytes: batched with
+// their corners prefetched; at a flush, scalar_face's test-function
+// rejection (N <= 0 at every corner, or N/D <= 0 at every corner) is
+// evaluated for the whole batch without branches and compacted, and
+// scalar_face (which repeats it) runs on the survivors.
+template <class Num>
+struct ScalarBatch {
+  const ScalarInputs& in;
+  const Num& num;
+  std::vector<LineSegment>& part;
+  CandidateBatch batch;
+
+  void add(std::size_t f) {
+    const Face& face = in.m.faces[f];
+    for (int k = 0; k < 3; ++k) {
+      __builtin_prefetch(&in.m.pos[face[k]]);
+      __builtin_prefetch(&in.val[face[k]]);
+      if (in.den) __builtin_prefetch(&in.den[face[k]]);
+    }
+    if (batch.add(f)) flush();
+  }
+  void flush() {
+    const Face* faces = in.m.faces;
+    std::size_t keep[CandidateBatch::kSize];
+    int nk = 0;
+    for (int k = 0; k < batch.n; ++k) {
+      const std::size_t g = batch.face[k];
+      const Face& fg = faces[g];
+      bool reject = false;
+      if (in.test) {
+        const double n0 = num(static_cast<std::size_t>(fg[0]));
+        const double n1 = num(static_cast<std::size_t>(fg[1]));
+        const double n2 = num(static_cast<std::size_t>(fg[2]));
+        if (!in.den) {
+          reject = (n0 <= 0.0) & (n1 <= 0.0) & (n2 <= 0.0);
+        } else {
+          const double* d = in.den;
+          const double d0 = d[fg[0]], d1 = d[fg[1]], d2 = d[fg[2]];
+          reject =
+              ((n0 <= 0.0) & (d0 >= 0.0) & (n1 <= 0.0) & (d1 >= 0.0) & (n2 <= 0.0) & (d2 >= 0.0)) |
+              ((n0 >= 0.0) & (d0 <= 0.0) & (n1 >= 0.0) & (d1 <= 0.0) & (n2 >= 0.0) & (d2 <= 0.0));
+        }
+      }
+      keep[nk] = g;
+      nk += int(!reject);
+    }
+    batch.n = 0;
+    for (int k = 0; k < nk; ++k) scalar_face(in, num, keep[k], part);
+  }
+};
+
+// The quick rejection from the sign bytes: with bits (negative, positive)
+// of one value, which no vertex has both of, a face can have a lone sign
+// only if one of them is set at some corner but not at all three:
+// (a0 | a1 | a2) & ~(a0 & a1 & a2). `cull`: a face needs the bit at some
+// corner.
+struct SignTest {
+  unsigned sides, cull;
+  explicit SignTest(const detail::SignBits& b) : sides(b.negative | b.positive), cull(b.cull) {}
+  bool pass(unsigned any, unsigned mixed) const { return (mixed & sides) && !(~any & cull); }
+};
 
 template <class Num>
 void scalar_crossings(const ScalarInputs& in, const Num& num, std::size_t face_count,
@@ -220,71 +339,25 @@ void scalar_crossings(const ScalarInputs& in, const Num& num, std::size_t face_c
       list.empty() ? face_count : list.size(),
       [&](std::size_t b, std::size_t e, std::vector<LineSegment>& part) {
         const Face* faces = in.m.faces;
-        const double* val = in.val;
         if (bits.signs && list.empty()) {
           // The same rejections (and the culling) from one byte per corner.
           const std::uint8_t* sg = bits.signs;
-          const unsigned neg = bits.negative, pos = bits.positive, cull = bits.cull;
-          CandidateBatch batch;
-          // scalar_face's test-function rejection (N <= 0 at every corner,
-          // or N/D <= 0 at every corner), evaluated for the whole batch
-          // without branches and compacted; scalar_face repeats it.
-          auto flush = [&] {
-            std::size_t keep[CandidateBatch::kSize];
-            int nk = 0;
-            for (int k = 0; k < batch.n; ++k) {
-              const std::size_t g = batch.face[k];
-              const Face& fg = faces[g];
-              bool reject = false;
-              if (in.test) {
-                const double n0 = num(static_cast<std::size_t>(fg[0]));
-                const double n1 = num(static_cast<std::size_t>(fg[1]));
-                const double n2 = num(static_cast<std::size_t>(fg[2]));
-                if (!in.den) {
-                  reject = (n0 <= 0.0) & (n1 <= 0.0) & (n2 <= 0.0);
-                } else {
-                  const double* d = in.den;
-                  const double d0 = d[fg[0]], d1 = d[fg[1]], d2 = d[fg[2]];
-                  reject = ((n0 <= 0.0) & (d0 >= 0.0) & (n1 <= 0.0) & (d1 >= 0.0) & (n2 <= 0.0) &
-                            (d2 >= 0.0)) |
-                           ((n0 >= 0.0) & (d0 <= 0.0) & (n1 >= 0.0) & (d1 <= 0.0) & (n2 >= 0.0) &
-                            (d2 <= 0.0));
-                }
-              }
-              keep[nk] = g;
-              nk += int(!reject);
-            }
-            batch.n = 0;
-            for (int k = 0; k < nk; ++k) scalar_face(in, num, keep[k], part);
-          };
+          const SignTest st(bits);
+          ScalarBatch<Num> batch{in, num, part, {}};
           for (std::size_t f = b; f < e; ++f) {
             const Face& face = faces[f];
             const unsigned a0 = sg[face[0]], a1 = sg[face[1]], a2 = sg[face[2]];
-            // All three on one side (most faces) first, then no sign at
-            // all or culled.
-            if ((a0 & a1 & a2) & (neg | pos)) continue;
             const unsigned any = a0 | a1 | a2;
-            if (!(any & (neg | pos)) || (~any & cull)) continue;
-            for (int k = 0; k < 3; ++k) {
-              __builtin_prefetch(&in.m.pos[face[k]]);
-              __builtin_prefetch(&val[face[k]]);
-              if (in.den) __builtin_prefetch(&in.den[face[k]]);
-            }
-            if (batch.add(f)) flush();
+            if (st.pass(any, any & ~(a0 & a1 & a2))) batch.add(f);
           }
-          flush();
+          batch.flush();
           return;
         }
-        for (std::size_t j = b; j < e; ++j) {
-          const std::size_t f = list.empty() ? j : static_cast<std::size_t>(list[j]);
-          // Quick exact rejection (most faces): a lone sign needs the three
-          // values neither all < 0, nor all > 0, nor all 0 (or NaN).
-          const Face& face = faces[f];
-          const double s0 = val[face[0]], s1 = val[face[1]], s2 = val[face[2]];
-          const int neg = int(s0 < 0.0) + int(s1 < 0.0) + int(s2 < 0.0);
-          const int pos = int(s0 > 0.0) + int(s1 > 0.0) + int(s2 > 0.0);
-          if (neg == 3 || pos == 3 || neg + pos == 0) continue;
-          scalar_face(in, num, f, part);
+        if (list.empty()) {
+          for (std::size_t f = b; f < e; ++f) scalar_face_body(in, num, f, part);
+        } else {
+          for (std::size_t j = b; j < e; ++j)
+            scalar_face_body(in, num, static_cast<std::size_t>(list[j]), part);
         }
       },
       out);
@@ -339,6 +412,57 @@ inline void crossing_bits(const Face* faces, const std::size_t* face, int n, con
 #endif
   for (int k = 0; k < n; ++k)
     out[k] = static_cast<std::uint8_t>(crossing_bits_of(faces[face[k]], E));
+}
+
+// Contours (zeros of n·v, StoredNum test) and suggestive contours or
+// highlights (zeros of K_r, ShiftedNum test) in one scan over the faces'
+// sign bytes: each family's candidates and segments exactly as its own scan
+// makes them, in face order. The suggestive segments of chunk c go to
+// side[c], concatenated after the loop.
+void fused_crossings(const ScalarInputs& ci, const StoredNum& cn, const detail::SignBits& cb,
+                     const ScalarInputs& si, const ShiftedNum& sn, const detail::SignBits& sb,
+                     std::size_t face_count, std::vector<LineSegment>& cout,
+                     std::vector<LineSegment>& sout) {
+  const std::size_t chunk = detail::kFaceChunk;
+  const std::size_t chunks = (face_count + chunk - 1) / chunk;
+  auto& pool = detail::ChunkBufferPool<LineSegment>::instance();
+  static const char site = 0;
+  std::vector<std::vector<LineSegment>> side(chunks);
+  detail::parallel_chunks<LineSegment>(
+      face_count,
+      [&](std::size_t b, std::size_t e, std::vector<LineSegment>& part) {
+        std::vector<LineSegment>& spart = side[b / chunk];
+        spart = pool.take({&site, b / chunk});
+        const Face* faces = ci.m.faces;
+        const std::uint8_t* sg = cb.signs;
+        const SignTest ct(cb), stt(sb);
+        const unsigned sides = ct.sides | stt.sides;
+        ScalarBatch<StoredNum> cbatch{ci, cn, part, {}};
+        ScalarBatch<ShiftedNum> sbatch{si, sn, spart, {}};
+        for (std::size_t f = b; f < e; ++f) {
+          const Face& face = faces[f];
+          const unsigned a0 = sg[face[0]], a1 = sg[face[1]], a2 = sg[face[2]];
+          const unsigned any = a0 | a1 | a2;
+          const unsigned mixed = any & ~(a0 & a1 & a2);
+          if (!(mixed & sides)) continue;
+          if (ct.pass(any, mixed)) cbatch.add(f);
+          if (stt.pass(any, mixed)) sbatch.add(f);
+        }
+        cbatch.flush();
+        sbatch.flush();
+      },
+      cout);
+  std::size_t total = sout.size();
+  for (const auto& p : side) total += p.size();
+  if (sout.empty() && sout.capacity() < total) {
+    std::vector<LineSegment> v = pool.take_at_least(detail::kOutputKey, total);
+    if (v.capacity() >= total) sout.swap(v);
+  }
+  sout.reserve(total);
+  for (std::size_t c = 0; c < chunks; ++c) {
+    sout.insert(sout.end(), side[c].begin(), side[c].end());
+    pool.give({&site, c}, std::move(side[c]));
+  }
 }
 
 struct VectorInputs {
@@ -566,39 +690,69 @@ template <bool ToCenter>
 
 void scalar_zero_crossings(const Surface& surface, std::span<const double> values,
                            const ScalarCrossingOptions& options, std::vector<LineSegment>& out) {
-  const ScalarInputs in{MeshArrays(surface),
-                        values.data(),
-                        options.cull.empty() ? nullptr : options.cull.data(),
-                        options.test_den.empty() ? nullptr : options.test_den.data(),
-                        !options.test_num.empty(),
-                        options.fade};
-  scalar_crossings(in, StoredNum{options.test_num.data()}, surface.face_count(), out,
-                   options.faces);
+  detail::scalar_zero_crossings(surface, values, options, detail::SignBits{}, out);
 }
 
 namespace detail {
 
+namespace {
+
+ScalarInputs scalar_inputs(const Surface& surface, std::span<const double> values,
+                           const ScalarCrossingOptions& options) {
+  return ScalarInputs{MeshArrays(surface),
+                      values.data(),
+                      options.cull.empty() ? nullptr : options.cull.data(),
+                      options.test_den.empty() ? nullptr : options.test_den.data(),
+                      !options.test_num.empty(),
+                      options.fade};
+}
+
+ScalarInputs suggestive_inputs(const Surface& surface, const SuggestiveTest& s) {
+  return ScalarInputs{MeshArrays(surface), s.kr.data(), s.cull ? s.ndotv.data() : nullptr,
+                      s.ndotv.data(),      true,        s.fade};
+}
+
+}  // namespace
+
 void scalar_zero_crossings(const Surface& surface, std::span<const double> values,
                            const ScalarCrossingOptions& options, const SignBits& bits,
                            std::vector<LineSegment>& out) {
-  const ScalarInputs in{MeshArrays(surface),
-                        values.data(),
-                        options.cull.empty() ? nullptr : options.cull.data(),
-                        options.test_den.empty() ? nullptr : options.test_den.data(),
-                        !options.test_num.empty(),
-                        options.fade};
-  scalar_crossings(in, StoredNum{options.test_num.data()}, surface.face_count(), out, options.faces,
-                   bits);
+  scalar_crossings(scalar_inputs(surface, values, options), StoredNum{options.test_num.data()},
+                   surface.face_count(), out, options.faces, bits);
 }
 
-void suggestive_zero_crossings(const Surface& surface, std::span<const double> kr,
-                               std::span<const double> sc_num, bool negate, double shift,
-                               std::span<const double> ndotv, bool cull, double fade,
+void scalar_zero_crossings(const Surface& surface, std::span<const double> values,
+                           const ScalarCrossingOptions& options, std::span<const double> magnitude,
+                           double threshold, std::vector<LineSegment>& out) {
+  ScalarInputs in = scalar_inputs(surface, values, options);
+  in.mag = magnitude.data();
+  in.mag_t = threshold;
+  scalar_crossings(in, StoredNum{options.test_num.data()}, surface.face_count(), out,
+                   options.faces);
+}
+
+void suggestive_zero_crossings(const Surface& surface, const SuggestiveTest& test,
                                const SignBits& bits, std::vector<LineSegment>& out) {
-  const ScalarInputs in{MeshArrays(surface), kr.data(), cull ? ndotv.data() : nullptr,
-                        ndotv.data(),        true,      fade};
-  scalar_crossings(in, ShiftedNum{sc_num.data(), ndotv.data(), negate, shift}, surface.face_count(),
-                   out, {}, bits);
+  scalar_crossings(suggestive_inputs(surface, test),
+                   ShiftedNum{test.sc_num.data(), test.ndotv.data(), test.negate, test.shift},
+                   surface.face_count(), out, {}, bits);
+}
+
+void contour_suggestive_zero_crossings(const Surface& surface, std::span<const double> ndotv,
+                                       const ScalarCrossingOptions& contour,
+                                       const SignBits& contour_bits, const SuggestiveTest& test,
+                                       const SignBits& suggestive_bits,
+                                       std::vector<LineSegment>& contours,
+                                       std::vector<LineSegment>& suggestive) {
+  if (!contour_bits.signs || contour_bits.signs != suggestive_bits.signs) {
+    scalar_zero_crossings(surface, ndotv, contour, contour_bits, contours);
+    suggestive_zero_crossings(surface, test, suggestive_bits, suggestive);
+    return;
+  }
+  fused_crossings(scalar_inputs(surface, ndotv, contour), StoredNum{contour.test_num.data()},
+                  contour_bits, suggestive_inputs(surface, test),
+                  ShiftedNum{test.sc_num.data(), test.ndotv.data(), test.negate, test.shift},
+                  suggestive_bits, surface.face_count(), contours, suggestive);
 }
 
 void vector_zero_crossings(const Surface& surface, std::span<const double> derivative,

@@ -11,6 +11,12 @@
 #include "fabrica/lines/segments.hpp"
 #include "fabrica/lines/zero_crossing.hpp"
 
+namespace fabrica {
+struct ContourOptions;
+struct SuggestiveOptions;
+struct ViewFields;
+}  // namespace fabrica
+
 namespace fabrica::detail {
 
 /// Per-vertex sign bytes (ViewFields::signs) for the quick face rejection
@@ -27,14 +33,43 @@ void scalar_zero_crossings(const Surface& surface, std::span<const double> value
                            const ScalarCrossingOptions& options, const SignBits& bits,
                            std::vector<LineSegment>& out);
 
-/// scalar_zero_crossings(kr) with the suggestive-contour test N/D, where
+/// scalar_zero_crossings (list path) with the magnitude threshold of PELs
+/// and Laplacian lines applied to each segment as it is made: a segment is
+/// dropped when the magnitude interpolated at both ends (by their
+/// barycentric coordinates) is <= threshold, and each end's strength is
+/// multiplied by k/(k + threshold), k = max(m - threshold, 0) (by 1 when
+/// threshold <= 0). The same segments, bit for bit, as thresholding the
+/// output afterwards.
+void scalar_zero_crossings(const Surface& surface, std::span<const double> values,
+                           const ScalarCrossingOptions& options, std::span<const double> magnitude,
+                           double threshold, std::vector<LineSegment>& out);
+
+/// The suggestive-contour test N/D of scalar_zero_crossings(kr), where
 /// D = ndotv and N_i = ±sc_num_i - shift * ndotv_i (minus sign when
 /// `negate`) is evaluated only at the corners of faces that reach the test:
 /// the same segments, bit for bit, as passing a stored N array.
-void suggestive_zero_crossings(const Surface& surface, std::span<const double> kr,
-                               std::span<const double> sc_num, bool negate, double shift,
-                               std::span<const double> ndotv, bool cull, double fade,
+struct SuggestiveTest {
+  std::span<const double> kr, sc_num, ndotv;
+  bool negate = false;
+  double shift = 0.0;
+  bool cull = false;
+  double fade = 0.0;
+};
+
+void suggestive_zero_crossings(const Surface& surface, const SuggestiveTest& test,
                                const SignBits& bits, std::vector<LineSegment>& out);
+
+/// Contours (scalar_zero_crossings of ndotv with `contour`, sign bits
+/// `contour_bits`) and suggestive_zero_crossings(test, suggestive_bits) in
+/// one scan over the faces' sign bytes; the two outputs are those of the
+/// separate calls. Both bits must use the same sign array (otherwise the
+/// separate calls are made).
+void contour_suggestive_zero_crossings(const Surface& surface, std::span<const double> ndotv,
+                                       const ScalarCrossingOptions& contour,
+                                       const SignBits& contour_bits, const SuggestiveTest& test,
+                                       const SignBits& suggestive_bits,
+                                       std::vector<LineSegment>& contours,
+                                       std::vector<LineSegment>& suggestive);
 
 /// vector_zero_crossings where `above_bit` of signs[v] is set exactly when
 /// !(magnitude[v] <= options.threshold): faces without it are skipped from
@@ -46,5 +81,12 @@ void vector_zero_crossings(const Surface& surface, std::span<const double> deriv
                            const VectorCrossingOptions& options, const std::uint8_t* signs,
                            unsigned above_bit, std::vector<LineSegment>& out,
                            const Vec3* field = nullptr);
+
+/// extract_contours and extract_suggestive_contours (the same soups) with
+/// one scan over the faces when the contours are interpolated.
+void extract_contours_and_suggestive(const Surface& surface, const ViewFields& fields,
+                                     const ContourOptions& contour, double feature_size,
+                                     const SuggestiveOptions& suggestive, SegmentSoup& contours,
+                                     SegmentSoup& suggestive_contours);
 
 }  // namespace fabrica::detail
