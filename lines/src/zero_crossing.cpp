@@ -139,8 +139,9 @@ struct ScalarInputs {
 
 // Writes segment (a, b) of face f (vertices v), after the magnitude
 // threshold if any.
-inline void emit_segment(const ScalarInputs& in, std::size_t f, const int v[3], const ScalarEnd& a,
-                         const ScalarEnd& b, std::vector<LineSegment>& out) {
+[[gnu::always_inline]] inline void emit_segment(const ScalarInputs& in, std::size_t f,
+                                                const int v[3], const ScalarEnd& a,
+                                                const ScalarEnd& b, std::vector<LineSegment>& out) {
   float sa = a.strength, sb = b.strength;
   if (in.mag) {
     const double* mg = in.mag;
