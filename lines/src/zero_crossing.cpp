@@ -357,8 +357,20 @@ void scalar_crossings(const ScalarInputs& in, const Num& num, std::size_t face_c
         if (list.empty()) {
           for (std::size_t f = b; f < e; ++f) scalar_face_body(in, num, f, part);
         } else {
-          for (std::size_t j = b; j < e; ++j)
+          // Listed faces are scattered over the mesh: fetch the face kk
+          // ahead and its corners' values k ahead, so the misses overlap.
+          constexpr std::size_t k = 8, kk = 16;
+          for (std::size_t j = b; j < e; ++j) {
+            if (j + kk < e) __builtin_prefetch(&faces[list[j + kk]]);
+            if (j + k < e) {
+              const Face& ahead = faces[list[j + k]];
+              for (int c = 0; c < 3; ++c) {
+                __builtin_prefetch(&in.val[ahead[c]]);
+                __builtin_prefetch(&in.m.pos[ahead[c]]);
+              }
+            }
             scalar_face_body(in, num, static_cast<std::size_t>(list[j]), part);
+          }
         }
       },
       out);
