@@ -36,6 +36,7 @@
 #include "fabrica/lines/extract.hpp"
 #include "fabrica/lines/view_fields.hpp"
 #include "fabrica/lines/visibility.hpp"
+#include "igea_view.hpp"
 
 namespace {
 
@@ -48,26 +49,12 @@ struct Fixture {
   std::unique_ptr<LineExtractor> extractor;  // every family; owns the precompute
 };
 
-// The reference view c3d_igea_v1 (rtsc's camera: fov 40.73°, feature size).
-Camera igea_v1_camera() {
-  Camera c;
-  c.eye = Vec3(0.000535484229, -0.00086883083, 0.16167897);
-  c.center = Vec3(0.000535484229, -0.00086883083, 0.00324995629);
-  c.up = Vec3(0, 1, 0);
-  c.fov_deg = 40.7329788;
-  c.width = c.height = 1024;
-  return c;
-}
-
 Fixture& fixture() {
   static Fixture f = [] {
     Fixture x;
-    auto loaded = io::read_mesh(std::string(FABRICA_BENCH_DATA) + "/meshes/classic/c3d_igea.ply");
-    TriangleMesh mesh = std::move(loaded.mesh);
-    io::prepare_for_lines(mesh);
-    x.surface = std::make_unique<Surface>(std::move(mesh));
-    x.camera = igea_v1_camera();
-    x.feature_size = 0.000873700483;
+    x.surface = bench::load_igea();
+    x.camera = bench::igea_v1_camera();
+    x.feature_size = bench::kIgeaV1FeatureSize;
     LineOptions o;
     o.families = all_families();
     o.feature_size = x.feature_size;

@@ -20,9 +20,8 @@
 #include <string>
 #include <vector>
 
-#include "fabrica/io/mesh_io.hpp"
-#include "fabrica/io/repair.hpp"
 #include "fabrica/lines/extract.hpp"
+#include "igea_view.hpp"
 
 int main(int argc, char** argv) {
   using namespace fabrica;
@@ -30,23 +29,16 @@ int main(int argc, char** argv) {
   const int threads = argc > 2 ? std::atoi(argv[2]) : 2;
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
                             static_cast<std::size_t>(threads));
-  auto loaded = io::read_mesh(std::string(FABRICA_BENCH_DATA) + "/meshes/classic/c3d_igea.ply");
-  TriangleMesh mesh = std::move(loaded.mesh);
-  io::prepare_for_lines(mesh);
-  Surface surface(std::move(mesh));
-  Camera c;
-  c.eye = Vec3(0.000535484229, -0.00086883083, 0.16167897);
-  c.center = Vec3(0.000535484229, -0.00086883083, 0.00324995629);
-  c.up = Vec3(0, 1, 0);
-  c.fov_deg = 40.7329788;
-  c.width = c.height = 1024;
+  const auto surface_ptr = bench::load_igea();
+  const Surface& surface = *surface_ptr;
+  const Camera c = bench::igea_v1_camera();
   LineOptions o;
   const std::string set = argc > 3 ? argv[3] : "rtsc";
   if (set == "light")
     o.families = {LineFamily::pel, LineFamily::laplacian};
   else
     o.families = reference_families();
-  o.feature_size = 0.000873700483;
+  o.feature_size = bench::kIgeaV1FeatureSize;
   LineExtractor ex(surface, o);
   std::vector<SegmentSoup> soups;
   ex.extract(c, soups);
