@@ -42,7 +42,7 @@ void LineExtractor::extract(const Camera& camera, std::vector<SegmentSoup>& soup
   // view's extractors find it (no fresh pages per view).
   for (auto& soup : soups)
     detail::ChunkBufferPool<LineSegment>::instance().give(detail::kOutputKey,
-                                                          std::move(soup.segments));
+                                                          std::move(soup.segments), true);
   soups = extract(camera);
 }
 

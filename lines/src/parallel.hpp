@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <map>
 #include <mutex>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -58,9 +59,14 @@ class ChunkBufferPool {
     if (best == list.size()) return {};
     return pop(list, best);
   }
-  void give(const Key& key, std::vector<T>&& v) {
+  /// With `keep_size` (whole outputs under kOutputKey only, for a
+  /// trivially destructible T) the elements stay constructed, so the next
+  /// output that takes the buffer and resizes it to about the same length
+  /// does not value-initialise them all again (concatenate_chunks
+  /// overwrites every element it keeps).
+  void give(const Key& key, std::vector<T>&& v, bool keep_size = false) {
     if (v.capacity() == 0) return;
-    v.clear();
+    if (!keep_size) v.clear();
     std::lock_guard<std::mutex> lock(mutex_);
     if (bytes_ + v.capacity() * sizeof(T) > kMaxBytes) return;
     bytes_ += v.capacity() * sizeof(T);
@@ -84,6 +90,35 @@ class ChunkBufferPool {
 /// Key of the whole-output buffers in ChunkBufferPool.
 inline constexpr std::pair<const void*, std::size_t> kOutputKey{nullptr, 0};
 
+/// Appends parts[0], parts[1], ... to `out` and hands each part back to the
+/// pool under {site, key_base + c}. The output grows once (from a recycled
+/// whole output when `out` is empty: its kept elements are overwritten, not
+/// value-initialised again), then the parts are copied into their places in
+/// parallel (a serial copy of ~10 MB per view would not scale).
+template <class T>
+void concatenate_chunks(std::vector<std::vector<T>>& parts, std::vector<T>& out, const void* site,
+                        std::size_t key_base) {
+  static_assert(std::is_trivially_destructible_v<T>);
+  auto& pool = ChunkBufferPool<T>::instance();
+  const std::size_t chunks = parts.size();
+  std::vector<std::size_t> offset(chunks + 1);
+  offset[0] = out.size();
+  for (std::size_t c = 0; c < chunks; ++c) offset[c + 1] = offset[c] + parts[c].size();
+  const std::size_t total = offset[chunks];
+  if (out.empty() && out.capacity() < total) {
+    std::vector<T> v = pool.take_at_least(kOutputKey, total);
+    if (v.capacity() >= total) out.swap(v);
+  }
+  out.resize(total);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t c = r.begin(); c != r.end(); ++c) {
+                        std::copy(parts[c].begin(), parts[c].end(), out.begin() + offset[c]);
+                        pool.give({site, key_base + c}, std::move(parts[c]));
+                      }
+                    });
+}
+
 /// fn(begin, end, std::vector<T>& out) for fixed chunks of [0, n); the
 /// outputs are appended to `out` in chunk order.
 template <class T, class Fn>
@@ -104,26 +139,7 @@ void parallel_chunks(std::size_t n, Fn&& fn, std::vector<T>& out, std::size_t ch
                         fn(c * chunk, std::min(n, (c + 1) * chunk), parts[c]);
                       }
                     });
-  // Concatenation: the output grows once, then the chunks are copied into
-  // their places in parallel (the value-initialisation of the new elements
-  // is a plain store stream; a serial copy of ~10 MB per view would not
-  // scale).
-  std::vector<std::size_t> offset(chunks + 1);
-  offset[0] = out.size();
-  for (std::size_t c = 0; c < chunks; ++c) offset[c + 1] = offset[c] + parts[c].size();
-  const std::size_t total = offset[chunks];
-  if (out.empty() && out.capacity() < total) {
-    std::vector<T> v = pool.take_at_least(kOutputKey, total);
-    if (v.capacity() >= total) out.swap(v);
-  }
-  out.resize(total);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t c = r.begin(); c != r.end(); ++c) {
-                        std::copy(parts[c].begin(), parts[c].end(), out.begin() + offset[c]);
-                        pool.give({&site, c + 1}, std::move(parts[c]));
-                      }
-                    });
+  concatenate_chunks(parts, out, &site, 1);
 }
 
 /// Plain parallel loop over [0, n) in blocks (no output).

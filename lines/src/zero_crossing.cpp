@@ -465,17 +465,7 @@ void fused_crossings(const ScalarInputs& ci, const StoredNum& cn, const detail::
         sbatch.flush();
       },
       cout);
-  std::size_t total = sout.size();
-  for (const auto& p : side) total += p.size();
-  if (sout.empty() && sout.capacity() < total) {
-    std::vector<LineSegment> v = pool.take_at_least(detail::kOutputKey, total);
-    if (v.capacity() >= total) sout.swap(v);
-  }
-  sout.reserve(total);
-  for (std::size_t c = 0; c < chunks; ++c) {
-    sout.insert(sout.end(), side[c].begin(), side[c].end());
-    pool.give({&site, c}, std::move(side[c]));
-  }
+  detail::concatenate_chunks(side, sout, &site, 0);
 }
 
 struct VectorInputs {
