@@ -194,6 +194,12 @@ struct RingPass {
     });
   }
 
+  // dt1q1 (0 where not finite) and E = dt1q1 t1_world at vertex i.
+  [[gnu::always_inline]] inline void store(std::size_t i, double d) const {
+    out[i] = std::isfinite(d) ? d : 0.0;
+    field[i] = out[i] * t1_world[i];
+  }
+
   FABRICA_DT1Q1_MULTIVERSION void operator()(std::size_t b, std::size_t e) const {
     const RingPass r = *this;  // in registers, not reloaded after the stores
     r.run(b, e);
@@ -208,14 +214,12 @@ struct RingPass {
         unsigned any = 0;
         for (std::int32_t j = jb; j + 2 <= je; j += 2) any |= sg[nbr[j]] | sg[nbr[j + 1]];
         if (!(any & kQ1Above)) {
-          out[i] = 0.0;
-          field[i] = 0.0 * t1_world[i];
+          store(i, 0.0);
           continue;
         }
       }
       if (t1_world[i].squaredNorm() == 0.0) {
-        out[i] = 0.0;
-        field[i] = 0.0 * t1_world[i];
+        store(i, 0.0);
         continue;
       }
       const __m128d cs = _mm_loadu_pd(t1[i].data());
@@ -237,8 +241,7 @@ struct RingPass {
       } else {
         result = general(i, nullptr, 0, c, sn, an, q0);
       }
-      out[i] = std::isfinite(result) ? result : 0.0;
-      field[i] = out[i] * t1_world[i];
+      store(i, result);
     }
   }
 };

@@ -170,17 +170,14 @@ void update_light_fields(ViewFields& fields, const Surface& surface, const Camer
   if (detail::cpu_has_avx2()) {
     const auto& vb = precompute->vertex_blocks();
     const ViewVector4 view(camera);
-    const std::size_t full = nv / 4;
-    detail::parallel_range(
-        full + 1,
-        [&](std::size_t b) {
-          if (b < full)
-            light_pass_avx2(vb.block.data(), b, b + 1, view, headlight ? nullptr : &fixed,
-                            lap_n.data(), f, lap, fill_ndotv ? fields.ndotv.data() : nullptr);
-          else
-            for (std::size_t i = 4 * full; i < nv; ++i) light_at(i);
-        },
-        512);
+    const std::size_t full = nv / 4;  // blocks of four; the rest one by one
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, full, 512),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        light_pass_avx2(vb.block.data(), r.begin(), r.end(), view,
+                                        headlight ? nullptr : &fixed, lap_n.data(), f, lap,
+                                        fill_ndotv ? fields.ndotv.data() : nullptr);
+                      });
+    for (std::size_t i = 4 * full; i < nv; ++i) light_at(i);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 4096),
                       [&](const tbb::blocked_range<std::size_t>& r) {
                         gradient_pass_avx2(grad, r.begin(), r.end(), f,

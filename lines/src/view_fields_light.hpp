@@ -41,8 +41,9 @@ void update_view_fields(ViewFields& fields, const Surface& surface, const Camera
                         const ViewFieldsRequest& request, const LinePrecompute* precompute,
                         bool defer_dt1q1);
 
-/// D_t1 q1 (fields.dt1q1) from the filled q1, t1, t1_world, ndotv and
-/// signs: Judd's one-sided finite differences along t1 (ALGORITHMS.md §6.2).
+/// D_t1 q1 (fields.dt1q1) and E = D_t1 q1 t1_world (fields.apparent_field)
+/// from the filled q1, t1, t1_world, ndotv and signs: Judd's one-sided
+/// finite differences along t1 (ALGORITHMS.md §6.2).
 /// With `cull`, only at vertices of faces with a corner carrying kQ1Above
 /// (0 elsewhere). `precompute` supplies the tangent ring; nullptr: from the
 /// topology.

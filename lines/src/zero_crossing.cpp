@@ -379,10 +379,16 @@ void scalar_crossings(const ScalarInputs& in, const Num& num, std::size_t face_c
 // Crossing bits of the vector kernel for n faces from E per vertex: bit 0
 // when E_0·E_1 <= 0, bit 1 when E_1·E_2 <= 0, bit 2 when E_2·E_0 <= 0
 // (Eigen's dot: (x x' + y y') + z z').
-inline unsigned crossing_bits_of(const Face& f, const Vec3* E) {
-  const Vec3 &e0 = E[f[0]], &e1 = E[f[1]], &e2 = E[f[2]];
+inline unsigned crossing_bits_of(const Vec3& e0, const Vec3& e1, const Vec3& e2) {
   return unsigned(e0.dot(e1) <= 0.0) | unsigned(e1.dot(e2) <= 0.0) << 1 |
          unsigned(e2.dot(e0) <= 0.0) << 2;
+}
+inline unsigned crossing_bits_of(const Face& f, const Vec3* E) {
+  return crossing_bits_of(E[f[0]], E[f[1]], E[f[2]]);
+}
+// At least two of the three edges cross.
+inline bool two_crossings(unsigned z) {
+  return z == 3 || z >= 5;
 }
 
 #if defined(FABRICA_LINES_AVX2)
@@ -673,10 +679,9 @@ template <bool ToCenter>
     return;
   const Vec3 E[3] = {in.delta[v[0]] * in.dir[v[0]], in.delta[v[1]] * in.dir[v[1]],
                      in.delta[v[2]] * in.dir[v[2]]};
-  bool z01 = E[0].dot(E[1]) <= 0.0;
-  bool z12 = E[1].dot(E[2]) <= 0.0;
-  bool z20 = E[2].dot(E[0]) <= 0.0;
-  if (int(z01) + int(z12) + int(z20) < 2) return;
+  const unsigned z = crossing_bits_of(E[0], E[1], E[2]);
+  if (!two_crossings(z)) return;
+  bool z01 = z & 1, z12 = (z >> 1) & 1, z20 = (z >> 2) & 1;
   if (o.test == ExtremumTest::edge) {
     const Vec3* pos = in.m.pos;
     const Vec3 d01 = pos[v[1]] - pos[v[0]], d12 = pos[v[2]] - pos[v[1]],
@@ -796,7 +801,7 @@ void vector_zero_crossings(const Surface& surface, std::span<const double> deriv
             crossing_bits(faces, batch.face, batch.n, field, zb);
             for (int k = 0; k < batch.n; ++k) {
               const unsigned z = zb[k];
-              if (z != 3 && z < 5) continue;  // fewer than two crossing edges
+              if (!two_crossings(z)) continue;
               Kept& kf = keep[nk++];
               kf.f = batch.face[k];
               const Face& fg = faces[kf.f];
@@ -817,10 +822,11 @@ void vector_zero_crossings(const Surface& surface, std::span<const double> deriv
                 kf.v[c] = fg[c];
                 kf.E[c] = in.delta[fg[c]] * in.dir[fg[c]];
               }
-              kf.z01 = kf.E[0].dot(kf.E[1]) <= 0.0;
-              kf.z12 = kf.E[1].dot(kf.E[2]) <= 0.0;
-              kf.z20 = kf.E[2].dot(kf.E[0]) <= 0.0;
-              nk += int(int(kf.z01) + int(kf.z12) + int(kf.z20) >= 2);
+              const unsigned z = crossing_bits_of(kf.E[0], kf.E[1], kf.E[2]);
+              kf.z01 = z & 1;
+              kf.z12 = (z >> 1) & 1;
+              kf.z20 = (z >> 2) & 1;
+              nk += int(two_crossings(z));
             }
           }
           batch.n = 0;

@@ -40,7 +40,7 @@ class LinePrecompute;
 struct ViewFieldsRequest {
   bool radial = true;    ///< ndotv, kr (contours, suggestive contours, highlights)
   bool sc_test = true;   ///< sc_num (suggestive contours and highlights)
-  bool apparent = true;  ///< q1, t1, t1_world, dt1q1
+  bool apparent = true;  ///< q1, t1, t1_world, dt1q1, apparent_field
   /// With a value t (rtsc's q1 threshold in 1/mm², as the apparent-ridge
   /// extractor uses): dt1q1 is computed only at the vertices of faces with a
   /// corner where q1 > t, the only ones an apparent ridge with that
