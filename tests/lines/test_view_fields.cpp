@@ -7,6 +7,8 @@
 // (f, Δf, ∇f, |∇f|, the PEL derivatives, the listed faces).
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <string>
@@ -144,5 +146,63 @@ TEST(LinesViewFields, SimdAndPortablePassesGiveTheSameBits) {
     c.projection = Projection::orthographic;
     expect_same_vertex_pass(surface, pre, c, true);
     expect_same_light_pass(surface, pre, c, std::nullopt, t);
+  }
+}
+
+// D_t1 q1 from the precomputed tangent ring (neighbour fans, and two
+// neighbours per face where the ring is not a closed fan: boundaries,
+// degenerate and non-manifold vertices) against the independent
+// face-by-face walk over the topology in double positions. The ring holds
+// float offsets, so values agree to float precision, except where a crossing
+// lands within rounding of a ring corner and the two walks pick different
+// faces.
+TEST(LinesViewFields, Dt1q1FromTheTangentRingMatchesTheTopologyWalk) {
+  for (const char* rel : {"meshes/classic/c3d_cow.obj", "meshes/classic/libigl_camelhead.off"}) {
+    SCOPED_TRACE(rel);
+    const Surface surface = load(rel, true);
+    const LinePrecompute pre(surface);
+    const auto& ring = pre.tangent_ring();
+    std::size_t fans = 0;
+    for (auto f : ring.fan) fans += f != 0;
+    // Both kinds of ring are exercised.
+    EXPECT_GT(fans, surface.vertex_count() / 2);
+    EXPECT_LT(fans, surface.vertex_count());
+    const BoundingBox box = bounding_box(surface.positions());
+    Camera c;
+    c.center = box.center();
+    c.eye = c.center + Vec3(-0.4, 0.3, 1.0).normalized() * 2.5 * box.diagonal();
+    c.up = Vec3::UnitY();
+    c.fov_deg = 30.0;
+    c.width = c.height = 512;
+    ViewFieldsRequest req;
+    const ViewFields fast = compute_view_fields(surface, c, req, &pre);
+    const ViewFields walk = compute_view_fields(surface, c, req, nullptr);
+    ASSERT_EQ(fast.dt1q1.size(), walk.dt1q1.size());
+    // Values near 0 (relative to the typical magnitude, the median: the
+    // largest are outliers where a crossing lands next to the vertex) are
+    // compared absolutely.
+    std::vector<double> mags;
+    for (double d : walk.dt1q1)
+      if (d != 0.0) mags.push_back(std::abs(d));
+    ASSERT_FALSE(mags.empty());
+    std::nth_element(mags.begin(), mags.begin() + mags.size() / 2, mags.end());
+    const double floor = 1e-6 * mags[mags.size() / 2];
+    // Counted separately on fans and on the other rings (few, but a path
+    // of their own).
+    std::size_t nonzero[2] = {0, 0}, close[2] = {0, 0};
+    for (std::size_t i = 0; i < walk.dt1q1.size(); ++i) {
+      const double a = fast.dt1q1[i], b = walk.dt1q1[i];
+      EXPECT_TRUE(std::isfinite(a)) << i;
+      if (b == 0.0 && a == 0.0) continue;
+      const int kind = ring.fan[i] ? 0 : 1;
+      ++nonzero[kind];
+      close[kind] += std::abs(a - b) <= 1e-4 * std::max(std::abs(b), floor);
+    }
+    std::printf("%s: fans %zu/%zu close, other rings %zu/%zu close\n", rel, close[0], nonzero[0],
+                close[1], nonzero[1]);
+    EXPECT_GT(nonzero[0], surface.vertex_count() / 2);
+    EXPECT_GT(nonzero[1], 0u);
+    for (int kind = 0; kind < 2; ++kind)
+      EXPECT_GE(static_cast<double>(close[kind]), 0.97 * static_cast<double>(nonzero[kind]));
   }
 }
