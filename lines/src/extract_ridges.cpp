@@ -94,10 +94,10 @@ SegmentSoup extract_apparent_ridges(const Surface& surface, const ViewFields& fi
     throw Error(ErrorKind::internal,
                 "apparent ridges: the view fields were computed for a higher threshold");
   const bool bits = fields.signs.size() == nv && cull_t && *cull_t == o.threshold;
-  const bool field = fields.apparent_field.size() == nv;
+  const bool packed = fields.apparent_vertex.size() == nv;
   detail::vector_zero_crossings(surface, fields.dt1q1, fields.t1_world, fields.q1, o,
                                 bits ? fields.signs.data() : nullptr, kQ1Above, soup.segments,
-                                field ? fields.apparent_field.data() : nullptr);
+                                packed ? fields.apparent_vertex.data() : nullptr);
   return soup;
 }
 

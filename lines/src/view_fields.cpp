@@ -231,7 +231,7 @@ void detail::update_view_fields(ViewFields& fields, const Surface& surface, cons
   detail::resize_or_clear(fields.t1, request.apparent, nv);
   detail::resize_or_clear(fields.t1_world, request.apparent, nv);
   detail::resize_or_clear(fields.dt1q1, request.apparent, nv);
-  detail::resize_or_clear(fields.apparent_field, request.apparent, nv);
+  detail::resize_or_clear(fields.apparent_vertex, request.apparent, nv);
   detail::resize_or_clear(fields.signs, radial, nv);
   fields.apparent_cull_threshold =
       request.apparent ? request.apparent_cull_threshold : std::optional<double>{};

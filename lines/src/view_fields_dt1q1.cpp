@@ -24,6 +24,14 @@ namespace fabrica::detail {
 
 namespace {
 
+inline void store_apparent_vertex(ApparentVertex& a, double d, const Vec3& t1_world, double q1,
+                                  const Vec3& pos) {
+  a.field = d * t1_world;
+  a.dt1q1 = d;
+  a.q1 = q1;
+  a.position = pos;
+}
+
 // w1 = num / den, the weight of the first corner where the line crosses a
 // face's opposite edge, when in [0, 1); false otherwise. Exact early
 // rejections before the division: |num| >= |den| (also den == 0 or NaN)
@@ -135,8 +143,9 @@ struct RingPass {
   const Vec2* t1;
   const Vec3* t1_world;
   const double* ndotv;
+  const Vec3* pos;
   double* out;
-  Vec3* field;  // out * t1_world
+  ApparentVertex* packed;  // E = out * t1_world, out, q1, pos
   bool cull;
 
   // The faces of vertex i with neighbours (a, b) (relative to the ring) in
@@ -194,10 +203,10 @@ struct RingPass {
     });
   }
 
-  // dt1q1 (0 where not finite) and E = dt1q1 t1_world at vertex i.
+  // dt1q1 (0 where not finite) and the record of vertex i.
   [[gnu::always_inline]] inline void store(std::size_t i, double d) const {
     out[i] = std::isfinite(d) ? d : 0.0;
-    field[i] = out[i] * t1_world[i];
+    store_apparent_vertex(packed[i], out[i], t1_world[i], q1[i], pos[i]);
   }
 
   FABRICA_DT1Q1_MULTIVERSION void operator()(std::size_t b, std::size_t e) const {
@@ -286,8 +295,9 @@ void update_dt1q1(ViewFields& fields, const Surface& surface, bool cull,
                         fields.t1.data(),
                         fields.t1_world.data(),
                         fields.ndotv.data(),
+                        pos.data(),
                         fields.dt1q1.data(),
-                        fields.apparent_field.data(),
+                        fields.apparent_vertex.data(),
                         cull};
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 2048),
                       [&](const tbb::blocked_range<std::size_t>& r) { pass(r.begin(), r.end()); });
@@ -352,7 +362,8 @@ void update_dt1q1(ViewFields& fields, const Surface& surface, bool cull,
       fields.dt1q1[i] = std::isfinite(result) ? result : 0.0;
     });
     detail::parallel_range(nv, [&](std::size_t i) {
-      fields.apparent_field[i] = fields.dt1q1[i] * fields.t1_world[i];
+      store_apparent_vertex(fields.apparent_vertex[i], fields.dt1q1[i], fields.t1_world[i], q1[i],
+                            pos[i]);
     });
   }
 }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "fabrica/core/error.hpp"
 #include "parallel.hpp"
 #include "simd_avx2.hpp"
 #include "zero_crossing_internal.hpp"
@@ -383,8 +384,14 @@ inline unsigned crossing_bits_of(const Vec3& e0, const Vec3& e1, const Vec3& e2)
   return unsigned(e0.dot(e1) <= 0.0) | unsigned(e1.dot(e2) <= 0.0) << 1 |
          unsigned(e2.dot(e0) <= 0.0) << 2;
 }
-inline unsigned crossing_bits_of(const Face& f, const Vec3* E) {
-  return crossing_bits_of(E[f[0]], E[f[1]], E[f[2]]);
+// E of vertex v at E + v * kApparentStride (ViewFields::apparent_vertex).
+constexpr std::size_t kApparentStride = sizeof(ApparentVertex) / sizeof(double);
+inline Vec3 field_at(const double* E, std::size_t v) {
+  const double* e = E + v * kApparentStride;
+  return Vec3(e[0], e[1], e[2]);
+}
+inline unsigned crossing_bits_of(const Face& f, const double* E) {
+  return crossing_bits_of(field_at(E, f[0]), field_at(E, f[1]), field_at(E, f[2]));
 }
 // At least two of the three edges cross.
 inline bool two_crossings(unsigned z) {
@@ -392,16 +399,16 @@ inline bool two_crossings(unsigned z) {
 }
 
 #if defined(FABRICA_LINES_AVX2)
-[[gnu::target("avx2")]] void crossing_bits_avx2(const Face* faces, const std::size_t* face, int n,
-                                                const Vec3* E, std::uint8_t* out) {
+[[gnu::target("avx2")]] void crossing_bits_avx2(const Face* faces, const std::uint32_t* face, int n,
+                                                const double* E, std::uint8_t* out) {
   int k = 0;
   for (; k + 4 <= n; k += 4) {
     __m256d x[3], y[3], z[3];
     for (int c = 0; c < 3; ++c) {
-      const double* a = E[faces[face[k]][c]].data();
-      const double* b = E[faces[face[k + 1]][c]].data();
-      const double* d = E[faces[face[k + 2]][c]].data();
-      const double* e = E[faces[face[k + 3]][c]].data();
+      const double* a = E + std::size_t(faces[face[k]][c]) * kApparentStride;
+      const double* b = E + std::size_t(faces[face[k + 1]][c]) * kApparentStride;
+      const double* d = E + std::size_t(faces[face[k + 2]][c]) * kApparentStride;
+      const double* e = E + std::size_t(faces[face[k + 3]][c]) * kApparentStride;
       x[c] = _mm256_set_pd(e[0], d[0], b[0], a[0]);
       y[c] = _mm256_set_pd(e[1], d[1], b[1], a[1]);
       z[c] = _mm256_set_pd(e[2], d[2], b[2], a[2]);
@@ -421,7 +428,7 @@ inline bool two_crossings(unsigned z) {
 }
 #endif
 
-inline void crossing_bits(const Face* faces, const std::size_t* face, int n, const Vec3* E,
+inline void crossing_bits(const Face* faces, const std::uint32_t* face, int n, const double* E,
                           std::uint8_t* out) {
 #if defined(FABRICA_LINES_AVX2)
   if (detail::cpu_has_avx2()) {
@@ -474,12 +481,21 @@ void fused_crossings(const ScalarInputs& ci, const StoredNum& cn, const detail::
   detail::concatenate_chunks(side, sout, &site, 0);
 }
 
+// The vector kernel's per-vertex reads: derivative δ, magnitude m and
+// position, from separate arrays or from ViewFields::apparent_vertex
+// records (then with a stride of one record, so a corner's data are one
+// cache line).
 struct VectorInputs {
   MeshArrays m;
   const double* delta;
   const Vec3* dir;
   const double* mag;
   const VectorCrossingOptions& o;
+  const double* pos = m.pos->data();
+  std::size_t ds = 1, ps = 3;  // strides of delta and mag, and of pos (doubles)
+  double d(std::size_t v) const { return delta[v * ds]; }
+  double mg(std::size_t v) const { return mag[v * ds]; }
+  const double* p(std::size_t v) const { return pos + v * ps; }
 };
 
 // The options the segment builder reads, copied out of VectorInputs once
@@ -506,18 +522,19 @@ struct EdgeCut {
   c.hi = s ? ca : cb;
   c.vlo = static_cast<std::size_t>(s ? vb : va);
   c.vhi = static_cast<std::size_t>(s ? va : vb);
-  const double da = std::abs(in.delta[c.vlo]), db = std::abs(in.delta[c.vhi]);
+  const double da = std::abs(in.d(c.vlo)), db = std::abs(in.d(c.vhi));
   const double sum = da + db;
   c.t = sum > 0.0 ? da / sum : 0.5;
-  c.m = std::abs((1.0 - c.t) * in.mag[c.vlo] + c.t * in.mag[c.vhi]);
+  c.m = std::abs((1.0 - c.t) * in.mg(c.vlo) + c.t * in.mg(c.vhi));
   return c;
 }
 
 // The point of a cut, (1 - t) p_lo + t p_hi per component (as the Eigen
 // expression evaluates it).
-[[gnu::always_inline]] inline void cut_point(const Vec3* pos, const EdgeCut& c, double p[3]) {
+[[gnu::always_inline]] inline void cut_point(const VectorInputs& in, const EdgeCut& c,
+                                             double p[3]) {
   const double s = 1.0 - c.t;
-  const Vec3 &a = pos[c.vlo], &b = pos[c.vhi];
+  const double *a = in.p(c.vlo), *b = in.p(c.vhi);
   p[0] = s * a[0] + c.t * b[0];
   p[1] = s * a[1] + c.t * b[1];
   p[2] = s * a[2] + c.t * b[2];
@@ -527,8 +544,8 @@ struct EdgeCut {
 // with n = (p1 - p0) x (p2 - p0) and q = n x (pa - pb), true (reject) when
 // E0·q <= 0, E1·q >= 0 or E2·q <= 0 (the Eigen cross and dot products'
 // operations, in the same order).
-[[gnu::always_inline]] inline bool perpendicular_rejects(const Vec3& p0, const Vec3& p1,
-                                                         const Vec3& p2, const double pa[3],
+[[gnu::always_inline]] inline bool perpendicular_rejects(const double* p0, const double* p1,
+                                                         const double* p2, const double pa[3],
                                                          const double pb[3], const Vec3& e0,
                                                          const Vec3& e1, const Vec3& e2) {
   const double u0 = p1[0] - p0[0], u1 = p1[1] - p0[1], u2 = p1[2] - p0[2];
@@ -610,18 +627,17 @@ template <bool ToCenter>
   const double m01 = a.m;
   const double k01 = std::max(m01 - sp.threshold, 0.0);
   if (k01 == 0.0 && k12 == 0.0) return;
-  const Vec3* pos = in.m.pos;
   double pa[3], pb[3];
-  cut_point(pos, a, pa);
+  cut_point(in, a, pa);
   if constexpr (ToCenter) {
     pb[0] = ce.p[0];
     pb[1] = ce.p[1];
     pb[2] = ce.p[2];
   } else {
-    cut_point(pos, b, pb);
+    cut_point(in, b, pb);
   }
   if (sp.perpendicular &&
-      perpendicular_rejects(pos[v[0]], pos[v[1]], pos[v[2]], pa, pb, E[c0], E[c1], E[c2]))
+      perpendicular_rejects(in.p(v[0]), in.p(v[1]), in.p(v[2]), pa, pb, E[c0], E[c1], E[c2]))
     return;
   const auto fi = static_cast<std::int32_t>(f);
   const Topology& topo = *in.m.topo;
@@ -636,9 +652,9 @@ template <bool ToCenter>
 [[gnu::noinline]] void vector_centroid_segments(const VectorInputs& in, const SegmentParams& sp,
                                                 std::size_t f, const int v[3], const Vec3 E[3],
                                                 std::vector<LineSegment>& out) {
-  const Vec3 &p0 = in.m.pos[v[0]], &p1 = in.m.pos[v[1]], &p2 = in.m.pos[v[2]];
+  const double *p0 = in.p(v[0]), *p1 = in.p(v[1]), *p2 = in.p(v[2]);
   CentroidEnd ce;
-  ce.m = std::abs(in.mag[v[0]] + in.mag[v[1]] + in.mag[v[2]]) / 3.0;
+  ce.m = std::abs(in.mg(v[0]) + in.mg(v[1]) + in.mg(v[2])) / 3.0;
   ce.k = std::max(ce.m - sp.threshold, 0.0);
   for (int k = 0; k < 3; ++k) ce.p[k] = (p0[k] + p1[k] + p2[k]) / 3.0;
   // (c0,c1,c2) = (1,2,0), (2,0,1), (0,1,2), in this order.
@@ -677,8 +693,8 @@ template <bool ToCenter>
   if (!o.vertex_mask.empty() &&
       (!o.vertex_mask[v[0]] || !o.vertex_mask[v[1]] || !o.vertex_mask[v[2]]))
     return;
-  const Vec3 E[3] = {in.delta[v[0]] * in.dir[v[0]], in.delta[v[1]] * in.dir[v[1]],
-                     in.delta[v[2]] * in.dir[v[2]]};
+  const Vec3 E[3] = {in.d(v[0]) * in.dir[v[0]], in.d(v[1]) * in.dir[v[1]],
+                     in.d(v[2]) * in.dir[v[2]]};
   const unsigned z = crossing_bits_of(E[0], E[1], E[2]);
   if (!two_crossings(z)) return;
   bool z01 = z & 1, z12 = (z >> 1) & 1, z20 = (z >> 2) & 1;
@@ -692,6 +708,222 @@ template <bool ToCenter>
     if (int(z01) + int(z12) + int(z20) < 2) return;
   }
   vector_face_segments(in, f, v, E, z01, z12, z20, out);
+}
+
+// The kept faces of a packed chunk (at least two crossing edges) and
+// their crossing bits.
+struct KeptFaces {
+  std::uint32_t f[detail::kFaceChunk];
+  std::uint8_t z[detail::kFaceChunk];
+  std::size_t n = 0;
+};
+
+// vector_face_segments for the kept faces, one at a time.
+void kept_segments_scalar(const VectorInputs& in, const double* field, const KeptFaces& kept,
+                          std::vector<LineSegment>& out) {
+  for (std::size_t j = 0; j < kept.n; ++j) {
+    const std::size_t f = kept.f[j];
+    const Face& fg = in.m.faces[f];
+    const int v[3] = {fg[0], fg[1], fg[2]};
+    const Vec3 E[3] = {field_at(field, fg[0]), field_at(field, fg[1]), field_at(field, fg[2])};
+    const unsigned z = kept.z[j];
+    vector_face_segments(in, f, v, E, z & 1, (z >> 1) & 1, (z >> 2) & 1, out);
+  }
+}
+
+#if defined(FABRICA_LINES_AVX2)
+// vector_edge for four cuts (derivatives and magnitudes at the lower and
+// the higher vertex): t from the lower vertex, the magnitude m, and
+// k = max(m - th, 0) as vector_segment computes it.
+[[gnu::target("avx2"), gnu::always_inline]] inline void cut4(const double* dl, const double* dh,
+                                                             const double* ql, const double* qh,
+                                                             __m256d th, __m256d& t, __m256d& m,
+                                                             __m256d& k) {
+  const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0);
+  const __m256d abs_mask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffff));
+  const __m256d da = _mm256_and_pd(_mm256_load_pd(dl), abs_mask);
+  const __m256d db = _mm256_and_pd(_mm256_load_pd(dh), abs_mask);
+  const __m256d sum = _mm256_add_pd(da, db);
+  t = detail::pick4(_mm256_cmp_pd(sum, zero, _CMP_GT_OQ), _mm256_div_pd(da, sum),
+                    _mm256_set1_pd(0.5));
+  m = _mm256_and_pd(_mm256_add_pd(_mm256_mul_pd(_mm256_sub_pd(one, t), _mm256_load_pd(ql)),
+                                  _mm256_mul_pd(t, _mm256_load_pd(qh))),
+                    abs_mask);
+  k = _mm256_max_pd(zero, _mm256_sub_pd(m, th));
+}
+
+// The same segments, four faces at a time: each lane evaluates
+// vector_segment<false>'s expressions in the same operations (so the same
+// bits); faces crossed on all three edges (the centroid case) and the
+// output records stay scalar, in face order.
+[[gnu::target("avx2")]] void kept_segments_avx2(const VectorInputs& in, const double* field,
+                                                const KeptFaces& kept,
+                                                std::vector<LineSegment>& out) {
+  const SegmentParams sp{in.o.threshold, in.o.test == ExtremumTest::perpendicular,
+                         in.o.keep_raw_magnitude};
+  const Face* faces = in.m.faces;
+  const Topology& topo = *in.m.topo;
+  for (std::size_t j = 0; j < kept.n; j += 4) {
+    const int lanes = static_cast<int>(std::min<std::size_t>(4, kept.n - j));
+    // Per lane: corners (c0, c1, c2) of the segment, its two cuts' corners
+    // ordered by vertex index, and the inputs gathered from the records.
+    int cl[4][3], alo[4], ahi[4], blo[4], bhi[4];
+    alignas(32) double dal[4], dah[4], qal[4], qah[4], dbl[4], dbh[4], qbl[4], qbh[4];
+    alignas(32) double pal[3][4], pah[3][4], pbl[3][4], pbh[3][4], P[3][3][4], Ec[3][3][4];
+    for (int l = 0; l < 4; ++l) {
+      const int src = l < lanes ? l : 0;  // unused lanes repeat lane 0
+      const unsigned z = kept.z[j + src];
+      const Face& fg = faces[kept.f[j + src]];
+      const int c0 = !(z & 1) ? 1 : !(z & 2) ? 2 : 0;
+      const int c1 = c0 == 2 ? 0 : c0 + 1, c2 = c1 == 2 ? 0 : c1 + 1;
+      cl[l][0] = c0, cl[l][1] = c1, cl[l][2] = c2;
+      const bool sa = fg[c0] > fg[c1], sb = fg[c1] > fg[c2];
+      alo[l] = sa ? c1 : c0, ahi[l] = sa ? c0 : c1;
+      blo[l] = sb ? c2 : c1, bhi[l] = sb ? c1 : c2;
+      const double* r[3];
+      for (int c = 0; c < 3; ++c) r[c] = field + std::size_t(fg[c]) * kApparentStride;
+      // Record layout: field (0..2), dt1q1 (3), q1 (4), position (5..7).
+      dal[l] = r[alo[l]][3], dah[l] = r[ahi[l]][3], qal[l] = r[alo[l]][4], qah[l] = r[ahi[l]][4];
+      dbl[l] = r[blo[l]][3], dbh[l] = r[bhi[l]][3], qbl[l] = r[blo[l]][4], qbh[l] = r[bhi[l]][4];
+      for (int k = 0; k < 3; ++k) {
+        pal[k][l] = r[alo[l]][5 + k], pah[k][l] = r[ahi[l]][5 + k];
+        pbl[k][l] = r[blo[l]][5 + k], pbh[k][l] = r[bhi[l]][5 + k];
+        for (int c = 0; c < 3; ++c) {
+          P[c][k][l] = r[c][5 + k];
+          Ec[c][k][l] = r[cl[l][c]][k];
+        }
+      }
+    }
+    const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0);
+    const __m256d th = _mm256_set1_pd(sp.threshold);
+    __m256d ta, ma, ka, tb, mb, kb;
+    cut4(dal, dah, qal, qah, th, ta, ma, ka);
+    cut4(dbl, dbh, qbl, qbh, th, tb, mb, kb);
+    const __m256d below =
+        _mm256_and_pd(_mm256_cmp_pd(ka, zero, _CMP_EQ_OQ), _mm256_cmp_pd(kb, zero, _CMP_EQ_OQ));
+    // cut_point: (1 - t) p_lo + t p_hi per component.
+    __m256d pa[3], pb[3];
+    const __m256d ua = _mm256_sub_pd(one, ta), ub = _mm256_sub_pd(one, tb);
+    for (int k = 0; k < 3; ++k) {
+      pa[k] = _mm256_add_pd(_mm256_mul_pd(ua, _mm256_load_pd(pal[k])),
+                            _mm256_mul_pd(ta, _mm256_load_pd(pah[k])));
+      pb[k] = _mm256_add_pd(_mm256_mul_pd(ub, _mm256_load_pd(pbl[k])),
+                            _mm256_mul_pd(tb, _mm256_load_pd(pbh[k])));
+    }
+    __m256d reject = below;
+    if (sp.perpendicular) {
+      // perpendicular_rejects, lane by lane the same operations.
+      __m256d p[3][3];
+      for (int c = 0; c < 3; ++c)
+        for (int k = 0; k < 3; ++k) p[c][k] = _mm256_load_pd(P[c][k]);
+      const __m256d u0 = _mm256_sub_pd(p[1][0], p[0][0]), u1 = _mm256_sub_pd(p[1][1], p[0][1]),
+                    u2 = _mm256_sub_pd(p[1][2], p[0][2]);
+      const __m256d w0 = _mm256_sub_pd(p[2][0], p[0][0]), w1 = _mm256_sub_pd(p[2][1], p[0][1]),
+                    w2 = _mm256_sub_pd(p[2][2], p[0][2]);
+      const __m256d n0 = _mm256_sub_pd(_mm256_mul_pd(u1, w2), _mm256_mul_pd(u2, w1));
+      const __m256d n1 = _mm256_sub_pd(_mm256_mul_pd(u2, w0), _mm256_mul_pd(u0, w2));
+      const __m256d n2 = _mm256_sub_pd(_mm256_mul_pd(u0, w1), _mm256_mul_pd(u1, w0));
+      const __m256d d0 = _mm256_sub_pd(pa[0], pb[0]), d1 = _mm256_sub_pd(pa[1], pb[1]),
+                    d2 = _mm256_sub_pd(pa[2], pb[2]);
+      const __m256d q0 = _mm256_sub_pd(_mm256_mul_pd(n1, d2), _mm256_mul_pd(n2, d1));
+      const __m256d q1 = _mm256_sub_pd(_mm256_mul_pd(n2, d0), _mm256_mul_pd(n0, d2));
+      const __m256d q2 = _mm256_sub_pd(_mm256_mul_pd(n0, d1), _mm256_mul_pd(n1, d0));
+      __m256d e[3];
+      for (int c = 0; c < 3; ++c)
+        e[c] = detail::dot4(_mm256_load_pd(Ec[c][0]), _mm256_load_pd(Ec[c][1]),
+                            _mm256_load_pd(Ec[c][2]), q0, q1, q2);
+      reject = _mm256_or_pd(reject, _mm256_cmp_pd(e[0], zero, _CMP_LE_OQ));
+      reject = _mm256_or_pd(reject, _mm256_cmp_pd(e[1], zero, _CMP_GE_OQ));
+      reject = _mm256_or_pd(reject, _mm256_cmp_pd(e[2], zero, _CMP_LE_OQ));
+    }
+    const int rejected = _mm256_movemask_pd(reject);
+    // ridge_strength for both ends.
+    alignas(32) double sa4[4], sb4[4], t_a[4], t_b[4], m_a[4], m_b[4], xa[3][4], xb[3][4];
+    if (sp.raw) {
+      _mm256_store_pd(sa4, ma);
+      _mm256_store_pd(sb4, mb);
+    } else if (sp.threshold > 0.0) {
+      _mm256_store_pd(sa4, _mm256_div_pd(ka, _mm256_add_pd(ka, th)));
+      _mm256_store_pd(sb4, _mm256_div_pd(kb, _mm256_add_pd(kb, th)));
+    }
+    _mm256_store_pd(t_a, ta);
+    _mm256_store_pd(t_b, tb);
+    _mm256_store_pd(m_a, ma);
+    _mm256_store_pd(m_b, mb);
+    for (int k = 0; k < 3; ++k) {
+      _mm256_store_pd(xa[k], pa[k]);
+      _mm256_store_pd(xb[k], pb[k]);
+    }
+    for (int l = 0; l < lanes; ++l) {
+      const std::size_t f = kept.f[j + l];
+      const Face& fg = faces[f];
+      if (kept.z[j + l] == 7) {
+        const int v[3] = {fg[0], fg[1], fg[2]};
+        const Vec3 E[3] = {field_at(field, fg[0]), field_at(field, fg[1]), field_at(field, fg[2])};
+        vector_centroid_segments(in, sp, f, v, E, out);
+        continue;
+      }
+      if (rejected >> l & 1) continue;
+      const EdgeCut a{alo[l], ahi[l], std::size_t(fg[alo[l]]), std::size_t(fg[ahi[l]]),
+                      t_a[l], m_a[l]};
+      const EdgeCut b{blo[l], bhi[l], std::size_t(fg[blo[l]]), std::size_t(fg[bhi[l]]),
+                      t_b[l], m_b[l]};
+      const double pa1[3] = {xa[0][l], xa[1][l], xa[2][l]};
+      const double pb1[3] = {xb[0][l], xb[1][l], xb[2][l]};
+      const auto fi = static_cast<std::int32_t>(f);
+      const float s_a = sp.raw || sp.threshold > 0.0 ? static_cast<float>(sa4[l]) : 1.0f;
+      const float s_b = sp.raw || sp.threshold > 0.0 ? static_cast<float>(sb4[l]) : 1.0f;
+      out.emplace_back(SegmentRecord<false>{fi, a, b, pa1, pb1, topo.face_edge(f, 3 - a.lo - a.hi),
+                                            topo.face_edge(f, 3 - b.lo - b.hi), s_a, s_b});
+    }
+  }
+}
+#endif
+
+// The packed (apparent-ridge) kernel over faces [b, e): the faces with a
+// corner above the threshold, compacted without branches (about half pass,
+// unpredictably); their crossing bits a batch at a time, the next batch's
+// corner records prefetched; the faces with two crossings, then their
+// segments.
+void packed_chunk(const VectorInputs& in, const double* field, const std::uint8_t* signs,
+                  unsigned above_bit, std::size_t b, std::size_t e, std::vector<LineSegment>& out) {
+  const Face* faces = in.m.faces;
+  std::uint32_t cand[detail::kFaceChunk];
+  std::size_t nc = 0;
+  for (std::size_t f = b; f < e; ++f) {
+    const Face& face = faces[f];
+    cand[nc] = static_cast<std::uint32_t>(f);
+    nc += ((signs[face[0]] | signs[face[1]] | signs[face[2]]) & above_bit) != 0;
+  }
+  auto prefetch = [&](std::size_t from, std::size_t to) {
+    for (std::size_t j = from; j < to; ++j)
+      for (int k = 0; k < 3; ++k)
+        __builtin_prefetch(field + std::size_t(faces[cand[j]][k]) * kApparentStride);
+  };
+  constexpr std::size_t kb = CandidateBatch::kSize;
+  KeptFaces kept;
+  const Topology& topo = *in.m.topo;
+  prefetch(0, std::min(nc, kb));
+  for (std::size_t j = 0; j < nc; j += kb) {
+    const std::size_t je = std::min(nc, j + kb);
+    prefetch(je, std::min(nc, je + kb));
+    std::uint8_t zb[kb];
+    crossing_bits(faces, cand + j, static_cast<int>(je - j), field, zb);
+    for (std::size_t k = j; k < je; ++k) {
+      const unsigned z = zb[k - j];
+      kept.f[kept.n] = cand[k];
+      kept.z[kept.n] = static_cast<std::uint8_t>(z);
+      if (two_crossings(z)) __builtin_prefetch(topo.face_edge_row(cand[k]));
+      kept.n += two_crossings(z);
+    }
+  }
+#if defined(FABRICA_LINES_AVX2)
+  if (detail::cpu_has_avx2()) {
+    kept_segments_avx2(in, field, kept, out);
+    return;
+  }
+#endif
+  kept_segments_scalar(in, field, kept, out);
 }
 
 }  // namespace
@@ -766,14 +998,33 @@ void contour_suggestive_zero_crossings(const Surface& surface, std::span<const d
 void vector_zero_crossings(const Surface& surface, std::span<const double> derivative,
                            std::span<const Vec3> direction, std::span<const double> magnitude,
                            const VectorCrossingOptions& options, const std::uint8_t* signs,
-                           unsigned above_bit, std::vector<LineSegment>& out, const Vec3* field) {
+                           unsigned above_bit, std::vector<LineSegment>& out,
+                           const ApparentVertex* packed) {
   if (!signs) {
     fabrica::vector_zero_crossings(surface, derivative, direction, magnitude, options, out);
     return;
   }
-  const VectorInputs in{MeshArrays(surface), derivative.data(), direction.data(), magnitude.data(),
-                        options};
+  VectorInputs in{MeshArrays(surface), derivative.data(), direction.data(), magnitude.data(),
+                  options};
   const VectorCrossingOptions& o = options;
+  // Without culling, vertex mask or edge test (apparent ridges), the
+  // survivors of the first test can go straight to their segments.
+  const bool direct = o.cull.empty() && o.vertex_mask.empty() && o.test != ExtremumTest::edge;
+  if (packed && !direct)
+    throw Error(ErrorKind::internal, "vector kernel: packed records need the direct path");
+  if (packed) {
+    in.delta = &packed->dt1q1;
+    in.mag = &packed->q1;
+    in.pos = packed->position.data();
+    in.ds = in.ps = kApparentStride;
+    detail::parallel_chunks<LineSegment>(
+        surface.face_count(),
+        [&](std::size_t b, std::size_t e, std::vector<LineSegment>& part) {
+          packed_chunk(in, packed->field.data(), signs, above_bit, b, e, part);
+        },
+        out);
+    return;
+  }
   detail::parallel_chunks<LineSegment>(
       surface.face_count(),
       [&](std::size_t b, std::size_t e, std::vector<LineSegment>& part) {
@@ -782,72 +1033,27 @@ void vector_zero_crossings(const Surface& surface, std::span<const double> deriv
         // vector_face's first test (at least two edges where E_i·E_j <= 0),
         // evaluated for the whole batch without branches and compacted, so
         // its hard-to-predict outcome does not cost a mispredicted branch
-        // per face. Without culling, vertex mask or edge test (apparent
-        // ridges), the survivors go straight to their segments with the E
-        // and the crossings computed here.
-        const bool direct = o.cull.empty() && o.vertex_mask.empty() && o.test != ExtremumTest::edge;
+        // per face.
         auto flush = [&] {
-          struct Kept {
-            std::size_t f;
-            int v[3];
-            Vec3 E[3];
-            bool z01, z12, z20;
-          } keep[CandidateBatch::kSize];
+          std::size_t keep[CandidateBatch::kSize];
           int nk = 0;
-          if (field) {
-            // The crossing bits of the whole batch first (four faces at a
-            // time with AVX2), then only the survivors' data.
-            std::uint8_t zb[CandidateBatch::kSize];
-            crossing_bits(faces, batch.face, batch.n, field, zb);
-            for (int k = 0; k < batch.n; ++k) {
-              const unsigned z = zb[k];
-              if (!two_crossings(z)) continue;
-              Kept& kf = keep[nk++];
-              kf.f = batch.face[k];
-              const Face& fg = faces[kf.f];
-              for (int c = 0; c < 3; ++c) {
-                kf.v[c] = fg[c];
-                kf.E[c] = field[fg[c]];
-              }
-              kf.z01 = z & 1;
-              kf.z12 = (z >> 1) & 1;
-              kf.z20 = (z >> 2) & 1;
-            }
-          } else {
-            for (int k = 0; k < batch.n; ++k) {
-              Kept& kf = keep[nk];
-              kf.f = batch.face[k];
-              const Face& fg = faces[kf.f];
-              for (int c = 0; c < 3; ++c) {
-                kf.v[c] = fg[c];
-                kf.E[c] = in.delta[fg[c]] * in.dir[fg[c]];
-              }
-              const unsigned z = crossing_bits_of(kf.E[0], kf.E[1], kf.E[2]);
-              kf.z01 = z & 1;
-              kf.z12 = (z >> 1) & 1;
-              kf.z20 = (z >> 2) & 1;
-              nk += int(two_crossings(z));
-            }
+          for (int k = 0; k < batch.n; ++k) {
+            const std::size_t f = batch.face[k];
+            const Face& fg = faces[f];
+            Vec3 E[3];
+            for (int c = 0; c < 3; ++c) E[c] = in.d(fg[c]) * in.dir[fg[c]];
+            keep[nk] = f;
+            nk += int(two_crossings(crossing_bits_of(E[0], E[1], E[2])));
           }
           batch.n = 0;
-          for (int k = 0; k < nk; ++k) {
-            const Kept& kf = keep[k];
-            if (direct)
-              vector_face_segments(in, kf.f, kf.v, kf.E, kf.z01, kf.z12, kf.z20, part);
-            else
-              vector_face(in, kf.f, part);
-          }
+          for (int k = 0; k < nk; ++k) vector_face(in, keep[k], part);
         };
         for (std::size_t f = b; f < e; ++f) {
           const Face& face = faces[f];
           if (!((signs[face[0]] | signs[face[1]] | signs[face[2]]) & above_bit)) continue;
           for (int k = 0; k < 3; ++k) {
-            if (field) {
-              __builtin_prefetch(&field[face[k]]);
-            } else {
-              __builtin_prefetch(&in.delta[face[k]]);
-              __builtin_prefetch(&in.dir[face[k]]);
-            }
+            __builtin_prefetch(&in.delta[face[k]]);
+            __builtin_prefetch(&in.dir[face[k]]);
           }
           if (batch.add(f)) flush();
         }

@@ -9,6 +9,7 @@
 
 #include "fabrica/core/surface.hpp"
 #include "fabrica/lines/segments.hpp"
+#include "fabrica/lines/view_fields.hpp"
 #include "fabrica/lines/zero_crossing.hpp"
 
 namespace fabrica {
@@ -73,14 +74,16 @@ void contour_suggestive_zero_crossings(const Surface& surface, std::span<const d
 
 /// vector_zero_crossings where `above_bit` of signs[v] is set exactly when
 /// !(magnitude[v] <= options.threshold): faces without it are skipped from
-/// the bytes. signs == nullptr: the plain kernel. `field`, when given, holds
-/// E_v = derivative[v] · direction[v] at least at the corners of those
-/// faces (ViewFields::apparent_field), so the kernel does not form it.
+/// the bytes. signs == nullptr: the plain kernel. `packed`, when given
+/// (ViewFields::apparent_vertex; only without culling, vertex mask or edge
+/// test), holds E_v = derivative[v] · direction[v], the derivative, the
+/// magnitude and the position at least at the corners of those faces, and
+/// is read instead of the arrays.
 void vector_zero_crossings(const Surface& surface, std::span<const double> derivative,
                            std::span<const Vec3> direction, std::span<const double> magnitude,
                            const VectorCrossingOptions& options, const std::uint8_t* signs,
                            unsigned above_bit, std::vector<LineSegment>& out,
-                           const Vec3* field = nullptr);
+                           const ApparentVertex* packed = nullptr);
 
 /// extract_contours and extract_suggestive_contours (the same soups) with
 /// one scan over the faces when the contours are interpolated.

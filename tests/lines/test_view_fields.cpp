@@ -33,6 +33,26 @@ std::size_t differing_bits(const std::vector<T>& a, const std::vector<T>& b) {
   return n;
 }
 
+// Segments whose fields differ in any bit (field by field: LineSegment
+// has padding bytes, which need not agree).
+std::size_t differing_segments(const std::vector<LineSegment>& a,
+                               const std::vector<LineSegment>& b) {
+  if (a.size() != b.size()) return std::max(a.size(), b.size()) + 1;
+  auto same = [](const auto& x, const auto& y) { return std::memcmp(&x, &y, sizeof(x)) == 0; };
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    bool eq = a[i].face == b[i].face;
+    for (int k = 0; k < 2; ++k) {
+      const SegmentEnd &x = a[i].end[k], &y = b[i].end[k];
+      eq = eq && x.anchor.face == y.anchor.face && same(x.anchor.bary, y.anchor.bary) &&
+           same(x.position, y.position) && x.element == y.element && x.kind == y.kind &&
+           same(x.strength, y.strength);
+    }
+    n += !eq;
+  }
+  return n;
+}
+
 #define EXPECT_SAME_FIELD(a, b, name)                           \
   do {                                                          \
     EXPECT_FALSE((a).name.empty()) << #name;                    \
@@ -67,12 +87,18 @@ void expect_same_vertex_pass(const Surface& surface, const LinePrecompute& pre,
   EXPECT_SAME_FIELD(simd, portable, t1_world);
   EXPECT_SAME_FIELD(simd, portable, signs);
   EXPECT_SAME_FIELD(simd, portable, dt1q1);
-  EXPECT_SAME_FIELD(simd, portable, apparent_field);
-  // The apparent-ridge kernel's E is D_t1 q1 times t1, bit for bit.
+  EXPECT_SAME_FIELD(simd, portable, apparent_vertex);
+  // The apparent-ridge kernel's record: E is D_t1 q1 times t1, and the
+  // copies of D_t1 q1, q1 and the position, bit for bit.
+  ASSERT_EQ(simd.apparent_vertex.size(), surface.vertex_count());
   std::size_t wrong = 0;
-  for (std::size_t i = 0; i < simd.apparent_field.size(); ++i) {
+  for (std::size_t i = 0; i < simd.apparent_vertex.size(); ++i) {
+    const ApparentVertex& a = simd.apparent_vertex[i];
     const Vec3 e = simd.dt1q1[i] * simd.t1_world[i];
-    wrong += std::memcmp(e.data(), simd.apparent_field[i].data(), sizeof(Vec3)) != 0;
+    wrong += std::memcmp(e.data(), a.field.data(), sizeof(Vec3)) != 0 ||
+             std::memcmp(&simd.dt1q1[i], &a.dt1q1, sizeof(double)) != 0 ||
+             std::memcmp(&simd.q1[i], &a.q1, sizeof(double)) != 0 ||
+             std::memcmp(surface.positions()[i].data(), a.position.data(), sizeof(Vec3)) != 0;
   }
   EXPECT_EQ(wrong, 0u);
 }
@@ -114,6 +140,19 @@ Surface load(const char* rel, bool degenerate) {
   return Surface(std::move(mesh));
 }
 
+// A 30° perspective camera looking at the mesh from `direction`, 2.5
+// bounding-box diagonals away, 512² pixels.
+Camera camera_towards(const Surface& surface, const Vec3& direction) {
+  const BoundingBox box = bounding_box(surface.positions());
+  Camera c;
+  c.center = box.center();
+  c.eye = c.center + direction.normalized() * 2.5 * box.diagonal();
+  c.up = Vec3::UnitY();
+  c.fov_deg = 30.0;
+  c.width = c.height = 512;
+  return c;
+}
+
 }  // namespace
 
 TEST(LinesViewFields, SimdAndPortablePassesGiveTheSameBits) {
@@ -131,13 +170,7 @@ TEST(LinesViewFields, SimdAndPortablePassesGiveTheSameBits) {
     std::size_t invalid = 0;
     for (auto v : valid) invalid += v == 0;
     std::printf("%s: %zu vertices, %zu with invalid curvature\n", rel, valid.size(), invalid);
-    const BoundingBox box = bounding_box(surface.positions());
-    Camera c;
-    c.center = box.center();
-    c.eye = c.center + Vec3(0.3, 0.2, 1.0).normalized() * 2.5 * box.diagonal();
-    c.up = Vec3::UnitY();
-    c.fov_deg = 30.0;
-    c.width = c.height = 512;
+    Camera c = camera_towards(surface, Vec3(0.3, 0.2, 1.0));
     const double t = 0.2 / surface.feature_size();
     expect_same_vertex_pass(surface, pre, c, true);
     expect_same_vertex_pass(surface, pre, c, false);
@@ -147,6 +180,46 @@ TEST(LinesViewFields, SimdAndPortablePassesGiveTheSameBits) {
     expect_same_vertex_pass(surface, pre, c, true);
     expect_same_light_pass(surface, pre, c, std::nullopt, t);
   }
+}
+
+// The face kernels also have AVX2 paths (the apparent-ridge crossing test
+// and segments four faces at a time); every family's segments, all fields
+// of every segment, must be the same bits with and without them, also with
+// the maximum test off and with no threshold (every fade branch).
+TEST(LinesViewFields, SimdAndPortableKernelsGiveTheSameSegments) {
+#if !defined(FABRICA_LINES_AVX2)
+  GTEST_SKIP() << "no AVX2 passes in this build";
+#else
+  if (!detail::cpu_has_avx2()) GTEST_SKIP() << "this CPU has no AVX2";
+  for (const char* rel : {"meshes/classic/c3d_cow.obj", "meshes/classic/libigl_camelhead.off"}) {
+    SCOPED_TRACE(rel);
+    const Surface surface = load(rel, true);
+    Camera c = camera_towards(surface, Vec3(-0.4, 0.3, 1.0));
+    for (int variant = 0; variant < 3; ++variant) {
+      LineOptions o;
+      o.families = all_families();
+      if (variant == 1) o.apparent.maximum_test = false;
+      if (variant == 2) o.apparent.threshold = 0.0;
+      LineExtractor simd_x(surface, o), portable_x(surface, o);
+      const auto simd = simd_x.extract(c);
+      const bool had = detail::avx2_enabled().exchange(false);
+      const auto portable = portable_x.extract(c);
+      detail::avx2_enabled() = had;
+      ASSERT_EQ(simd.size(), portable.size());
+      std::size_t centroid = 0;
+      for (std::size_t k = 0; k < simd.size(); ++k) {
+        SCOPED_TRACE(family_name(simd[k].family));
+        EXPECT_EQ(simd[k].family, portable[k].family);
+        EXPECT_EQ(differing_segments(simd[k].segments, portable[k].segments), 0u);
+        if (simd[k].family == LineFamily::apparent) {
+          EXPECT_GT(simd[k].segments.size(), 100u);
+          for (const auto& seg : simd[k].segments) centroid += seg.end[1].kind == EndKind::centroid;
+        }
+      }
+      std::printf("%s variant %d: %zu apparent-ridge ends at a centroid\n", rel, variant, centroid);
+    }
+  }
+#endif
 }
 
 // D_t1 q1 from the precomputed tangent ring (neighbour fans, and two
@@ -167,13 +240,7 @@ TEST(LinesViewFields, Dt1q1FromTheTangentRingMatchesTheTopologyWalk) {
     // Both kinds of ring are exercised.
     EXPECT_GT(fans, surface.vertex_count() / 2);
     EXPECT_LT(fans, surface.vertex_count());
-    const BoundingBox box = bounding_box(surface.positions());
-    Camera c;
-    c.center = box.center();
-    c.eye = c.center + Vec3(-0.4, 0.3, 1.0).normalized() * 2.5 * box.diagonal();
-    c.up = Vec3::UnitY();
-    c.fov_deg = 30.0;
-    c.width = c.height = 512;
+    Camera c = camera_towards(surface, Vec3(-0.4, 0.3, 1.0));
     ViewFieldsRequest req;
     const ViewFields fast = compute_view_fields(surface, c, req, &pre);
     const ViewFields walk = compute_view_fields(surface, c, req, nullptr);

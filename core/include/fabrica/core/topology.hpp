@@ -20,7 +20,9 @@ class Topology {
   Topology() = default;
   explicit Topology(const TriangleMesh& mesh);
 
-  std::size_t vertex_count() const { return vertex_face_offsets_.empty() ? 0 : vertex_face_offsets_.size() - 1; }
+  std::size_t vertex_count() const {
+    return vertex_face_offsets_.empty() ? 0 : vertex_face_offsets_.size() - 1;
+  }
   std::size_t face_count() const { return face_edges_.size(); }
   std::size_t edge_count() const { return edges_.size(); }
 
@@ -56,6 +58,8 @@ class Topology {
   }
   /// The edge of face f opposite corner k, i.e. joining corners (k+1)%3 and (k+2)%3.
   std::int32_t face_edge(std::size_t f, int k) const { return face_edges_[f][k]; }
+  /// The three edges of face f in one row (for prefetching).
+  const std::int32_t* face_edge_row(std::size_t f) const { return face_edges_[f].data(); }
   /// The face across the edge opposite corner k of f, or -1 at a boundary or
   /// non-manifold edge.
   std::int32_t face_neighbor(std::size_t f, int k) const;

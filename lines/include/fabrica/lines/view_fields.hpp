@@ -17,7 +17,9 @@
 //   t1             its unit eigenvector in principal coordinates
 //   t1_world       t1[0] e1 + t1[1] e2 (unit tangent vector)
 //   dt1q1          D_t1 q1 by Judd's one-sided finite differences (§6.2), 1/mm³
-//   apparent_field dt1q1 · t1_world (the apparent-ridge kernel's E)
+//   apparent_vertex  E = dt1q1 · t1_world (the apparent-ridge kernel's
+//                  field), with dt1q1, q1 and the position: one record
+//                  per vertex
 //   light          f = n·l (headlight l = v, or a fixed direction), unclamped
 //   light_gradient ∇f at the vertex (1/mm); light_laplacian Δf (1/mm²)
 // Vertices where the Surface marks curvature invalid get zeros.
@@ -40,7 +42,7 @@ class LinePrecompute;
 struct ViewFieldsRequest {
   bool radial = true;    ///< ndotv, kr (contours, suggestive contours, highlights)
   bool sc_test = true;   ///< sc_num (suggestive contours and highlights)
-  bool apparent = true;  ///< q1, t1, t1_world, dt1q1, apparent_field
+  bool apparent = true;  ///< q1, t1, t1_world, dt1q1, apparent_vertex
   /// With a value t (rtsc's q1 threshold in 1/mm², as the apparent-ridge
   /// extractor uses): dt1q1 is computed only at the vertices of faces with a
   /// corner where q1 > t, the only ones an apparent ridge with that
@@ -73,16 +75,28 @@ enum ViewSign : std::uint8_t {
   kQ1Above = 32,       ///< !(q1 <= apparent_cull_threshold) (only with a threshold)
 };
 
+/// What the apparent-ridge kernel reads at a face corner, in one 64-byte
+/// cache line: the sign-free field E = dt1q1 · t1_world (1/mm³), D_t1 q1,
+/// q1 and the vertex position (copies of ViewFields::dt1q1, q1 and the
+/// Surface's position).
+struct alignas(64) ApparentVertex {
+  Vec3 field;
+  double dt1q1;
+  double q1;
+  Vec3 position;
+};
+static_assert(sizeof(ApparentVertex) == 64);
+
 struct ViewFields {
   Camera camera;
   std::vector<double> ndotv, kr, sc_num;
   std::vector<double> q1, dt1q1;
   std::vector<Vec2> t1;
   std::vector<Vec3> t1_world;
-  /// E = dt1q1 · t1_world, the sign-free field whose zero set the
-  /// apparent-ridge kernel extracts (1/mm³; filled with dt1q1, 0 where
-  /// dt1q1 was not computed).
-  std::vector<Vec3> apparent_field;
+  /// Per vertex: E = dt1q1 · t1_world, the sign-free field whose zero set
+  /// the apparent-ridge kernel extracts (filled with dt1q1, 0 where dt1q1
+  /// was not computed), and the other per-corner inputs of that kernel.
+  std::vector<ApparentVertex> apparent_vertex;
   std::vector<std::uint8_t> signs;                ///< ViewSign bits (with the radial group)
   std::optional<double> apparent_cull_threshold;  ///< as requested
   std::vector<double> light, light_laplacian;
