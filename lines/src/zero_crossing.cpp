@@ -399,27 +399,43 @@ inline bool two_crossings(unsigned z) {
 }
 
 #if defined(FABRICA_LINES_AVX2)
+// Rows a, b, c, d of a 4×4 block of doubles as its four columns.
+[[gnu::target("avx2"), gnu::always_inline]] inline void transpose4(__m256d a, __m256d b, __m256d c,
+                                                                   __m256d d, __m256d col[4]) {
+  const __m256d t0 = _mm256_unpacklo_pd(a, b), t1 = _mm256_unpackhi_pd(a, b);
+  const __m256d t2 = _mm256_unpacklo_pd(c, d), t3 = _mm256_unpackhi_pd(c, d);
+  col[0] = _mm256_permute2f128_pd(t0, t2, 0x20);
+  col[1] = _mm256_permute2f128_pd(t1, t3, 0x20);
+  col[2] = _mm256_permute2f128_pd(t0, t2, 0x31);
+  col[3] = _mm256_permute2f128_pd(t1, t3, 0x31);
+}
+
+// E (x, y, z) of four vertices from their records (ApparentVertex, whose
+// first four doubles are E and D_t1 q1), one lane each.
+[[gnu::target("avx2"), gnu::always_inline]] inline void load_field4(const double* E, int a, int b,
+                                                                    int c, int d, __m256d e[4]) {
+  transpose4(_mm256_load_pd(E + std::size_t(a) * kApparentStride),
+             _mm256_load_pd(E + std::size_t(b) * kApparentStride),
+             _mm256_load_pd(E + std::size_t(c) * kApparentStride),
+             _mm256_load_pd(E + std::size_t(d) * kApparentStride), e);
+}
+
+// Lane bits where E_a·E_b <= 0 (Eigen's dot order).
+[[gnu::target("avx2"), gnu::always_inline]] inline int dot_le0(const __m256d a[4],
+                                                               const __m256d b[4]) {
+  return _mm256_movemask_pd(_mm256_cmp_pd(detail::dot4(a[0], a[1], a[2], b[0], b[1], b[2]),
+                                          _mm256_setzero_pd(), _CMP_LE_OQ));
+}
+
 [[gnu::target("avx2")]] void crossing_bits_avx2(const Face* faces, const std::uint32_t* face, int n,
                                                 const double* E, std::uint8_t* out) {
   int k = 0;
   for (; k + 4 <= n; k += 4) {
-    __m256d x[3], y[3], z[3];
-    for (int c = 0; c < 3; ++c) {
-      const double* a = E + std::size_t(faces[face[k]][c]) * kApparentStride;
-      const double* b = E + std::size_t(faces[face[k + 1]][c]) * kApparentStride;
-      const double* d = E + std::size_t(faces[face[k + 2]][c]) * kApparentStride;
-      const double* e = E + std::size_t(faces[face[k + 3]][c]) * kApparentStride;
-      x[c] = _mm256_set_pd(e[0], d[0], b[0], a[0]);
-      y[c] = _mm256_set_pd(e[1], d[1], b[1], a[1]);
-      z[c] = _mm256_set_pd(e[2], d[2], b[2], a[2]);
-    }
-    const __m256d zero = _mm256_setzero_pd();
-    const int m01 = _mm256_movemask_pd(
-        _mm256_cmp_pd(detail::dot4(x[0], y[0], z[0], x[1], y[1], z[1]), zero, _CMP_LE_OQ));
-    const int m12 = _mm256_movemask_pd(
-        _mm256_cmp_pd(detail::dot4(x[1], y[1], z[1], x[2], y[2], z[2]), zero, _CMP_LE_OQ));
-    const int m20 = _mm256_movemask_pd(
-        _mm256_cmp_pd(detail::dot4(x[2], y[2], z[2], x[0], y[0], z[0]), zero, _CMP_LE_OQ));
+    const Face &f0 = faces[face[k]], &f1 = faces[face[k + 1]], &f2 = faces[face[k + 2]],
+               &f3 = faces[face[k + 3]];
+    __m256d e[3][4];
+    for (int c = 0; c < 3; ++c) load_field4(E, f0[c], f1[c], f2[c], f3[c], e[c]);
+    const int m01 = dot_le0(e[0], e[1]), m12 = dot_le0(e[1], e[2]), m20 = dot_le0(e[2], e[0]);
     for (int l = 0; l < 4; ++l)
       out[k + l] = static_cast<std::uint8_t>(((m01 >> l) & 1) | ((m12 >> l) & 1) << 1 |
                                              ((m20 >> l) & 1) << 2);
@@ -732,30 +748,75 @@ void kept_segments_scalar(const VectorInputs& in, const double* field, const Kep
 }
 
 #if defined(FABRICA_LINES_AVX2)
-// vector_edge for four cuts (derivatives and magnitudes at the lower and
-// the higher vertex): t from the lower vertex, the magnitude m, and
-// k = max(m - th, 0) as vector_segment computes it.
-[[gnu::target("avx2"), gnu::always_inline]] inline void cut4(const double* dl, const double* dh,
-                                                             const double* ql, const double* qh,
-                                                             __m256d th, __m256d& t, __m256d& m,
-                                                             __m256d& k) {
+// One face corner's record (ApparentVertex) for four faces, one lane each:
+// E (x, y, z), D_t1 q1, q1, position (x, y, z), and the vertex index.
+struct Corner4 {
+  __m256d e[3], d, q, p[3], id;
+};
+[[gnu::target("avx2"), gnu::always_inline]] inline Corner4 load_corner4(const double* field,
+                                                                        const int v[4]) {
+  const double* r[4];
+  for (int l = 0; l < 4; ++l) r[l] = field + std::size_t(v[l]) * kApparentStride;
+  __m256d lo[4], hi[4];
+  transpose4(_mm256_load_pd(r[0]), _mm256_load_pd(r[1]), _mm256_load_pd(r[2]), _mm256_load_pd(r[3]),
+             lo);
+  transpose4(_mm256_load_pd(r[0] + 4), _mm256_load_pd(r[1] + 4), _mm256_load_pd(r[2] + 4),
+             _mm256_load_pd(r[3] + 4), hi);
+  Corner4 c;
+  c.e[0] = lo[0], c.e[1] = lo[1], c.e[2] = lo[2], c.d = lo[3];
+  c.q = hi[0], c.p[0] = hi[1], c.p[1] = hi[2], c.p[2] = hi[3];
+  c.id = _mm256_cvtepi32_pd(_mm_loadu_si128(reinterpret_cast<const __m128i*>(v)));
+  return c;
+}
+
+// Per lane: x1 where r1, else x2 where r2, else x0.
+[[gnu::target("avx2"), gnu::always_inline]] inline __m256d select3(__m256d r1, __m256d r2,
+                                                                   __m256d x0, __m256d x1,
+                                                                   __m256d x2) {
+  return _mm256_blendv_pd(_mm256_blendv_pd(x0, x2, r2), x1, r1);
+}
+
+// One end of a cut (its derivative, magnitude and position), per lane.
+struct End4 {
+  __m256d d, q, p[3];
+};
+[[gnu::target("avx2"), gnu::always_inline]] inline End4 pick_end4(__m256d m, const End4& a,
+                                                                  const End4& b) {
+  End4 r;
+  r.d = _mm256_blendv_pd(b.d, a.d, m);
+  r.q = _mm256_blendv_pd(b.q, a.q, m);
+  for (int k = 0; k < 3; ++k) r.p[k] = _mm256_blendv_pd(b.p[k], a.p[k], m);
+  return r;
+}
+
+// vector_edge and cut_point for four cuts (ends ordered lo, hi): t from
+// the lower vertex, the magnitude m, k = max(m - th, 0) and the point, in
+// vector_segment's operations.
+struct Cut4 {
+  __m256d t, m, k, p[3];
+};
+[[gnu::target("avx2"), gnu::always_inline]] inline Cut4 cut4(const End4& lo, const End4& hi,
+                                                             __m256d th) {
   const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0);
   const __m256d abs_mask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffff));
-  const __m256d da = _mm256_and_pd(_mm256_load_pd(dl), abs_mask);
-  const __m256d db = _mm256_and_pd(_mm256_load_pd(dh), abs_mask);
+  const __m256d da = _mm256_and_pd(lo.d, abs_mask), db = _mm256_and_pd(hi.d, abs_mask);
   const __m256d sum = _mm256_add_pd(da, db);
-  t = detail::pick4(_mm256_cmp_pd(sum, zero, _CMP_GT_OQ), _mm256_div_pd(da, sum),
-                    _mm256_set1_pd(0.5));
-  m = _mm256_and_pd(_mm256_add_pd(_mm256_mul_pd(_mm256_sub_pd(one, t), _mm256_load_pd(ql)),
-                                  _mm256_mul_pd(t, _mm256_load_pd(qh))),
-                    abs_mask);
-  k = _mm256_max_pd(zero, _mm256_sub_pd(m, th));
+  Cut4 c;
+  c.t = detail::pick4(_mm256_cmp_pd(sum, zero, _CMP_GT_OQ), _mm256_div_pd(da, sum),
+                      _mm256_set1_pd(0.5));
+  const __m256d u = _mm256_sub_pd(one, c.t);
+  c.m = _mm256_and_pd(_mm256_add_pd(_mm256_mul_pd(u, lo.q), _mm256_mul_pd(c.t, hi.q)), abs_mask);
+  c.k = _mm256_max_pd(zero, _mm256_sub_pd(c.m, th));
+  for (int k = 0; k < 3; ++k)
+    c.p[k] = _mm256_add_pd(_mm256_mul_pd(u, lo.p[k]), _mm256_mul_pd(c.t, hi.p[k]));
+  return c;
 }
 
 // The same segments, four faces at a time: each lane evaluates
 // vector_segment<false>'s expressions in the same operations (so the same
-// bits); faces crossed on all three edges (the centroid case) and the
-// output records stay scalar, in face order.
+// bits), from the four faces' records transposed into lanes; faces crossed
+// on all three edges (the centroid case) and the output records stay
+// scalar, in face order.
 [[gnu::target("avx2")]] void kept_segments_avx2(const VectorInputs& in, const double* field,
                                                 const KeptFaces& kept,
                                                 std::vector<LineSegment>& out) {
@@ -763,118 +824,117 @@ void kept_segments_scalar(const VectorInputs& in, const double* field, const Kep
                          in.o.keep_raw_magnitude};
   const Face* faces = in.m.faces;
   const Topology& topo = *in.m.topo;
+  const __m256d zero = _mm256_setzero_pd();
+  const __m256d th = _mm256_set1_pd(sp.threshold);
   for (std::size_t j = 0; j < kept.n; j += 4) {
     const int lanes = static_cast<int>(std::min<std::size_t>(4, kept.n - j));
-    // Per lane: corners (c0, c1, c2) of the segment, its two cuts' corners
-    // ordered by vertex index, and the inputs gathered from the records.
-    int cl[4][3], alo[4], ahi[4], blo[4], bhi[4];
-    alignas(32) double dal[4], dah[4], qal[4], qah[4], dbl[4], dbh[4], qbl[4], qbh[4];
-    alignas(32) double pal[3][4], pah[3][4], pbl[3][4], pbh[3][4], P[3][3][4], Ec[3][3][4];
+    // Unused lanes repeat lane 0.
+    alignas(16) int v[3][4];
+    alignas(32) std::int64_t rot[2][4];
     for (int l = 0; l < 4; ++l) {
-      const int src = l < lanes ? l : 0;  // unused lanes repeat lane 0
-      const unsigned z = kept.z[j + src];
+      const int src = l < lanes ? l : 0;
       const Face& fg = faces[kept.f[j + src]];
+      for (int c = 0; c < 3; ++c) v[c][l] = fg[c];
+      // The segment's first corner c0: 1, 2 or 0 (the edge without a crossing is opposite c1).
+      const unsigned z = kept.z[j + src];
       const int c0 = !(z & 1) ? 1 : !(z & 2) ? 2 : 0;
-      const int c1 = c0 == 2 ? 0 : c0 + 1, c2 = c1 == 2 ? 0 : c1 + 1;
-      cl[l][0] = c0, cl[l][1] = c1, cl[l][2] = c2;
-      const bool sa = fg[c0] > fg[c1], sb = fg[c1] > fg[c2];
-      alo[l] = sa ? c1 : c0, ahi[l] = sa ? c0 : c1;
-      blo[l] = sb ? c2 : c1, bhi[l] = sb ? c1 : c2;
-      const double* r[3];
-      for (int c = 0; c < 3; ++c) r[c] = field + std::size_t(fg[c]) * kApparentStride;
-      // Record layout: field (0..2), dt1q1 (3), q1 (4), position (5..7).
-      dal[l] = r[alo[l]][3], dah[l] = r[ahi[l]][3], qal[l] = r[alo[l]][4], qah[l] = r[ahi[l]][4];
-      dbl[l] = r[blo[l]][3], dbh[l] = r[bhi[l]][3], qbl[l] = r[blo[l]][4], qbh[l] = r[bhi[l]][4];
-      for (int k = 0; k < 3; ++k) {
-        pal[k][l] = r[alo[l]][5 + k], pah[k][l] = r[ahi[l]][5 + k];
-        pbl[k][l] = r[blo[l]][5 + k], pbh[k][l] = r[bhi[l]][5 + k];
-        for (int c = 0; c < 3; ++c) {
-          P[c][k][l] = r[c][5 + k];
-          Ec[c][k][l] = r[cl[l][c]][k];
-        }
-      }
+      rot[0][l] = -std::int64_t(c0 == 1);
+      rot[1][l] = -std::int64_t(c0 == 2);
     }
-    const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0);
-    const __m256d th = _mm256_set1_pd(sp.threshold);
-    __m256d ta, ma, ka, tb, mb, kb;
-    cut4(dal, dah, qal, qah, th, ta, ma, ka);
-    cut4(dbl, dbh, qbl, qbh, th, tb, mb, kb);
-    const __m256d below =
-        _mm256_and_pd(_mm256_cmp_pd(ka, zero, _CMP_EQ_OQ), _mm256_cmp_pd(kb, zero, _CMP_EQ_OQ));
-    // cut_point: (1 - t) p_lo + t p_hi per component.
-    __m256d pa[3], pb[3];
-    const __m256d ua = _mm256_sub_pd(one, ta), ub = _mm256_sub_pd(one, tb);
-    for (int k = 0; k < 3; ++k) {
-      pa[k] = _mm256_add_pd(_mm256_mul_pd(ua, _mm256_load_pd(pal[k])),
-                            _mm256_mul_pd(ta, _mm256_load_pd(pah[k])));
-      pb[k] = _mm256_add_pd(_mm256_mul_pd(ub, _mm256_load_pd(pbl[k])),
-                            _mm256_mul_pd(tb, _mm256_load_pd(pbh[k])));
+    const __m256d r1 = _mm256_load_pd(reinterpret_cast<const double*>(rot[0]));
+    const __m256d r2 = _mm256_load_pd(reinterpret_cast<const double*>(rot[1]));
+    const Corner4 C[3] = {load_corner4(field, v[0]), load_corner4(field, v[1]),
+                          load_corner4(field, v[2])};
+    // The corners c0, c1, c2 of the segment (rotations of 0, 1, 2).
+    End4 e[3];
+    __m256d id[3];
+    for (int s = 0; s < 3; ++s) {
+      e[s].d = select3(r1, r2, C[s].d, C[(s + 1) % 3].d, C[(s + 2) % 3].d);
+      e[s].q = select3(r1, r2, C[s].q, C[(s + 1) % 3].q, C[(s + 2) % 3].q);
+      for (int k = 0; k < 3; ++k)
+        e[s].p[k] = select3(r1, r2, C[s].p[k], C[(s + 1) % 3].p[k], C[(s + 2) % 3].p[k]);
+      id[s] = select3(r1, r2, C[s].id, C[(s + 1) % 3].id, C[(s + 2) % 3].id);
     }
-    __m256d reject = below;
+    // Edge a joins c0 and c1, edge b c1 and c2; each from its lower vertex.
+    const __m256d swap_a = _mm256_cmp_pd(id[0], id[1], _CMP_GT_OQ);
+    const __m256d swap_b = _mm256_cmp_pd(id[1], id[2], _CMP_GT_OQ);
+    const Cut4 a = cut4(pick_end4(swap_a, e[1], e[0]), pick_end4(swap_a, e[0], e[1]), th);
+    const Cut4 b = cut4(pick_end4(swap_b, e[2], e[1]), pick_end4(swap_b, e[1], e[2]), th);
+    __m256d reject =
+        _mm256_and_pd(_mm256_cmp_pd(a.k, zero, _CMP_EQ_OQ), _mm256_cmp_pd(b.k, zero, _CMP_EQ_OQ));
     if (sp.perpendicular) {
-      // perpendicular_rejects, lane by lane the same operations.
-      __m256d p[3][3];
-      for (int c = 0; c < 3; ++c)
-        for (int k = 0; k < 3; ++k) p[c][k] = _mm256_load_pd(P[c][k]);
-      const __m256d u0 = _mm256_sub_pd(p[1][0], p[0][0]), u1 = _mm256_sub_pd(p[1][1], p[0][1]),
-                    u2 = _mm256_sub_pd(p[1][2], p[0][2]);
-      const __m256d w0 = _mm256_sub_pd(p[2][0], p[0][0]), w1 = _mm256_sub_pd(p[2][1], p[0][1]),
-                    w2 = _mm256_sub_pd(p[2][2], p[0][2]);
+      // perpendicular_rejects: n from the face's corners in face order,
+      // q = n × (pa - pb), and E·q at c0, c1, c2.
+      const __m256d u0 = _mm256_sub_pd(C[1].p[0], C[0].p[0]);
+      const __m256d u1 = _mm256_sub_pd(C[1].p[1], C[0].p[1]);
+      const __m256d u2 = _mm256_sub_pd(C[1].p[2], C[0].p[2]);
+      const __m256d w0 = _mm256_sub_pd(C[2].p[0], C[0].p[0]);
+      const __m256d w1 = _mm256_sub_pd(C[2].p[1], C[0].p[1]);
+      const __m256d w2 = _mm256_sub_pd(C[2].p[2], C[0].p[2]);
       const __m256d n0 = _mm256_sub_pd(_mm256_mul_pd(u1, w2), _mm256_mul_pd(u2, w1));
       const __m256d n1 = _mm256_sub_pd(_mm256_mul_pd(u2, w0), _mm256_mul_pd(u0, w2));
       const __m256d n2 = _mm256_sub_pd(_mm256_mul_pd(u0, w1), _mm256_mul_pd(u1, w0));
-      const __m256d d0 = _mm256_sub_pd(pa[0], pb[0]), d1 = _mm256_sub_pd(pa[1], pb[1]),
-                    d2 = _mm256_sub_pd(pa[2], pb[2]);
+      const __m256d d0 = _mm256_sub_pd(a.p[0], b.p[0]), d1 = _mm256_sub_pd(a.p[1], b.p[1]),
+                    d2 = _mm256_sub_pd(a.p[2], b.p[2]);
       const __m256d q0 = _mm256_sub_pd(_mm256_mul_pd(n1, d2), _mm256_mul_pd(n2, d1));
       const __m256d q1 = _mm256_sub_pd(_mm256_mul_pd(n2, d0), _mm256_mul_pd(n0, d2));
       const __m256d q2 = _mm256_sub_pd(_mm256_mul_pd(n0, d1), _mm256_mul_pd(n1, d0));
-      __m256d e[3];
-      for (int c = 0; c < 3; ++c)
-        e[c] = detail::dot4(_mm256_load_pd(Ec[c][0]), _mm256_load_pd(Ec[c][1]),
-                            _mm256_load_pd(Ec[c][2]), q0, q1, q2);
-      reject = _mm256_or_pd(reject, _mm256_cmp_pd(e[0], zero, _CMP_LE_OQ));
-      reject = _mm256_or_pd(reject, _mm256_cmp_pd(e[1], zero, _CMP_GE_OQ));
-      reject = _mm256_or_pd(reject, _mm256_cmp_pd(e[2], zero, _CMP_LE_OQ));
+      __m256d D[3];
+      for (int c = 0; c < 3; ++c) D[c] = detail::dot4(C[c].e[0], C[c].e[1], C[c].e[2], q0, q1, q2);
+      reject =
+          _mm256_or_pd(reject, _mm256_cmp_pd(select3(r1, r2, D[0], D[1], D[2]), zero, _CMP_LE_OQ));
+      reject =
+          _mm256_or_pd(reject, _mm256_cmp_pd(select3(r1, r2, D[1], D[2], D[0]), zero, _CMP_GE_OQ));
+      reject =
+          _mm256_or_pd(reject, _mm256_cmp_pd(select3(r1, r2, D[2], D[0], D[1]), zero, _CMP_LE_OQ));
     }
     const int rejected = _mm256_movemask_pd(reject);
+    if ((rejected & ((1 << lanes) - 1)) == (1 << lanes) - 1) {
+      bool centroid = false;
+      for (int l = 0; l < lanes; ++l) centroid |= kept.z[j + l] == 7;
+      if (!centroid) continue;
+    }
     // ridge_strength for both ends.
     alignas(32) double sa4[4], sb4[4], t_a[4], t_b[4], m_a[4], m_b[4], xa[3][4], xb[3][4];
+    const bool fade = sp.raw || sp.threshold > 0.0;
     if (sp.raw) {
-      _mm256_store_pd(sa4, ma);
-      _mm256_store_pd(sb4, mb);
-    } else if (sp.threshold > 0.0) {
-      _mm256_store_pd(sa4, _mm256_div_pd(ka, _mm256_add_pd(ka, th)));
-      _mm256_store_pd(sb4, _mm256_div_pd(kb, _mm256_add_pd(kb, th)));
+      _mm256_store_pd(sa4, a.m);
+      _mm256_store_pd(sb4, b.m);
+    } else if (fade) {
+      _mm256_store_pd(sa4, _mm256_div_pd(a.k, _mm256_add_pd(a.k, th)));
+      _mm256_store_pd(sb4, _mm256_div_pd(b.k, _mm256_add_pd(b.k, th)));
     }
-    _mm256_store_pd(t_a, ta);
-    _mm256_store_pd(t_b, tb);
-    _mm256_store_pd(m_a, ma);
-    _mm256_store_pd(m_b, mb);
+    _mm256_store_pd(t_a, a.t);
+    _mm256_store_pd(t_b, b.t);
+    _mm256_store_pd(m_a, a.m);
+    _mm256_store_pd(m_b, b.m);
     for (int k = 0; k < 3; ++k) {
-      _mm256_store_pd(xa[k], pa[k]);
-      _mm256_store_pd(xb[k], pb[k]);
+      _mm256_store_pd(xa[k], a.p[k]);
+      _mm256_store_pd(xb[k], b.p[k]);
     }
     for (int l = 0; l < lanes; ++l) {
       const std::size_t f = kept.f[j + l];
       const Face& fg = faces[f];
-      if (kept.z[j + l] == 7) {
-        const int v[3] = {fg[0], fg[1], fg[2]};
+      const unsigned z = kept.z[j + l];
+      if (z == 7) {
+        const int vv[3] = {fg[0], fg[1], fg[2]};
         const Vec3 E[3] = {field_at(field, fg[0]), field_at(field, fg[1]), field_at(field, fg[2])};
-        vector_centroid_segments(in, sp, f, v, E, out);
+        vector_centroid_segments(in, sp, f, vv, E, out);
         continue;
       }
       if (rejected >> l & 1) continue;
-      const EdgeCut a{alo[l], ahi[l], std::size_t(fg[alo[l]]), std::size_t(fg[ahi[l]]),
-                      t_a[l], m_a[l]};
-      const EdgeCut b{blo[l], bhi[l], std::size_t(fg[blo[l]]), std::size_t(fg[bhi[l]]),
-                      t_b[l], m_b[l]};
-      const double pa1[3] = {xa[0][l], xa[1][l], xa[2][l]};
-      const double pb1[3] = {xb[0][l], xb[1][l], xb[2][l]};
+      const int c0 = !(z & 1) ? 1 : !(z & 2) ? 2 : 0;
+      const int c1 = c0 == 2 ? 0 : c0 + 1, c2 = c1 == 2 ? 0 : c1 + 1;
+      const bool sa = fg[c0] > fg[c1], sb = fg[c1] > fg[c2];
+      const int alo = sa ? c1 : c0, ahi = sa ? c0 : c1, blo = sb ? c2 : c1, bhi = sb ? c1 : c2;
+      const EdgeCut ca{alo, ahi, std::size_t(fg[alo]), std::size_t(fg[ahi]), t_a[l], m_a[l]};
+      const EdgeCut cb{blo, bhi, std::size_t(fg[blo]), std::size_t(fg[bhi]), t_b[l], m_b[l]};
+      const double pa[3] = {xa[0][l], xa[1][l], xa[2][l]};
+      const double pb[3] = {xb[0][l], xb[1][l], xb[2][l]};
       const auto fi = static_cast<std::int32_t>(f);
-      const float s_a = sp.raw || sp.threshold > 0.0 ? static_cast<float>(sa4[l]) : 1.0f;
-      const float s_b = sp.raw || sp.threshold > 0.0 ? static_cast<float>(sb4[l]) : 1.0f;
-      out.emplace_back(SegmentRecord<false>{fi, a, b, pa1, pb1, topo.face_edge(f, 3 - a.lo - a.hi),
-                                            topo.face_edge(f, 3 - b.lo - b.hi), s_a, s_b});
+      out.emplace_back(SegmentRecord<false>{
+          fi, ca, cb, pa, pb, topo.face_edge(f, 3 - alo - ahi), topo.face_edge(f, 3 - blo - bhi),
+          fade ? static_cast<float>(sa4[l]) : 1.0f, fade ? static_cast<float>(sb4[l]) : 1.0f});
     }
   }
 }
