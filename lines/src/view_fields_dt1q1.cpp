@@ -223,7 +223,9 @@ struct RingPass {
         unsigned any = 0;
         for (std::int32_t j = jb; j + 2 <= je; j += 2) any |= sg[nbr[j]] | sg[nbr[j + 1]];
         if (!(any & kQ1Above)) {
-          store(i, 0.0);
+          // No candidate face of the kernel has this corner: its record
+          // is never read and is left as it is.
+          out[i] = 0.0;
           continue;
         }
       }

@@ -94,8 +94,10 @@ struct ViewFields {
   std::vector<Vec2> t1;
   std::vector<Vec3> t1_world;
   /// Per vertex: E = dt1q1 · t1_world, the sign-free field whose zero set
-  /// the apparent-ridge kernel extracts (filled with dt1q1, 0 where dt1q1
-  /// was not computed), and the other per-corner inputs of that kernel.
+  /// the apparent-ridge kernel extracts, and the other per-corner inputs of
+  /// that kernel. With apparent_cull_threshold, set only at the corners of
+  /// faces with a corner where q1 > threshold (the only ones the kernel
+  /// reads); elsewhere left as they were.
   std::vector<ApparentVertex> apparent_vertex;
   std::vector<std::uint8_t> signs;                ///< ViewSign bits (with the radial group)
   std::optional<double> apparent_cull_threshold;  ///< as requested
