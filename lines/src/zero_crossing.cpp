@@ -1,6 +1,7 @@
 #include "fabrica/lines/zero_crossing.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 #include "fabrica/core/error.hpp"
@@ -88,7 +89,8 @@ inline float fade_strength(double num, double den, double fade) {
 }
 
 inline bool lone_sign(double a, double b, double c) {
-  return (a < 0.0 && b >= 0.0 && c >= 0.0) || (a > 0.0 && b <= 0.0 && c <= 0.0);
+  // Bitwise, so it compiles without branches.
+  return ((a < 0.0) & (b >= 0.0) & (c >= 0.0)) | ((a > 0.0) & (b <= 0.0) & (c <= 0.0));
 }
 
 // Test numerators: stored per vertex, or N_i = ±sc_i - shift * D_i computed
@@ -182,15 +184,12 @@ template <class Num>
   const int v[3] = {face[0], face[1], face[2]};
   const int i0 = v[0], i1 = v[1], i2 = v[2];
   const double s[3] = {in.val[i0], in.val[i1], in.val[i2]};
-  int k;
-  if (lone_sign(s[0], s[1], s[2]))
-    k = 0;
-  else if (lone_sign(s[1], s[2], s[0]))
-    k = 1;
-  else if (lone_sign(s[2], s[0], s[1]))
-    k = 2;
-  else
-    return;
+  // The first corner with a lone sign (without branches: which one it is
+  // is unpredictable).
+  const bool l0 = lone_sign(s[0], s[1], s[2]), l1 = lone_sign(s[1], s[2], s[0]),
+             l2 = lone_sign(s[2], s[0], s[1]);
+  if (!(l0 | l1 | l2)) return;
+  const int k = int(!l0) * (1 + int(!l1));
   const double* cull = in.cull;
   if (cull && cull[i0] <= 0.0 && cull[i1] <= 0.0 && cull[i2] <= 0.0) return;
   const bool test = in.test;
@@ -283,14 +282,25 @@ struct ScalarBatch {
   std::vector<LineSegment>& part;
   CandidateBatch batch;
 
-  void add(std::size_t f) {
+  void prefetch(std::size_t f) const {
     const Face& face = in.m.faces[f];
     for (int k = 0; k < 3; ++k) {
       __builtin_prefetch(&in.m.pos[face[k]]);
       __builtin_prefetch(&in.val[face[k]]);
       if (in.den) __builtin_prefetch(&in.den[face[k]]);
     }
-    if (batch.add(f)) flush();
+  }
+  // The listed faces (ascending), a batch at a time, the next batch's
+  // corners prefetched while the current one is processed.
+  void run(const std::uint32_t* list, std::size_t n) {
+    constexpr std::size_t kb = CandidateBatch::kSize;
+    for (std::size_t j = 0; j < std::min(n, kb); ++j) prefetch(list[j]);
+    for (std::size_t j = 0; j < n; j += kb) {
+      const std::size_t je = std::min(n, j + kb);
+      for (std::size_t k = je; k < std::min(n, je + kb); ++k) prefetch(list[k]);
+      for (std::size_t k = j; k < je; ++k) batch.add(list[k]);
+      flush();
+    }
   }
   void flush() {
     const Face* faces = in.m.faces;
@@ -330,7 +340,9 @@ struct ScalarBatch {
 struct SignTest {
   unsigned sides, cull;
   explicit SignTest(const detail::SignBits& b) : sides(b.negative | b.positive), cull(b.cull) {}
-  bool pass(unsigned any, unsigned mixed) const { return (mixed & sides) && !(~any & cull); }
+  bool pass(unsigned any, unsigned mixed) const {
+    return ((mixed & sides) != 0) & ((~any & cull) == 0);  // no branch
+  }
 };
 
 template <class Num>
@@ -343,16 +355,19 @@ void scalar_crossings(const ScalarInputs& in, const Num& num, std::size_t face_c
         const Face* faces = in.m.faces;
         if (bits.signs && list.empty()) {
           // The same rejections (and the culling) from one byte per corner.
+          // Candidates compacted without branches, then in batches.
           const std::uint8_t* sg = bits.signs;
           const SignTest st(bits);
-          ScalarBatch<Num> batch{in, num, part, {}};
+          std::uint32_t cand[detail::kFaceChunk];
+          std::size_t nc = 0;
           for (std::size_t f = b; f < e; ++f) {
             const Face& face = faces[f];
             const unsigned a0 = sg[face[0]], a1 = sg[face[1]], a2 = sg[face[2]];
             const unsigned any = a0 | a1 | a2;
-            if (st.pass(any, any & ~(a0 & a1 & a2))) batch.add(f);
+            cand[nc] = static_cast<std::uint32_t>(f);
+            nc += st.pass(any, any & ~(a0 & a1 & a2));
           }
-          batch.flush();
+          ScalarBatch<Num>{in, num, part, {}}.run(cand, nc);
           return;
         }
         if (list.empty()) {
@@ -394,8 +409,21 @@ inline unsigned crossing_bits_of(const Face& f, const double* E) {
   return crossing_bits_of(field_at(E, f[0]), field_at(E, f[1]), field_at(E, f[2]));
 }
 // At least two of the three edges cross.
+// The first corner c0 of the segment (c0, c1, c2) of a face with crossing
+// bits z: the edge without a crossing is opposite c1, so c0 = 1 without
+// z01, else 2 without z12, else 0 (a table of 2-bit entries, no branch);
+// and the corner after c (0 -> 1 -> 2 -> 0).
+inline int first_corner(unsigned z) {
+  return (0x1919u >> (2 * (z & 7))) & 3;
+}
+inline int next_corner(int c) {
+  return (0x09u >> (2 * c)) & 3;
+}
+
+// At least two of the three edges cross: z = 3, 5, 6 or 7 (a bit table,
+// no branch).
 inline bool two_crossings(unsigned z) {
-  return z == 3 || z >= 5;
+  return (0xE8u >> (z & 7)) & 1;
 }
 
 #if defined(FABRICA_LINES_AVX2)
@@ -478,20 +506,21 @@ void fused_crossings(const ScalarInputs& ci, const StoredNum& cn, const detail::
         const Face* faces = ci.m.faces;
         const std::uint8_t* sg = cb.signs;
         const SignTest ct(cb), stt(sb);
-        const unsigned sides = ct.sides | stt.sides;
-        ScalarBatch<StoredNum> cbatch{ci, cn, part, {}};
-        ScalarBatch<ShiftedNum> sbatch{si, sn, spart, {}};
+        // Each family's candidates compacted without branches, then in
+        // batches.
+        std::uint32_t cc[detail::kFaceChunk], sc[detail::kFaceChunk];
+        std::size_t nc = 0, ns = 0;
         for (std::size_t f = b; f < e; ++f) {
           const Face& face = faces[f];
           const unsigned a0 = sg[face[0]], a1 = sg[face[1]], a2 = sg[face[2]];
           const unsigned any = a0 | a1 | a2;
           const unsigned mixed = any & ~(a0 & a1 & a2);
-          if (!(mixed & sides)) continue;
-          if (ct.pass(any, mixed)) cbatch.add(f);
-          if (stt.pass(any, mixed)) sbatch.add(f);
+          cc[nc] = sc[ns] = static_cast<std::uint32_t>(f);
+          nc += ct.pass(any, mixed);
+          ns += stt.pass(any, mixed);
         }
-        cbatch.flush();
-        sbatch.flush();
+        ScalarBatch<StoredNum>{ci, cn, part, {}}.run(cc, nc);
+        ScalarBatch<ShiftedNum>{si, sn, spart, {}}.run(sc, ns);
       },
       cout);
   detail::concatenate_chunks(side, sout, &site, 0);
@@ -835,9 +864,7 @@ struct Cut4 {
       const int src = l < lanes ? l : 0;
       const Face& fg = faces[kept.f[j + src]];
       for (int c = 0; c < 3; ++c) v[c][l] = fg[c];
-      // The segment's first corner c0: 1, 2 or 0 (the edge without a crossing is opposite c1).
-      const unsigned z = kept.z[j + src];
-      const int c0 = !(z & 1) ? 1 : !(z & 2) ? 2 : 0;
+      const int c0 = first_corner(kept.z[j + src]);
       rot[0][l] = -std::int64_t(c0 == 1);
       rot[1][l] = -std::int64_t(c0 == 2);
     }
@@ -888,12 +915,12 @@ struct Cut4 {
       reject =
           _mm256_or_pd(reject, _mm256_cmp_pd(select3(r1, r2, D[2], D[0], D[1]), zero, _CMP_LE_OQ));
     }
-    const int rejected = _mm256_movemask_pd(reject);
-    if ((rejected & ((1 << lanes) - 1)) == (1 << lanes) - 1) {
-      bool centroid = false;
-      for (int l = 0; l < lanes; ++l) centroid |= kept.z[j + l] == 7;
-      if (!centroid) continue;
-    }
+    // The lanes that give output, in lane (face) order: kept segments and
+    // centroid faces (visited by their set bits: no branch per lane).
+    int centroid = 0;
+    for (int l = 0; l < lanes; ++l) centroid |= int(kept.z[j + l] == 7) << l;
+    const int emit = ((~_mm256_movemask_pd(reject) & ((1 << lanes) - 1)) | centroid);
+    if (!emit) continue;
     // ridge_strength for both ends.
     alignas(32) double sa4[4], sb4[4], t_a[4], t_b[4], m_a[4], m_b[4], xa[3][4], xb[3][4];
     const bool fade = sp.raw || sp.threshold > 0.0;
@@ -912,19 +939,18 @@ struct Cut4 {
       _mm256_store_pd(xa[k], a.p[k]);
       _mm256_store_pd(xb[k], b.p[k]);
     }
-    for (int l = 0; l < lanes; ++l) {
+    for (int bits = emit; bits; bits &= bits - 1) {
+      const int l = std::countr_zero(static_cast<unsigned>(bits));
       const std::size_t f = kept.f[j + l];
       const Face& fg = faces[f];
       const unsigned z = kept.z[j + l];
-      if (z == 7) {
+      if (centroid >> l & 1) {
         const int vv[3] = {fg[0], fg[1], fg[2]};
         const Vec3 E[3] = {field_at(field, fg[0]), field_at(field, fg[1]), field_at(field, fg[2])};
         vector_centroid_segments(in, sp, f, vv, E, out);
         continue;
       }
-      if (rejected >> l & 1) continue;
-      const int c0 = !(z & 1) ? 1 : !(z & 2) ? 2 : 0;
-      const int c1 = c0 == 2 ? 0 : c0 + 1, c2 = c1 == 2 ? 0 : c1 + 1;
+      const int c0 = first_corner(z), c1 = next_corner(c0), c2 = next_corner(c1);
       const bool sa = fg[c0] > fg[c1], sb = fg[c1] > fg[c2];
       const int alo = sa ? c1 : c0, ahi = sa ? c0 : c1, blo = sb ? c2 : c1, bhi = sb ? c1 : c2;
       const EdgeCut ca{alo, ahi, std::size_t(fg[alo]), std::size_t(fg[ahi]), t_a[l], m_a[l]};
@@ -973,7 +999,7 @@ void packed_chunk(const VectorInputs& in, const double* field, const std::uint8_
       const unsigned z = zb[k - j];
       kept.f[kept.n] = cand[k];
       kept.z[kept.n] = static_cast<std::uint8_t>(z);
-      if (two_crossings(z)) __builtin_prefetch(topo.face_edge_row(cand[k]));
+      __builtin_prefetch(topo.face_edge_row(cand[k]));
       kept.n += two_crossings(z);
     }
   }
