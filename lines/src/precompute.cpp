@@ -108,10 +108,12 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
       t.offset[i + 1] = t.offset[i] + (t.fan[i] ? r.offset[i + 1] - r.offset[i] + 1
                                                 : 2 * (r.offset[i + 1] - r.offset[i]));
     const auto total = static_cast<std::size_t>(t.offset[nv]);
-    t.vertex.resize(total);
-    t.rank.assign(total, 0);
-    t.x.assign(total, 0.0f);
-    t.y.assign(total, 0.0f);
+    // kPad entries after the last ring (vertex 0, offsets 0): fixed-width
+    // reads past a short ring stay inside the arrays.
+    t.vertex.assign(total + TangentRing::kPad, 0);
+    t.rank.assign(total + TangentRing::kPad, 0);
+    t.x.assign(total + TangentRing::kPad, 0.0f);
+    t.y.assign(total + TangentRing::kPad, 0.0f);
     detail::parallel_range(nv, [&](std::size_t i) {
       const bool ok = curv.valid[i] != 0;
       auto put = [&](std::int32_t n, std::int32_t v) {

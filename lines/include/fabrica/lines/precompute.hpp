@@ -77,8 +77,11 @@ class LinePrecompute {
   /// neighbours for k faces, n_0..n_{k-1}, n_0 in cyclic order: fan face j
   /// has the opposite corners (n_j, n_{j+1}) and is face rank[offset[i] + j]
   /// in corner_ring() order. Otherwise there are two neighbours per face,
-  /// (i1, i2) of each face in corner_ring() order (rank unused).
+  /// (i1, i2) of each face in corner_ring() order (rank unused). vertex,
+  /// rank, x and y have kPad more entries after the last ring (vertex 0,
+  /// zeros), so fixed-width reads of a short ring stay inside them.
   struct TangentRing {
+    static constexpr std::size_t kPad = 16;
     std::vector<std::int32_t> offset;
     std::vector<std::uint8_t> fan;
     std::vector<std::int32_t> vertex;
