@@ -2,6 +2,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 
 #include "fabrica/core/error.hpp"
 #include "fabrica/lines/extract.hpp"
@@ -23,7 +24,9 @@ std::vector<LineFamily> all_families() {
 }
 
 LineExtractor::LineExtractor(const Surface& surface, LineOptions options)
-    : surface_(&surface), precompute_(std::make_unique<LinePrecompute>(surface)) {
+    : surface_(&surface),
+      precompute_(std::make_unique<LinePrecompute>(surface)),
+      apparent_faces_(std::make_unique<detail::FaceLists>()) {
   set_options(std::move(options));
 }
 
@@ -90,13 +93,30 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
   const bool fused = contour_at != fam.end() && suggestive_at != fam.end();
   const auto fused_contour = static_cast<std::size_t>(contour_at - fam.begin());
   const auto fused_suggestive = static_cast<std::size_t>(suggestive_at - fam.begin());
+  // With apparent ridges too, that scan also lists the apparent-ridge
+  // kernel's candidate faces; the kernel then runs in whichever of the two
+  // tasks (the scan, D_t1 q1) finishes second.
+  const auto apparent_at = std::find(fam.begin(), fam.end(), LineFamily::apparent);
+  const bool three = fused && apparent_at != fam.end();
+  const auto apparent_k = static_cast<std::size_t>(apparent_at - fam.begin());
+  std::atomic<int> arrived{0};
+  bool listed = false;
+  auto apparent_kernel = [&] {
+    out[apparent_k] = detail::extract_apparent_ridges(*surface_, fields_, fs, options_.apparent,
+                                                      listed ? apparent_faces_.get() : nullptr);
+  };
   auto run = [&](std::size_t k) {
     const LineFamily f = options_.families[k];
     if (fused && (k == fused_contour || k == fused_suggestive)) {
-      if (k == fused_contour)
-        detail::extract_contours_and_suggestive(*surface_, fields_, options_.contour, fs,
-                                                options_.suggestive, out[fused_contour],
-                                                out[fused_suggestive]);
+      if (k == fused_contour) {
+        const bool l = detail::extract_contours_and_suggestive(
+            *surface_, fields_, options_.contour, fs, options_.suggestive, out[fused_contour],
+            out[fused_suggestive], three ? apparent_faces_.get() : nullptr);
+        if (three) {
+          listed = l;
+          if (arrived.fetch_add(1) == 1) apparent_kernel();
+        }
+      }
       return;
     }
     switch (f) {
@@ -124,7 +144,11 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
       case LineFamily::apparent:
         detail::update_dt1q1(fields_, *surface_, fields_.apparent_cull_threshold.has_value(),
                              precompute_.get());
-        out[k] = extract_apparent_ridges(*surface_, fields_, fs, options_.apparent);
+        if (three) {
+          if (arrived.fetch_add(1) == 1) apparent_kernel();
+        } else {
+          out[k] = extract_apparent_ridges(*surface_, fields_, fs, options_.apparent);
+        }
         break;
       case LineFamily::pel:
         out[k] = extract_pels(*surface_, fields_, fs, options_.pel);

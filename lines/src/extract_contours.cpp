@@ -174,14 +174,14 @@ SegmentSoup extract_suggestive_highlights(const Surface& surface, const ViewFiel
 
 namespace detail {
 
-void extract_contours_and_suggestive(const Surface& surface, const ViewFields& fields,
+bool extract_contours_and_suggestive(const Surface& surface, const ViewFields& fields,
                                      const ContourOptions& contour, double feature_size,
                                      const SuggestiveOptions& suggestive, SegmentSoup& contours,
-                                     SegmentSoup& suggestive_contours) {
+                                     SegmentSoup& suggestive_contours, FaceLists* apparent) {
   if (contour.mesh_edges) {
     contours = extract_contours(surface, fields, contour);
     suggestive_contours = extract_suggestive_contours(surface, fields, feature_size, suggestive);
-    return;
+    return false;
   }
   ScalarCrossingOptions o;
   const SignBits cbits = contour_setup(surface, fields, contour, o);
@@ -192,8 +192,12 @@ void extract_contours_and_suggestive(const Surface& surface, const ViewFields& f
   contours.family = LineFamily::contour;
   suggestive_contours = SegmentSoup{};
   suggestive_contours.family = LineFamily::suggestive;
-  contour_suggestive_zero_crossings(surface, fields.ndotv, o, cbits, test, sbits, contours.segments,
-                                    suggestive_contours.segments);
+  // The kQ1Above bits exist only with an apparent cull threshold.
+  if (!fields.apparent_cull_threshold || fields.signs.size() != surface.vertex_count())
+    apparent = nullptr;
+  return contour_suggestive_zero_crossings(surface, fields.ndotv, o, cbits, test, sbits,
+                                           contours.segments, suggestive_contours.segments,
+                                           apparent, kQ1Above);
 }
 
 }  // namespace detail

@@ -75,6 +75,14 @@ SegmentSoup extract_demarcating_curves(const LinePrecompute& pre, const ViewFiel
 
 SegmentSoup extract_apparent_ridges(const Surface& surface, const ViewFields& fields,
                                     double feature_size, const ApparentOptions& options) {
+  return detail::extract_apparent_ridges(surface, fields, feature_size, options, nullptr);
+}
+
+namespace detail {
+
+SegmentSoup extract_apparent_ridges(const Surface& surface, const ViewFields& fields,
+                                    double feature_size, const ApparentOptions& options,
+                                    const FaceLists* listed) {
   if (!(feature_size > 0.0)) throw InputError("feature size must be positive");
   const std::size_t nv = surface.vertex_count();
   if (fields.q1.size() != nv || fields.dt1q1.size() != nv || fields.t1_world.size() != nv)
@@ -97,8 +105,11 @@ SegmentSoup extract_apparent_ridges(const Surface& surface, const ViewFields& fi
   const bool packed = fields.apparent_vertex.size() == nv;
   detail::vector_zero_crossings(surface, fields.dt1q1, fields.t1_world, fields.q1, o,
                                 bits ? fields.signs.data() : nullptr, kQ1Above, soup.segments,
-                                packed ? fields.apparent_vertex.data() : nullptr);
+                                packed ? fields.apparent_vertex.data() : nullptr,
+                                packed ? listed : nullptr);
   return soup;
 }
+
+}  // namespace detail
 
 }  // namespace fabrica

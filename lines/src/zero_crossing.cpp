@@ -492,9 +492,14 @@ inline void crossing_bits(const Face* faces, const std::uint32_t* face, int n, c
 void fused_crossings(const ScalarInputs& ci, const StoredNum& cn, const detail::SignBits& cb,
                      const ScalarInputs& si, const ShiftedNum& sn, const detail::SignBits& sb,
                      std::size_t face_count, std::vector<LineSegment>& cout,
-                     std::vector<LineSegment>& sout) {
+                     std::vector<LineSegment>& sout, detail::FaceLists* listed,
+                     unsigned listed_bit) {
   const std::size_t chunk = detail::kFaceChunk;
   const std::size_t chunks = (face_count + chunk - 1) / chunk;
+  if (listed) {
+    listed->face.resize(chunks * chunk);
+    listed->count.resize(chunks);
+  }
   auto& pool = detail::ChunkBufferPool<LineSegment>::instance();
   static const char site = 0;
   std::vector<std::vector<LineSegment>> side(chunks);
@@ -508,17 +513,21 @@ void fused_crossings(const ScalarInputs& ci, const StoredNum& cn, const detail::
         const SignTest ct(cb), stt(sb);
         // Each family's candidates compacted without branches, then in
         // batches.
-        std::uint32_t cc[detail::kFaceChunk], sc[detail::kFaceChunk];
-        std::size_t nc = 0, ns = 0;
+        // With `listed`, the faces with listed_bit at some corner too.
+        std::uint32_t cc[detail::kFaceChunk], sc[detail::kFaceChunk], scratch[detail::kFaceChunk];
+        std::uint32_t* lf = listed ? listed->face.data() + (b / chunk) * chunk : scratch;
+        std::size_t nc = 0, ns = 0, nl = 0;
         for (std::size_t f = b; f < e; ++f) {
           const Face& face = faces[f];
           const unsigned a0 = sg[face[0]], a1 = sg[face[1]], a2 = sg[face[2]];
           const unsigned any = a0 | a1 | a2;
           const unsigned mixed = any & ~(a0 & a1 & a2);
-          cc[nc] = sc[ns] = static_cast<std::uint32_t>(f);
+          cc[nc] = sc[ns] = lf[nl] = static_cast<std::uint32_t>(f);
           nc += ct.pass(any, mixed);
           ns += stt.pass(any, mixed);
+          nl += (any & listed_bit) != 0;
         }
+        if (listed) listed->count[b / chunk] = static_cast<std::uint32_t>(nl);
         ScalarBatch<StoredNum>{ci, cn, part, {}}.run(cc, nc);
         ScalarBatch<ShiftedNum>{si, sn, spart, {}}.run(sc, ns);
       },
@@ -967,19 +976,25 @@ struct Cut4 {
 #endif
 
 // The packed (apparent-ridge) kernel over faces [b, e): the faces with a
-// corner above the threshold, compacted without branches (about half pass,
-// unpredictably); their crossing bits a batch at a time, the next batch's
+// corner above the threshold (`listed`, or compacted here without branches:
+// about half pass, unpredictably); their crossing bits a batch at a time, the next batch's
 // corner records prefetched; the faces with two crossings, then their
 // segments.
 void packed_chunk(const VectorInputs& in, const double* field, const std::uint8_t* signs,
-                  unsigned above_bit, std::size_t b, std::size_t e, std::vector<LineSegment>& out) {
+                  unsigned above_bit, std::size_t b, std::size_t e, const std::uint32_t* listed,
+                  std::size_t listed_count, std::vector<LineSegment>& out) {
   const Face* faces = in.m.faces;
-  std::uint32_t cand[detail::kFaceChunk];
-  std::size_t nc = 0;
-  for (std::size_t f = b; f < e; ++f) {
-    const Face& face = faces[f];
-    cand[nc] = static_cast<std::uint32_t>(f);
-    nc += ((signs[face[0]] | signs[face[1]] | signs[face[2]]) & above_bit) != 0;
+  std::uint32_t scanned[detail::kFaceChunk];
+  const std::uint32_t* cand = listed;
+  std::size_t nc = listed_count;
+  if (!listed) {
+    nc = 0;
+    for (std::size_t f = b; f < e; ++f) {
+      const Face& face = faces[f];
+      scanned[nc] = static_cast<std::uint32_t>(f);
+      nc += ((signs[face[0]] | signs[face[1]] | signs[face[2]]) & above_bit) != 0;
+    }
+    cand = scanned;
   }
   auto prefetch = [&](std::size_t from, std::size_t to) {
     for (std::size_t j = from; j < to; ++j)
@@ -1064,28 +1079,30 @@ void suggestive_zero_crossings(const Surface& surface, const SuggestiveTest& tes
                    surface.face_count(), out, {}, bits);
 }
 
-void contour_suggestive_zero_crossings(const Surface& surface, std::span<const double> ndotv,
+bool contour_suggestive_zero_crossings(const Surface& surface, std::span<const double> ndotv,
                                        const ScalarCrossingOptions& contour,
                                        const SignBits& contour_bits, const SuggestiveTest& test,
                                        const SignBits& suggestive_bits,
                                        std::vector<LineSegment>& contours,
-                                       std::vector<LineSegment>& suggestive) {
+                                       std::vector<LineSegment>& suggestive, FaceLists* listed,
+                                       unsigned listed_bit) {
   if (!contour_bits.signs || contour_bits.signs != suggestive_bits.signs) {
     scalar_zero_crossings(surface, ndotv, contour, contour_bits, contours);
     suggestive_zero_crossings(surface, test, suggestive_bits, suggestive);
-    return;
+    return false;
   }
   fused_crossings(scalar_inputs(surface, ndotv, contour), StoredNum{contour.test_num.data()},
                   contour_bits, suggestive_inputs(surface, test),
                   ShiftedNum{test.sc_num.data(), test.ndotv.data(), test.negate, test.shift},
-                  suggestive_bits, surface.face_count(), contours, suggestive);
+                  suggestive_bits, surface.face_count(), contours, suggestive, listed, listed_bit);
+  return listed != nullptr;
 }
 
 void vector_zero_crossings(const Surface& surface, std::span<const double> derivative,
                            std::span<const Vec3> direction, std::span<const double> magnitude,
                            const VectorCrossingOptions& options, const std::uint8_t* signs,
                            unsigned above_bit, std::vector<LineSegment>& out,
-                           const ApparentVertex* packed) {
+                           const ApparentVertex* packed, const FaceLists* lists) {
   if (!signs) {
     fabrica::vector_zero_crossings(surface, derivative, direction, magnitude, options, out);
     return;
@@ -1106,7 +1123,10 @@ void vector_zero_crossings(const Surface& surface, std::span<const double> deriv
     detail::parallel_chunks<LineSegment>(
         surface.face_count(),
         [&](std::size_t b, std::size_t e, std::vector<LineSegment>& part) {
-          packed_chunk(in, packed->field.data(), signs, above_bit, b, e, part);
+          const std::size_t c = b / detail::kFaceChunk;
+          packed_chunk(in, packed->field.data(), signs, above_bit, b, e,
+                       lists ? lists->face.data() + c * detail::kFaceChunk : nullptr,
+                       lists ? lists->count[c] : 0, part);
         },
         out);
     return;

@@ -14,6 +14,7 @@
 
 namespace fabrica {
 struct ContourOptions;
+struct ApparentOptions;
 struct SuggestiveOptions;
 struct ViewFields;
 }  // namespace fabrica
@@ -60,17 +61,30 @@ struct SuggestiveTest {
 void suggestive_zero_crossings(const Surface& surface, const SuggestiveTest& test,
                                const SignBits& bits, std::vector<LineSegment>& out);
 
+/// Per chunk of detail::kFaceChunk faces (chunk c: faces from c ·
+/// kFaceChunk), the faces with a given sign-byte bit at some corner,
+/// ascending: face[c · kFaceChunk + j] for j < count[c]. The contour and
+/// suggestive-contour scan lists the apparent-ridge kernel's candidates
+/// (kQ1Above) this way, so the faces are scanned once for the three.
+struct FaceLists {
+  std::vector<std::uint32_t> face;
+  std::vector<std::uint32_t> count;
+};
+
 /// Contours (scalar_zero_crossings of ndotv with `contour`, sign bits
 /// `contour_bits`) and suggestive_zero_crossings(test, suggestive_bits) in
 /// one scan over the faces' sign bytes; the two outputs are those of the
 /// separate calls. Both bits must use the same sign array (otherwise the
-/// separate calls are made).
-void contour_suggestive_zero_crossings(const Surface& surface, std::span<const double> ndotv,
+/// separate calls are made). With `listed`, the same scan also fills it
+/// with the faces having `listed_bit` at some corner (returns false, and
+/// leaves it alone, when it could not: the separate calls were made).
+bool contour_suggestive_zero_crossings(const Surface& surface, std::span<const double> ndotv,
                                        const ScalarCrossingOptions& contour,
                                        const SignBits& contour_bits, const SuggestiveTest& test,
                                        const SignBits& suggestive_bits,
                                        std::vector<LineSegment>& contours,
-                                       std::vector<LineSegment>& suggestive);
+                                       std::vector<LineSegment>& suggestive,
+                                       FaceLists* listed = nullptr, unsigned listed_bit = 0);
 
 /// vector_zero_crossings where `above_bit` of signs[v] is set exactly when
 /// !(magnitude[v] <= options.threshold): faces without it are skipped from
@@ -78,18 +92,29 @@ void contour_suggestive_zero_crossings(const Surface& surface, std::span<const d
 /// (ViewFields::apparent_vertex; only without culling, vertex mask or edge
 /// test), holds E_v = derivative[v] · direction[v], the derivative, the
 /// magnitude and the position at least at the corners of those faces, and
-/// is read instead of the arrays.
+/// is read instead of the arrays; `lists`, when given with it, are those
+/// faces (FaceLists of above_bit), which then are not scanned for.
 void vector_zero_crossings(const Surface& surface, std::span<const double> derivative,
                            std::span<const Vec3> direction, std::span<const double> magnitude,
                            const VectorCrossingOptions& options, const std::uint8_t* signs,
                            unsigned above_bit, std::vector<LineSegment>& out,
-                           const ApparentVertex* packed = nullptr);
+                           const ApparentVertex* packed = nullptr,
+                           const FaceLists* lists = nullptr);
 
 /// extract_contours and extract_suggestive_contours (the same soups) with
-/// one scan over the faces when the contours are interpolated.
-void extract_contours_and_suggestive(const Surface& surface, const ViewFields& fields,
+/// one scan over the faces when the contours are interpolated. With
+/// `apparent`, and fields with the kQ1Above bits, the scan also lists the
+/// apparent-ridge kernel's candidate faces there (returns whether it did).
+bool extract_contours_and_suggestive(const Surface& surface, const ViewFields& fields,
                                      const ContourOptions& contour, double feature_size,
                                      const SuggestiveOptions& suggestive, SegmentSoup& contours,
-                                     SegmentSoup& suggestive_contours);
+                                     SegmentSoup& suggestive_contours,
+                                     FaceLists* apparent = nullptr);
+
+/// extract_apparent_ridges, with the candidate faces listed by
+/// extract_contours_and_suggestive for the same fields when `listed`.
+SegmentSoup extract_apparent_ridges(const Surface& surface, const ViewFields& fields,
+                                    double feature_size, const ApparentOptions& options,
+                                    const FaceLists* listed);
 
 }  // namespace fabrica::detail

@@ -194,7 +194,9 @@ TEST(LinesViewFields, SimdAndPortablePassesGiveTheSameBits) {
 // The face kernels also have AVX2 paths (the apparent-ridge crossing test
 // and segments four faces at a time); every family's segments, all fields
 // of every segment, must be the same bits with and without them, also with
-// the maximum test off and with no threshold (every fade branch).
+// the maximum test off and with no threshold (every fade branch). And the
+// apparent ridges are the same whether their candidate faces come from the
+// extractor's shared scan or from their own.
 TEST(LinesViewFields, SimdAndPortableKernelsGiveTheSameSegments) {
 #if !defined(FABRICA_LINES_AVX2)
   GTEST_SKIP() << "no AVX2 passes in this build";
@@ -222,6 +224,11 @@ TEST(LinesViewFields, SimdAndPortableKernelsGiveTheSameSegments) {
         EXPECT_EQ(differing_segments(simd[k].segments, portable[k].segments), 0u);
         if (simd[k].family == LineFamily::apparent) {
           EXPECT_GT(simd[k].segments.size(), 100u);
+          // The extractor takes the kernel's candidate faces from the
+          // contour scan; the family on its own scans for them.
+          const SegmentSoup alone =
+              extract_apparent_ridges(surface, simd_x.fields(), simd_x.feature_size(), o.apparent);
+          EXPECT_EQ(differing_segments(simd[k].segments, alone.segments), 0u);
           for (const auto& seg : simd[k].segments) centroid += seg.end[1].kind == EndKind::centroid;
         }
       }

@@ -23,6 +23,10 @@
 
 namespace fabrica {
 
+namespace detail {
+struct FaceLists;
+}
+
 struct ContourOptions {
   /// rtsc's "trim inside contours": keep only where K_r >= 0 (points with
   /// K_r < 0 are locally self-occluded, §3.2).
@@ -152,6 +156,7 @@ class LineExtractor {
   double feature_size_ = 0.0;
   std::unique_ptr<LinePrecompute> precompute_;
   ViewFields fields_;
+  std::unique_ptr<detail::FaceLists> apparent_faces_;  // listed by the contour scan
 };
 
 }  // namespace fabrica
