@@ -132,12 +132,13 @@ inline std::uint64_t candidate_faces_short(const float* x, const float* y, int m
 // are the only candidates (each lane is crossing_weight and the difference
 // of that loop, in the same operations; see RingPass::in_order). Fan face j
 // has the neighbours j, j + 1 (x, y, p, nbr).
-inline double two_faces(const float* x, const float* y, const double* p, const std::int32_t* nbr,
-                        const double* q1, int j0, int j1, bool two, double c, double sn, double an,
-                        double q0) {
+// pj0 and pj1 are (p[j0], p[j0 + 1]) and (p[j1], p[j1 + 1]).
+inline double two_faces(const float* x, const float* y, const double* pj0, const double* pj1,
+                        const std::int32_t* nbr, const double* q1, int j0, int j1, bool two,
+                        double c, double sn, double an, double q0) {
   const __m128d zero = _mm_setzero_pd(), one = _mm_set1_pd(1.0);
   const __m128d abs_mask = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffff));
-  const __m128d p0 = _mm_loadu_pd(p + j0), p1 = _mm_loadu_pd(p + j1);
+  const __m128d p0 = _mm_loadu_pd(pj0), p1 = _mm_loadu_pd(pj1);
   const __m128d num = _mm_unpackhi_pd(p0, p1);
   const __m128d den = _mm_sub_pd(num, _mm_unpacklo_pd(p0, p1));
   const __m128d anum = _mm_and_pd(num, abs_mask), aden = _mm_and_pd(den, abs_mask);
@@ -170,6 +171,19 @@ inline double two_faces(const float* x, const float* y, const double* p, const s
   const double sum = (0.0 + t0) + t1;
   return okm == 3 ? sum * 0.5 : sum;
 }
+
+// A fan vertex whose D_t1 q1 is two_faces', queued: a batch of them then
+// runs back to back, so the long dependency chains (loads, two divisions)
+// of several vertices overlap instead of one vertex's filling the
+// processor's window.
+struct TwoFaces {
+  std::size_t i;
+  std::int32_t jb;
+  int j0, j1;
+  bool two;
+  double c, sn, an, q0;
+  double pj0[2], pj1[2];
+};
 
 // D_t1 q1 over vertices [b, e) from the tangent ring (see update_dt1q1).
 struct RingPass {
@@ -252,8 +266,26 @@ struct RingPass {
   }
 
   [[gnu::always_inline]] inline void run(std::size_t b, std::size_t e) const {
+    constexpr int kQueue = 16;
+    TwoFaces queue[kQueue];
+    int nq = 0;
+    auto flush = [&] {
+      for (int k = 0; k < nq; ++k) {
+        const TwoFaces& t = queue[k];
+        store(t.i, two_faces(xs + t.jb, ys + t.jb, t.pj0, t.pj1, nbr + t.jb, q1, t.j0, t.j1, t.two,
+                             t.c, t.sn, t.an, t.q0));
+      }
+      nq = 0;
+    };
     for (std::size_t i = b; i < e; ++i) {
       const std::int32_t jb = off[i], je = off[i + 1];
+      {
+        // q1 of the neighbours of a vertex kAhead further (its ring
+        // entries are read in order; q1 is scattered), every other entry.
+        constexpr std::size_t kAhead = 6;
+        const std::int32_t* a = nbr + off[std::min(i + kAhead, e)];
+        for (int k = 0; k < 8; k += 2) __builtin_prefetch(q1 + a[k]);
+      }
       if (cull && !(sg[i] & kQ1Above)) {
         // Branch-free over the ring (bytes), by pairs: a ring of odd size
         // is a fan whose last neighbour repeats the first.
@@ -293,13 +325,17 @@ struct RingPass {
         } else if (cand) {
           // At most two crossings: their sum does not depend on the order.
           const int j0 = std::countr_zero(cand), j1 = rest ? std::countr_zero(rest) : j0;
-          result = two_faces(xs + jb, ys + jb, p, nbr + jb, q1, j0, j1, rest != 0, c, sn, an, q0);
+          queue[nq++] = TwoFaces{
+              i, jb, j0, j1, rest != 0, c, sn, an, q0, {p[j0], p[j0 + 1]}, {p[j1], p[j1 + 1]}};
+          if (nq == kQueue) flush();
+          continue;
         }
       } else {
         result = general(i, nullptr, 0, c, sn, an, q0);
       }
       store(i, result);
     }
+    flush();
   }
 };
 
