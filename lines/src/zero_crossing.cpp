@@ -99,6 +99,9 @@ inline bool lone_sign(double a, double b, double c) {
 struct StoredNum {
   const double* n;
   double operator()(std::size_t i) const { return n[i]; }
+  void prefetch(std::size_t i) const {
+    if (n) __builtin_prefetch(n + i);
+  }
 };
 struct ShiftedNum {
   const double* sc;
@@ -109,6 +112,7 @@ struct ShiftedNum {
     const double n = negate ? -sc[i] : sc[i];
     return n - shift * den[i];
   }
+  void prefetch(std::size_t i) const { __builtin_prefetch(sc + i); }
 };
 
 // Faces that passed the quick rejection, processed in groups (in face
@@ -288,7 +292,9 @@ struct ScalarBatch {
       __builtin_prefetch(&in.m.pos[face[k]]);
       __builtin_prefetch(&in.val[face[k]]);
       if (in.den) __builtin_prefetch(&in.den[face[k]]);
+      if (in.test) num.prefetch(static_cast<std::size_t>(face[k]));
     }
+    __builtin_prefetch(in.m.topo->face_edge_row(f));
   }
   // The listed faces (ascending), a batch at a time, the next batch's
   // corners prefetched while the current one is processed.
