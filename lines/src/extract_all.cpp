@@ -45,7 +45,7 @@ void LineExtractor::extract(const Camera& camera, std::vector<SegmentSoup>& soup
   // view's extractors find it (no fresh pages per view).
   for (auto& soup : soups)
     detail::ChunkBufferPool<LineSegment>::instance().give(detail::kOutputKey,
-                                                          std::move(soup.segments), true);
+                                                          std::move(soup.segments));
   soups = extract(camera);
 }
 

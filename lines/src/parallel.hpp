@@ -1,16 +1,20 @@
 // Private: deterministic chunked parallel loops that produce variable-size
 // output (segments): each fixed chunk of the index range writes its own
-// vector, and the chunks are concatenated in order, so the result is the
-// same at any thread count.
+// vector, and the chunks are appended in order, so the result is the same
+// at any thread count.
 #pragma once
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
+#include <atomic>
 #include <cstddef>
 #include <map>
+#include <memory>
 #include <mutex>
+#include <tuple>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -22,9 +26,9 @@ inline constexpr std::size_t kFaceChunk = 4096;
 /// Process-wide free lists of output buffers, so that the chunks of a call
 /// reuse the capacity (already-touched memory) left by earlier calls instead
 /// of growing fresh vectors every view. Chunk buffers are filed under their
-/// call site and chunk index (a chunk gets back a buffer sized by the same
-/// chunk of an earlier call); whole outputs (handed back through
-/// LineExtractor::extract(camera, soups)) under kOutputKey, taken best-fit.
+/// call site and taken back most recent first (likely still in cache);
+/// whole outputs (handed back through LineExtractor::extract(camera,
+/// soups)) under kOutputKey, taken best-fit.
 /// Keeps at most kMaxBytes of capacity. Buffers never affect the results.
 template <class T>
 class ChunkBufferPool {
@@ -34,16 +38,13 @@ class ChunkBufferPool {
     static ChunkBufferPool pool;
     return pool;
   }
-  /// The largest free buffer filed under `key`, or an empty vector.
-  std::vector<T> take(const Key& key) {
+  /// The buffer given back last under `key` (likely still in cache), or
+  /// an empty vector.
+  std::vector<T> take_recent(const Key& key) {
     std::lock_guard<std::mutex> lock(mutex_);
     auto it = free_.find(key);
     if (it == free_.end() || it->second.empty()) return {};
-    auto& list = it->second;
-    std::size_t best = 0;
-    for (std::size_t k = 1; k < list.size(); ++k)
-      if (list[k].capacity() > list[best].capacity()) best = k;
-    return pop(list, best);
+    return pop(it->second, it->second.size() - 1);
   }
   /// The smallest free buffer under `key` with capacity >= n, or empty.
   std::vector<T> take_at_least(const Key& key, std::size_t n) {
@@ -59,14 +60,10 @@ class ChunkBufferPool {
     if (best == list.size()) return {};
     return pop(list, best);
   }
-  /// With `keep_size` (whole outputs under kOutputKey only, for a
-  /// trivially destructible T) the elements stay constructed, so the next
-  /// output that takes the buffer and resizes it to about the same length
-  /// does not value-initialise them all again (concatenate_chunks
-  /// overwrites every element it keeps).
-  void give(const Key& key, std::vector<T>&& v, bool keep_size = false) {
+  /// Files `v` (emptied) under `key`.
+  void give(const Key& key, std::vector<T>&& v) {
     if (v.capacity() == 0) return;
-    if (!keep_size) v.clear();
+    v.clear();
     std::lock_guard<std::mutex> lock(mutex_);
     if (bytes_ + v.capacity() * sizeof(T) > kMaxBytes) return;
     bytes_ += v.capacity() * sizeof(T);
@@ -90,56 +87,89 @@ class ChunkBufferPool {
 /// Key of the whole-output buffers in ChunkBufferPool.
 inline constexpr std::pair<const void*, std::size_t> kOutputKey{nullptr, 0};
 
-/// Appends parts[0], parts[1], ... to `out` and hands each part back to the
-/// pool under {site, key_base + c}. The output grows once (from a recycled
-/// whole output when `out` is empty: its kept elements are overwritten, not
-/// value-initialised again), then the parts are copied into their places in
-/// parallel (a serial copy of ~10 MB per view would not scale).
-template <class T>
-void concatenate_chunks(std::vector<std::vector<T>>& parts, std::vector<T>& out, const void* site,
-                        std::size_t key_base) {
+/// fn(begin, end, part_0, ..., part_{N-1}) for fixed chunks of [0, n), each
+/// chunk writing N fresh parts; part k of every chunk is appended to
+/// *outs[k] in chunk order, so the result is the same at any thread count.
+/// Chunks are taken in index order (whichever task runs next takes the next
+/// chunk) and each finished run of consecutive chunks is appended at once
+/// by the thread that completes it, while its parts are still in cache; the
+/// part buffers are recycled most-recent-first. So the parts are not
+/// written to memory, read back and copied again after the loop (which, for
+/// the ~10 MB of segments of a view, costs more memory traffic than the
+/// kernels themselves).
+template <std::size_t N, class T, class Fn>
+void ordered_chunks(std::size_t n, Fn&& fn, const std::array<std::vector<T>*, N>& outs,
+                    const void* site, std::size_t chunk = kFaceChunk) {
   static_assert(std::is_trivially_destructible_v<T>);
+  if (n == 0) return;
+  const std::size_t chunks = (n + chunk - 1) / chunk;
   auto& pool = ChunkBufferPool<T>::instance();
-  const std::size_t chunks = parts.size();
-  std::vector<std::size_t> offset(chunks + 1);
-  offset[0] = out.size();
-  for (std::size_t c = 0; c < chunks; ++c) offset[c + 1] = offset[c] + parts[c].size();
-  const std::size_t total = offset[chunks];
-  if (out.empty() && out.capacity() < total) {
-    std::vector<T> v = pool.take_at_least(kOutputKey, total);
-    if (v.capacity() >= total) out.swap(v);
+  // Each empty output starts from the smallest recycled whole output that
+  // holds what this call site's output held last time (instantiations
+  // differ by call site: Fn is a lambda).
+  static std::array<std::atomic<std::size_t>, N> last_size{};
+  std::array<std::size_t, N> start{};
+  for (std::size_t k = 0; k < N; ++k) {
+    std::vector<T>* o = outs[k];
+    if (o->empty() && o->capacity() == 0) {
+      const std::size_t want = last_size[k].load(std::memory_order_relaxed);
+      if (want > 0) {
+        *o = pool.take_at_least(kOutputKey, want + want / 8);
+        o->clear();
+      }
+    }
+    start[k] = o->size();
   }
-  out.resize(total);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t c = r.begin(); c != r.end(); ++c) {
-                        std::copy(parts[c].begin(), parts[c].end(), out.begin() + offset[c]);
-                        pool.give({site, key_base + c}, std::move(parts[c]));
-                      }
-                    });
+  struct Slot {
+    std::array<std::vector<T>, N> part;
+    std::atomic<bool> done{false};
+  };
+  std::unique_ptr<Slot[]> slot(new Slot[chunks]);
+  std::atomic<std::size_t> next{0};
+  std::mutex append;
+  std::size_t appended = 0;  // guarded by `append`
+  auto drain = [&] {         // with `append` held
+    while (appended < chunks && slot[appended].done.load(std::memory_order_acquire)) {
+      for (std::size_t k = 0; k < N; ++k) {
+        std::vector<T>& p = slot[appended].part[k];
+        outs[k]->insert(outs[k]->end(), p.begin(), p.end());
+        pool.give({site, 0}, std::move(p));
+      }
+      ++appended;
+    }
+  };
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, chunks, 1), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t t = r.begin(); t != r.end(); ++t) {
+          const std::size_t c = next.fetch_add(1);
+          Slot& s = slot[c];
+          for (auto& p : s.part) p = pool.take_recent({site, 0});
+          std::apply([&](auto&... parts) { fn(c * chunk, std::min(n, (c + 1) * chunk), parts...); },
+                     s.part);
+          s.done.store(true, std::memory_order_release);
+          if (append.try_lock()) {
+            drain();
+            append.unlock();
+          }
+        }
+      });
+  std::lock_guard<std::mutex> lock(append);
+  drain();
+  for (std::size_t k = 0; k < N; ++k)
+    last_size[k].store(outs[k]->size() - start[k], std::memory_order_relaxed);
 }
 
 /// fn(begin, end, std::vector<T>& out) for fixed chunks of [0, n); the
-/// outputs are appended to `out` in chunk order.
+/// outputs are appended to `out` in chunk order (ordered_chunks).
 template <class T, class Fn>
 void parallel_chunks(std::size_t n, Fn&& fn, std::vector<T>& out, std::size_t chunk = kFaceChunk) {
   if (n == 0) return;
-  const std::size_t chunks = (n + chunk - 1) / chunk;
-  if (chunks == 1) {
+  if (n <= chunk) {
     fn(std::size_t{0}, n, out);
     return;
   }
-  auto& pool = ChunkBufferPool<T>::instance();
   static const char site = 0;  // one per instantiation, i.e. per call site
-  std::vector<std::vector<T>> parts(chunks);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t c = r.begin(); c != r.end(); ++c) {
-                        parts[c] = pool.take({&site, c + 1});
-                        fn(c * chunk, std::min(n, (c + 1) * chunk), parts[c]);
-                      }
-                    });
-  concatenate_chunks(parts, out, &site, 1);
+  ordered_chunks<1, T>(n, fn, std::array<std::vector<T>*, 1>{&out}, &site, chunk);
 }
 
 /// Plain parallel loop over [0, n) in blocks (no output).

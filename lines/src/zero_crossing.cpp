@@ -493,8 +493,7 @@ inline void crossing_bits(const Face* faces, const std::uint32_t* face, int n, c
 // Contours (zeros of n·v, StoredNum test) and suggestive contours or
 // highlights (zeros of K_r, ShiftedNum test) in one scan over the faces'
 // sign bytes: each family's candidates and segments exactly as its own scan
-// makes them, in face order. The suggestive segments of chunk c go to
-// side[c], concatenated after the loop.
+// makes them, in face order (two outputs of one ordered_chunks).
 void fused_crossings(const ScalarInputs& ci, const StoredNum& cn, const detail::SignBits& cb,
                      const ScalarInputs& si, const ShiftedNum& sn, const detail::SignBits& sb,
                      std::size_t face_count, std::vector<LineSegment>& cout,
@@ -506,14 +505,11 @@ void fused_crossings(const ScalarInputs& ci, const StoredNum& cn, const detail::
     listed->face.resize(chunks * chunk);
     listed->count.resize(chunks);
   }
-  auto& pool = detail::ChunkBufferPool<LineSegment>::instance();
   static const char site = 0;
-  std::vector<std::vector<LineSegment>> side(chunks);
-  detail::parallel_chunks<LineSegment>(
+  detail::ordered_chunks<2, LineSegment>(
       face_count,
-      [&](std::size_t b, std::size_t e, std::vector<LineSegment>& part) {
-        std::vector<LineSegment>& spart = side[b / chunk];
-        spart = pool.take({&site, b / chunk});
+      [&](std::size_t b, std::size_t e, std::vector<LineSegment>& part,
+          std::vector<LineSegment>& spart) {
         const Face* faces = ci.m.faces;
         const std::uint8_t* sg = cb.signs;
         const SignTest ct(cb), stt(sb);
@@ -537,8 +533,7 @@ void fused_crossings(const ScalarInputs& ci, const StoredNum& cn, const detail::
         ScalarBatch<StoredNum>{ci, cn, part, {}}.run(cc, nc);
         ScalarBatch<ShiftedNum>{si, sn, spart, {}}.run(sc, ns);
       },
-      cout);
-  detail::concatenate_chunks(side, sout, &site, 0);
+      std::array<std::vector<LineSegment>*, 2>{&cout, &sout}, &site);
 }
 
 // The vector kernel's per-vertex reads: derivative δ, magnitude m and
