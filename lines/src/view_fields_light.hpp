@@ -41,11 +41,12 @@ void update_view_fields(ViewFields& fields, const Surface& surface, const Camera
                         const ViewFieldsRequest& request, const LinePrecompute* precompute,
                         bool defer_dt1q1);
 
-/// D_t1 q1 (fields.dt1q1) and E = D_t1 q1 t1_world (fields.apparent_field)
+/// D_t1 q1 (fields.dt1q1) and the apparent-ridge kernel's records
+/// (fields.apparent_vertex: E = D_t1 q1 t1_world, D_t1 q1, q1, position)
 /// from the filled q1, t1, t1_world, ndotv and signs: Judd's one-sided
 /// finite differences along t1 (ALGORITHMS.md §6.2).
 /// With `cull`, only at vertices of faces with a corner carrying kQ1Above
-/// (0 elsewhere). `precompute` supplies the tangent ring; nullptr: from the
+/// (dt1q1 0 elsewhere, records left as they were). `precompute` supplies the tangent ring; nullptr: from the
 /// topology.
 void update_dt1q1(ViewFields& fields, const Surface& surface, bool cull,
                   const LinePrecompute* precompute);
