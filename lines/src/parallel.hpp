@@ -94,9 +94,8 @@ inline constexpr std::pair<const void*, std::size_t> kOutputKey{nullptr, 0};
 /// chunk) and each finished run of consecutive chunks is appended at once
 /// by the thread that completes it, while its parts are still in cache; the
 /// part buffers are recycled most-recent-first. So the parts are not
-/// written to memory, read back and copied again after the loop (which, for
-/// the ~10 MB of segments of a view, costs more memory traffic than the
-/// kernels themselves).
+/// written to memory, read back and copied again after the loop (a second
+/// pass over the ~10 MB of segments of a view).
 template <std::size_t N, class T, class Fn>
 void ordered_chunks(std::size_t n, Fn&& fn, const std::array<std::vector<T>*, N>& outs,
                     const void* site, std::size_t chunk = kFaceChunk) {
@@ -114,8 +113,11 @@ void ordered_chunks(std::size_t n, Fn&& fn, const std::array<std::vector<T>*, N>
     if (o->empty() && o->capacity() == 0) {
       const std::size_t want = last_size[k].load(std::memory_order_relaxed);
       if (want > 0) {
-        *o = pool.take_at_least(kOutputKey, want + want / 8);
+        // Room for a little more than last time, so that buffers settle at
+        // a capacity later views fit in (no growth while appending).
+        *o = pool.take_at_least(kOutputKey, want);
         o->clear();
+        o->reserve(want + want / 8);
       }
     }
     start[k] = o->size();
