@@ -61,12 +61,22 @@ inline __m128 load2(const float* f) {
 // num and den needs |num| <= |den| 2^-900; with |c|, |sn| <= 2 and finite
 // float offsets |p| <= 2^130, so "tiny" is |p| <= 2^-770 (anything
 // otherwise).
+//
+// Short: a fan of m < kShort faces, without a loop: p for the first kShort
+// ring entries (those past the fan's m + 1 belong to the next ring or the
+// padding; they are computed and stored, and ignored: their sign bits are
+// masked off, and they can only make the rare `small` check below run,
+// which then looks at the fan's own entries only).
+constexpr int kShort = 8;
+template <bool Short>
 inline std::uint64_t candidate_faces(const float* x, const float* y, int m, __m128d cs, double* p) {
   const __m128d vc = _mm_unpacklo_pd(cs, cs), vs = _mm_unpackhi_pd(cs, cs);
   const __m128d abs_mask = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffff));
   __m128d vmin = _mm_set1_pd(HUGE_VAL);
   std::uint64_t neg = 0;
-  for (int j = 0; j < m; j += 2) {
+  const int end = Short ? kShort : m;
+#pragma GCC unroll 4
+  for (int j = 0; j < end; j += 2) {
     const __m128d vx = _mm_cvtps_pd(load2(x + j)), vy = _mm_cvtps_pd(load2(y + j));
     const __m128d v = _mm_sub_pd(_mm_mul_pd(vc, vy), _mm_mul_pd(vs, vx));
     _mm_store_pd(p + j, v);
@@ -74,9 +84,10 @@ inline std::uint64_t candidate_faces(const float* x, const float* y, int m, __m1
     neg |= std::uint64_t(_mm_movemask_pd(v)) << j;
   }
   p[m] = p[0];
-  // Bit j of cand: bits j and j + 1 of b (bit m is bit 0) differ.
+  // Bit j of cand: bits j and j + 1 of neg (bit m is bit 0, neighbour m
+  // being neighbour 0 again) differ.
   const std::uint64_t all = (std::uint64_t{1} << m) - 1;
-  auto pairs = [&](std::uint64_t b) { return b | (b & 1) << m; };
+  auto pairs = [&](std::uint64_t b) { return (b & all) | (b & 1) << m; };
   neg = pairs(neg);
   std::uint64_t cand = (neg ^ neg >> 1) & all;
   const bool bounded =
@@ -86,43 +97,6 @@ inline std::uint64_t candidate_faces(const float* x, const float* y, int m, __m1
     std::uint64_t small = 0;
     for (int j = 0; j < m; ++j) small |= std::uint64_t(std::abs(p[j]) <= tiny) << j;
     cand |= pairs(small) >> 1 & all;
-  }
-  return cand;
-}
-
-// candidate_faces for a fan of m < kShort faces, without a loop: p for the
-// first kShort ring entries (those past the fan's m + 1 belong to the next
-// ring or the padding; they are computed and stored, and ignored: their
-// sign bits are masked off, and they can only make the rare `small` check
-// below run, which then looks at the fan's own entries only).
-constexpr int kShort = 8;
-inline std::uint64_t candidate_faces_short(const float* x, const float* y, int m, __m128d cs,
-                                           double* p) {
-  const __m128d vc = _mm_unpacklo_pd(cs, cs), vs = _mm_unpackhi_pd(cs, cs);
-  const __m128d abs_mask = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffff));
-  __m128d vmin = _mm_set1_pd(HUGE_VAL);
-  std::uint64_t neg = 0;
-#pragma GCC unroll 4
-  for (int j = 0; j < kShort; j += 2) {
-    const __m128d vx = _mm_cvtps_pd(load2(x + j)), vy = _mm_cvtps_pd(load2(y + j));
-    const __m128d v = _mm_sub_pd(_mm_mul_pd(vc, vy), _mm_mul_pd(vs, vx));
-    _mm_store_pd(p + j, v);
-    vmin = _mm_min_pd(_mm_and_pd(v, abs_mask), vmin);
-    neg |= std::uint64_t(_mm_movemask_pd(v)) << j;
-  }
-  p[m] = p[0];
-  const std::uint64_t all = (std::uint64_t{1} << m) - 1;
-  neg &= all;
-  neg |= (neg & 1) << m;
-  std::uint64_t cand = (neg ^ neg >> 1) & all;
-  const bool bounded =
-      _mm_movemask_pd(_mm_cmple_pd(_mm_and_pd(cs, abs_mask), _mm_set1_pd(2.0))) == 3;
-  const double tiny = bounded ? 0x1p-770 : HUGE_VAL;
-  if (_mm_cvtsd_f64(_mm_min_sd(vmin, _mm_unpackhi_pd(vmin, vmin))) <= tiny) {
-    std::uint64_t small = 0;
-    for (int j = 0; j < m; ++j) small |= std::uint64_t(std::abs(p[j]) <= tiny) << j;
-    small |= (small & 1) << m;
-    cand |= small >> 1 & all;
   }
   return cand;
 }
@@ -317,8 +291,8 @@ struct RingPass {
       if (fan[i]) {
         const std::int32_t m = je - jb - 1;
         alignas(16) double p[kMaxFan + 2];
-        const std::uint64_t cand = m < kShort ? candidate_faces_short(xs + jb, ys + jb, m, cs, p)
-                                              : candidate_faces(xs + jb, ys + jb, m, cs, p);
+        const std::uint64_t cand = m < kShort ? candidate_faces<true>(xs + jb, ys + jb, m, cs, p)
+                                              : candidate_faces<false>(xs + jb, ys + jb, m, cs, p);
         const std::uint64_t rest = cand & (cand - 1);
         if (rest & (rest - 1)) {
           result = general(i, p, cand, c, sn, an, q0);
