@@ -17,6 +17,16 @@ if [ $# -lt 2 ]; then
   exit 2
 fi
 old="$1" new="$2" views="${3:-8}" threads="${4:-2}" rounds="${5:-10}" set="${6:-rtsc}"
+for n in "$views" "$threads" "$rounds"; do
+  if ! [[ "$n" =~ ^[1-9][0-9]*$ ]]; then
+    echo "ab_drive: VIEWS, THREADS and ROUNDS must be positive integers (got '$n')" >&2
+    exit 2
+  fi
+done
+if [ "$set" != rtsc ] && [ "$set" != light ]; then
+  echo "ab_drive: the set is rtsc or light (got '$set')" >&2
+  exit 2
+fi
 for b in "$old" "$new"; do
   if [ ! -x "$b/bench/drive_lines" ]; then
     echo "ab_drive: $b/bench/drive_lines not found (build the drive_lines target)" >&2

@@ -27,6 +27,10 @@ int main(int argc, char** argv) {
   using namespace fabrica;
   const int views = argc > 1 ? std::atoi(argv[1]) : 50;
   const int threads = argc > 2 ? std::atoi(argv[2]) : 2;
+  if (views < 1 || threads < 1) {
+    std::fprintf(stderr, "drive_lines: VIEWS and THREADS must be positive integers\n");
+    return 2;
+  }
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
                             static_cast<std::size_t>(threads));
   const auto surface_ptr = bench::load_igea();
@@ -34,10 +38,14 @@ int main(int argc, char** argv) {
   const Camera c = bench::igea_v1_camera();
   LineOptions o;
   const std::string set = argc > 3 ? argv[3] : "rtsc";
-  if (set == "light")
+  if (set == "light") {
     o.families = {LineFamily::pel, LineFamily::laplacian};
-  else
+  } else if (set == "rtsc") {
     o.families = reference_families();
+  } else {
+    std::fprintf(stderr, "drive_lines: the set is rtsc or light (got '%s')\n", set.c_str());
+    return 2;
+  }
   o.feature_size = bench::kIgeaV1FeatureSize;
   LineExtractor ex(surface, o);
   std::vector<SegmentSoup> soups;

@@ -149,10 +149,10 @@ void ordered_chunks(std::size_t n, Fn&& fn, const std::array<std::vector<T>*, N>
           std::apply([&](auto&... parts) { fn(c * chunk, std::min(n, (c + 1) * chunk), parts...); },
                      s.part);
           s.done.store(true, std::memory_order_release);
-          if (append.try_lock()) {
-            drain();
-            append.unlock();
-          }
+          // Whoever finds the lock free appends what is ready (RAII: an
+          // append that throws still releases it).
+          std::unique_lock<std::mutex> lock(append, std::try_to_lock);
+          if (lock.owns_lock()) drain();
         }
       });
   std::lock_guard<std::mutex> lock(append);

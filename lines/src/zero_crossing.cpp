@@ -107,6 +107,9 @@ struct ShiftedNum {
   const double* den;
   bool negate;
   double shift;
+  static ShiftedNum of(const detail::SuggestiveTest& t) {
+    return ShiftedNum{t.sc_num.data(), t.ndotv.data(), t.negate, t.shift};
+  }
   double operator()(std::size_t i) const {
     const double n = negate ? -sc[i] : sc[i];
     return n - shift * den[i];
@@ -419,7 +422,7 @@ inline Vec3 field_at(const double* E, std::size_t v) {
 inline unsigned crossing_bits_of(const Face& f, const double* E) {
   return crossing_bits_of(field_at(E, f[0]), field_at(E, f[1]), field_at(E, f[2]));
 }
-// At least two of the three edges cross.
+
 // The first corner c0 of the segment (c0, c1, c2) of a face with crossing
 // bits z: the edge without a crossing is opposite c1, so c0 = 1 without
 // z01, else 2 without z12, else 0 (a table of 2-bit entries, no branch);
@@ -719,28 +722,25 @@ template <bool ToCenter>
   for (int k = 0; k < 3; ++k) ce.p[k] = (p0[k] + p1[k] + p2[k]) / 3.0;
   // (c0,c1,c2) = (1,2,0), (2,0,1), (0,1,2), in this order.
   for (int k = 0; k < 3; ++k) {
-    const int c0 = k == 2 ? 0 : k + 1, c1 = c0 == 2 ? 0 : c0 + 1;
-    vector_segment<true>(in, sp, f, v, c0, c1, 3 - c0 - c1, E, ce, out);
+    const int c0 = next_corner(k), c1 = next_corner(c0);
+    vector_segment<true>(in, sp, f, v, c0, c1, next_corner(c1), E, ce, out);
   }
 }
 
 // The segments of face f (vertices v, E_i = delta_i dir_i) given which
-// edges cross (zij: E_i·E_j <= 0, and the maximum test where it applies):
-// at least two of them.
+// edges cross (crossing bits z as crossing_bits_of, with the maximum test
+// where it applies): at least two of them.
 [[gnu::noinline]] void vector_face_segments(const VectorInputs& in, std::size_t f, const int v[3],
-                                            const Vec3 E[3], bool z01, bool z12, bool z20,
+                                            const Vec3 E[3], unsigned z,
                                             std::vector<LineSegment>& out) {
   const SegmentParams sp{in.o.threshold, in.o.test == ExtremumTest::perpendicular,
                          in.o.keep_raw_magnitude};
-  if (z01 && z12 && z20) {
+  if (z == 7) {
     vector_centroid_segments(in, sp, f, v, E, out);
     return;
   }
-  // The one edge without a crossing is opposite the middle corner c1 of
-  // the segment (c0,c1,c2) = (1,2,0), (2,0,1) or (0,1,2).
-  const int c0 = !z01 ? 1 : !z12 ? 2 : 0;
-  const int c1 = c0 == 2 ? 0 : c0 + 1, c2 = c1 == 2 ? 0 : c1 + 1;
-  vector_segment<false>(in, sp, f, v, c0, c1, c2, E, CentroidEnd{}, out);
+  const int c0 = first_corner(z), c1 = next_corner(c0);
+  vector_segment<false>(in, sp, f, v, c0, c1, next_corner(c1), E, CentroidEnd{}, out);
 }
 
 // The rest of vector_face for a face with a corner above the threshold.
@@ -755,19 +755,19 @@ template <bool ToCenter>
     return;
   const Vec3 E[3] = {in.d(v[0]) * in.dir[v[0]], in.d(v[1]) * in.dir[v[1]],
                      in.d(v[2]) * in.dir[v[2]]};
-  const unsigned z = crossing_bits_of(E[0], E[1], E[2]);
+  unsigned z = crossing_bits_of(E[0], E[1], E[2]);
   if (!two_crossings(z)) return;
-  bool z01 = z & 1, z12 = (z >> 1) & 1, z20 = (z >> 2) & 1;
   if (o.test == ExtremumTest::edge) {
     const Vec3* pos = in.m.pos;
     const Vec3 d01 = pos[v[1]] - pos[v[0]], d12 = pos[v[2]] - pos[v[1]],
                d20 = pos[v[0]] - pos[v[2]];
-    z01 = z01 && (E[0].dot(d01) >= 0.0 || E[1].dot(d01) <= 0.0);
-    z12 = z12 && (E[1].dot(d12) >= 0.0 || E[2].dot(d12) <= 0.0);
-    z20 = z20 && (E[2].dot(d20) >= 0.0 || E[0].dot(d20) <= 0.0);
-    if (int(z01) + int(z12) + int(z20) < 2) return;
+    const bool z01 = (z & 1) && (E[0].dot(d01) >= 0.0 || E[1].dot(d01) <= 0.0);
+    const bool z12 = (z & 2) && (E[1].dot(d12) >= 0.0 || E[2].dot(d12) <= 0.0);
+    const bool z20 = (z & 4) && (E[2].dot(d20) >= 0.0 || E[0].dot(d20) <= 0.0);
+    z = unsigned(z01) | unsigned(z12) << 1 | unsigned(z20) << 2;
+    if (!two_crossings(z)) return;
   }
-  vector_face_segments(in, f, v, E, z01, z12, z20, out);
+  vector_face_segments(in, f, v, E, z, out);
 }
 
 // The kept faces of a packed chunk (at least two crossing edges) and
@@ -786,8 +786,7 @@ void kept_segments_scalar(const VectorInputs& in, const double* field, const Kep
     const Face& fg = in.m.faces[f];
     const int v[3] = {fg[0], fg[1], fg[2]};
     const Vec3 E[3] = {field_at(field, fg[0]), field_at(field, fg[1]), field_at(field, fg[2])};
-    const unsigned z = kept.z[j];
-    vector_face_segments(in, f, v, E, z & 1, (z >> 1) & 1, (z >> 2) & 1, out);
+    vector_face_segments(in, f, v, E, kept.z[j], out);
   }
 }
 
@@ -1080,9 +1079,8 @@ void scalar_zero_crossings(const Surface& surface, std::span<const double> value
 
 void suggestive_zero_crossings(const Surface& surface, const SuggestiveTest& test,
                                const SignBits& bits, std::vector<LineSegment>& out) {
-  scalar_crossings(suggestive_inputs(surface, test),
-                   ShiftedNum{test.sc_num.data(), test.ndotv.data(), test.negate, test.shift},
-                   surface.face_count(), out, {}, bits);
+  scalar_crossings(suggestive_inputs(surface, test), ShiftedNum::of(test), surface.face_count(),
+                   out, {}, bits);
 }
 
 bool contour_suggestive_zero_crossings(const Surface& surface, std::span<const double> ndotv,
@@ -1098,8 +1096,7 @@ bool contour_suggestive_zero_crossings(const Surface& surface, std::span<const d
     return false;
   }
   fused_crossings(scalar_inputs(surface, ndotv, contour), StoredNum{contour.test_num.data()},
-                  contour_bits, suggestive_inputs(surface, test),
-                  ShiftedNum{test.sc_num.data(), test.ndotv.data(), test.negate, test.shift},
+                  contour_bits, suggestive_inputs(surface, test), ShiftedNum::of(test),
                   suggestive_bits, surface.face_count(), contours, suggestive, listed, listed_bit);
   return listed != nullptr;
 }

@@ -16,7 +16,6 @@ namespace fabrica {
 struct ContourOptions;
 struct ApparentOptions;
 struct SuggestiveOptions;
-struct ViewFields;
 }  // namespace fabrica
 
 namespace fabrica::detail {

@@ -95,9 +95,9 @@ struct ViewFields {
   std::vector<Vec3> t1_world;
   /// Per vertex: E = dt1q1 · t1_world, the sign-free field whose zero set
   /// the apparent-ridge kernel extracts, and the other per-corner inputs of
-  /// that kernel. With apparent_cull_threshold, set only at the corners of
-  /// faces with a corner where q1 > threshold (the only ones the kernel
-  /// reads); elsewhere left as they were.
+  /// that kernel. With apparent_cull_threshold, guaranteed current only at
+  /// the corners of faces with a corner where q1 > threshold (the only ones
+  /// the kernel reads); elsewhere they may hold an earlier view's values.
   std::vector<ApparentVertex> apparent_vertex;
   std::vector<std::uint8_t> signs;                ///< ViewSign bits (with the radial group)
   std::optional<double> apparent_cull_threshold;  ///< as requested
