@@ -14,20 +14,23 @@ namespace {
 
 // Keeps raw segments (strength = magnitude) whose face is not back-facing
 // and whose magnitude exceeds `t` at either end; strength becomes the fade
-// (m - t)/m (rtsc's k/(k + t) with k = m - t). The tests read the compact
-// keys (and the view's sign bytes when present); only kept segments are
-// copied.
-SegmentSoup threshold_raw(const Surface& surface, const std::vector<LineSegment>& raw,
-                          const std::vector<LinePrecompute::RawKey>& keys, LineFamily family,
-                          const ViewFields& fields, double t, bool cull) {
+// (m - t)/m (rtsc's k/(k + t) with k = m - t). The threshold test is
+// view-independent (LinePrecompute::raw_above lists the segments that pass
+// it); per view, the cull reads the listed keys (and the view's sign bytes
+// when present), and only kept segments are copied.
+SegmentSoup threshold_raw(const LinePrecompute& pre, const std::vector<LineSegment>& raw,
+                          LineFamily family, const ViewFields& fields, double t, bool cull) {
   SegmentSoup soup;
   soup.family = family;
-  const std::size_t nv = surface.vertex_count();
+  const std::size_t nv = pre.surface().vertex_count();
   const bool do_cull = cull && fields.ndotv.size() == nv;
   const std::uint8_t* sg = fields.signs.size() == nv ? fields.signs.data() : nullptr;
   const double* ndotv = fields.ndotv.data();
+  const auto above = pre.raw_above(family, t);
+  const auto& keys = above->key;
+  const auto& index = above->index;
   detail::parallel_chunks<LineSegment>(
-      raw.size(),
+      keys.size(),
       [&](std::size_t b, std::size_t e, std::vector<LineSegment>& out) {
         for (std::size_t i = b; i < e; ++i) {
           const LinePrecompute::RawKey& key = keys[i];
@@ -37,15 +40,14 @@ SegmentSoup threshold_raw(const Surface& surface, const std::vector<LineSegment>
                    : ndotv[c[0]] <= 0.0 && ndotv[c[1]] <= 0.0 && ndotv[c[2]] <= 0.0)
               continue;
           }
-          const double k0 = std::max(double(key.m0) - t, 0.0);
-          const double k1 = std::max(double(key.m1) - t, 0.0);
-          if (k0 == 0.0 && k1 == 0.0) continue;
-          LineSegment& s = out.emplace_back(raw[i]);
+          const double k0 = LinePrecompute::raw_excess(key.m0, t);
+          const double k1 = LinePrecompute::raw_excess(key.m1, t);
+          LineSegment& s = out.emplace_back(raw[index[i]]);
           s.end[0].strength = t > 0.0 ? static_cast<float>(k0 / (k0 + t)) : 1.0f;
           s.end[1].strength = t > 0.0 ? static_cast<float>(k1 / (k1 + t)) : 1.0f;
         }
       },
-      soup.segments, 16384);
+      soup.segments, 4096);
   return soup;
 }
 
@@ -54,22 +56,21 @@ SegmentSoup threshold_raw(const Surface& surface, const std::vector<LineSegment>
 SegmentSoup extract_ridges(const LinePrecompute& pre, const ViewFields& fields, double feature_size,
                            const RidgeOptions& options) {
   if (!(feature_size > 0.0)) throw InputError("feature size must be positive");
-  return threshold_raw(pre.surface(), pre.raw_ridges(), pre.raw_ridge_keys(), LineFamily::ridge,
-                       fields, options.threshold / feature_size, options.cull_backfaces);
+  return threshold_raw(pre, pre.raw_ridges(), LineFamily::ridge, fields,
+                       options.threshold / feature_size, options.cull_backfaces);
 }
 
 SegmentSoup extract_valleys(const LinePrecompute& pre, const ViewFields& fields,
                             double feature_size, const RidgeOptions& options) {
   if (!(feature_size > 0.0)) throw InputError("feature size must be positive");
-  return threshold_raw(pre.surface(), pre.raw_valleys(), pre.raw_valley_keys(), LineFamily::valley,
-                       fields, options.threshold / feature_size, options.cull_backfaces);
+  return threshold_raw(pre, pre.raw_valleys(), LineFamily::valley, fields,
+                       options.threshold / feature_size, options.cull_backfaces);
 }
 
 SegmentSoup extract_demarcating_curves(const LinePrecompute& pre, const ViewFields& fields,
                                        double feature_size, const DemarcatingOptions& options) {
   if (!(feature_size > 0.0)) throw InputError("feature size must be positive");
-  return threshold_raw(pre.surface(), pre.raw_demarcating(), pre.raw_demarcating_keys(),
-                       LineFamily::demarcating, fields,
+  return threshold_raw(pre, pre.raw_demarcating(), LineFamily::demarcating, fields,
                        options.threshold / (feature_size * feature_size), options.cull_backfaces);
 }
 

@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <mutex>
 
+#include "fabrica/core/error.hpp"
 #include "fabrica/lines/zero_crossing.hpp"
 #include "parallel.hpp"
 
@@ -20,6 +22,8 @@ struct LinePrecompute::Cache {
   std::vector<LineSegment> ridges, valleys, demarcating;
   GradientOperator gradient;
   std::vector<Vec3> normal_laplacian;
+  std::mutex above_mutex;
+  std::shared_ptr<const RawAbove> above[3];  // ridge, valley, demarcating
 };
 
 LinePrecompute::LinePrecompute(const Surface& surface)
@@ -261,6 +265,44 @@ const std::vector<LinePrecompute::RawKey>& LinePrecompute::raw_demarcating_keys(
   std::call_once(cache_->demarcating_keys_once,
                  [&] { cache_->demarcating_keys = raw_keys(*surface_, raw_demarcating()); });
   return cache_->demarcating_keys;
+}
+
+std::shared_ptr<const LinePrecompute::RawAbove> LinePrecompute::raw_above(LineFamily family,
+                                                                          double t) const {
+  int slot;
+  const std::vector<RawKey>* keys;
+  switch (family) {
+    case LineFamily::ridge:
+      slot = 0, keys = &raw_ridge_keys();
+      break;
+    case LineFamily::valley:
+      slot = 1, keys = &raw_valley_keys();
+      break;
+    case LineFamily::demarcating:
+      slot = 2, keys = &raw_demarcating_keys();
+      break;
+    default:
+      throw Error(ErrorKind::internal, "raw_above: not a precomputed family");
+  }
+  // The same t bit for bit (NaN included).
+  auto same = [&](const std::shared_ptr<const RawAbove>& a) {
+    return a && std::memcmp(&a->t, &t, sizeof t) == 0;
+  };
+  {
+    std::lock_guard lock(cache_->above_mutex);
+    if (same(cache_->above[slot])) return cache_->above[slot];
+  }
+  auto a = std::make_shared<RawAbove>();
+  a->t = t;
+  for (std::size_t i = 0; i < keys->size(); ++i) {
+    const RawKey& k = (*keys)[i];
+    if (raw_excess(k.m0, t) == 0.0 && raw_excess(k.m1, t) == 0.0) continue;
+    a->index.push_back(static_cast<std::uint32_t>(i));
+    a->key.push_back(k);
+  }
+  std::lock_guard lock(cache_->above_mutex);
+  cache_->above[slot] = a;
+  return a;
 }
 
 const std::vector<LineSegment>& LinePrecompute::raw_demarcating() const {

@@ -4,13 +4,18 @@
 // zero-crossing kernel's edge sharing, the comparison metric.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include "fabrica/core/camera.hpp"
+#include "fabrica/core/error.hpp"
 #include "fabrica/core/surface.hpp"
 #include "fabrica/lines/chain.hpp"
 #include "fabrica/lines/compare.hpp"
 #include "fabrica/lines/extract.hpp"
+#include "fabrica/lines/precompute.hpp"
+#include "fabrica/lines/view_fields.hpp"
 #include "test_support.hpp"
 
 using namespace fabrica;
@@ -152,6 +157,66 @@ TEST(Ridges, GaussianCrestHasItsRidgeOnTheCrestLine) {
     mean_x += seg.end[0].position.x();
   }
   EXPECT_NEAR(mean_x / valleys.size(), 0.0, 0.1);
+}
+
+// The per-view threshold visits only LinePrecompute::raw_above's list: the
+// raw segments above the threshold at an end, in order, per family and
+// threshold (a changed threshold gives its own list), and extraction keeps
+// exactly the listed segments that survive the view's back-face culling.
+TEST(Ridges, ThresholdListIsTheRawSegmentsAboveItAndExtractionUsesIt) {
+  TriangleMesh m = test::make_plane(4.0, 81);
+  for (auto& p : m.positions) {
+    p.x() -= 2.0;
+    p.y() -= 2.0;
+    p.z() = 0.5 * std::exp(-p.x() * p.x() / 0.25) * (1.0 + 0.3 * std::sin(2.0 * p.y()));
+  }
+  Surface s(std::move(m));
+  const LinePrecompute pre(s);
+  const auto& keys = pre.raw_ridge_keys();
+  ASSERT_GT(keys.size(), 40u);
+  std::vector<float> mags;
+  for (const auto& k : keys) mags.push_back(std::max(k.m0, k.m1));
+  std::sort(mags.begin(), mags.end());
+  // A threshold between the raw magnitudes: some pass, some do not.
+  const double t = mags[mags.size() / 2];
+  const auto above = pre.raw_above(LineFamily::ridge, t);
+  std::vector<std::uint32_t> expect;
+  for (std::size_t i = 0; i < keys.size(); ++i)
+    if (double(keys[i].m0) > t || double(keys[i].m1) > t) expect.push_back(std::uint32_t(i));
+  EXPECT_EQ(above->index, expect);
+  ASSERT_EQ(above->key.size(), expect.size());
+  for (std::size_t j = 0; j < expect.size(); ++j)
+    EXPECT_EQ(std::memcmp(&above->key[j], &keys[expect[j]], sizeof(LinePrecompute::RawKey)), 0);
+  EXPECT_GT(expect.size(), 0u);
+  EXPECT_LT(expect.size(), keys.size());
+  // Cached while the threshold stays; a new threshold, a new list.
+  EXPECT_EQ(pre.raw_above(LineFamily::ridge, t), above);
+  EXPECT_EQ(pre.raw_above(LineFamily::ridge, 0.0)->index.size(), keys.size());
+  EXPECT_EQ(above->index, expect);  // the old list is still whole
+  EXPECT_THROW((void)pre.raw_above(LineFamily::contour, t), Error);
+  // Seen along the crest (its slopes alternately towards and away from the
+  // eye: part back-facing), ridges keep the listed
+  // segments with a corner facing the eye, in list order.
+  const Camera c = camera_at({0.0, 6.0, 0.5}, Vec3::Zero(), Vec3::UnitZ());
+  ViewFieldsRequest req;
+  const ViewFields fields = compute_view_fields(s, c, req, &pre);
+  RidgeOptions ro;
+  const double fs = 0.5;
+  ro.threshold = t * fs;
+  const SegmentSoup ridges = extract_ridges(pre, fields, fs, ro);
+  std::size_t kept = 0;
+  for (std::uint32_t i : expect) {
+    const auto& corner = keys[i].corners;
+    if (!(fields.ndotv[corner[0]] > 0.0 || fields.ndotv[corner[1]] > 0.0 ||
+          fields.ndotv[corner[2]] > 0.0))
+      continue;
+    ASSERT_LT(kept, ridges.segments.size());
+    EXPECT_EQ(ridges.segments[kept].face, pre.raw_ridges()[i].face);
+    ++kept;
+  }
+  EXPECT_EQ(kept, ridges.segments.size());
+  EXPECT_GT(kept, 0u);
+  EXPECT_LT(kept, expect.size());
 }
 
 TEST(Chaining, TorusContoursFormClosedLoops) {

@@ -6,6 +6,7 @@
 // Laplacian of the normals ΔN (Zhang et al. 2009's shortcut: Δ(n·l) = ΔN·l).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <memory>
@@ -55,6 +56,21 @@ class LinePrecompute {
   const std::vector<RawKey>& raw_ridge_keys() const;
   const std::vector<RawKey>& raw_valley_keys() const;
   const std::vector<RawKey>& raw_demarcating_keys() const;
+  /// How far a raw end magnitude m exceeds the threshold t: max(m - t, 0)
+  /// (NaN stays NaN). A raw segment is kept when either end's is not 0.
+  static double raw_excess(float m, double t) { return std::max(double(m) - t, 0.0); }
+  /// The raw segments of `family` (ridge, valley or demarcating) that pass
+  /// the threshold t: their indices in raw_ridges() / raw_valleys() /
+  /// raw_demarcating(), ascending, and copies of their keys. The threshold
+  /// does not depend on the view, so the per-view extraction visits only
+  /// these (back-face culling stays per view). Cached for the last t of each
+  /// family (thread-safe; the list stays valid while held).
+  struct RawAbove {
+    double t = 0.0;
+    std::vector<std::uint32_t> index;
+    std::vector<RawKey> key;
+  };
+  std::shared_ptr<const RawAbove> raw_above(LineFamily family, double t) const;
   const GradientOperator& gradient_operator() const;
   /// Cotan Laplacian of each normal component (1/mm²), per vertex.
   const std::vector<Vec3>& normal_laplacian() const;
