@@ -16,10 +16,11 @@ namespace {
 // and whose magnitude exceeds `t` at either end; strength becomes the fade
 // (m - t)/m (rtsc's k/(k + t) with k = m - t). The threshold test is
 // view-independent (LinePrecompute::raw_above lists the segments that pass
-// it); per view, the cull reads the listed keys (and the view's sign bytes
-// when present), and only kept segments are copied.
+// it); per view, the cull reads the listed segments' keys (and the view's
+// sign bytes when present), and only kept segments are copied.
 SegmentSoup threshold_raw(const LinePrecompute& pre, const std::vector<LineSegment>& raw,
-                          LineFamily family, const ViewFields& fields, double t, bool cull) {
+                          const std::vector<LinePrecompute::RawKey>& keys, LineFamily family,
+                          const ViewFields& fields, double t, bool cull) {
   SegmentSoup soup;
   soup.family = family;
   const std::size_t nv = pre.surface().vertex_count();
@@ -27,13 +28,12 @@ SegmentSoup threshold_raw(const LinePrecompute& pre, const std::vector<LineSegme
   const std::uint8_t* sg = fields.signs.size() == nv ? fields.signs.data() : nullptr;
   const double* ndotv = fields.ndotv.data();
   const auto above = pre.raw_above(family, t);
-  const auto& keys = above->key;
   const auto& index = above->index;
   detail::parallel_chunks<LineSegment>(
-      keys.size(),
+      index.size(),
       [&](std::size_t b, std::size_t e, std::vector<LineSegment>& out) {
         for (std::size_t i = b; i < e; ++i) {
-          const LinePrecompute::RawKey& key = keys[i];
+          const LinePrecompute::RawKey& key = keys[index[i]];
           const auto& c = key.corners;
           if (do_cull) {
             if (sg ? !((sg[c[0]] | sg[c[1]] | sg[c[2]]) & kNdotvNotBack)
@@ -56,21 +56,22 @@ SegmentSoup threshold_raw(const LinePrecompute& pre, const std::vector<LineSegme
 SegmentSoup extract_ridges(const LinePrecompute& pre, const ViewFields& fields, double feature_size,
                            const RidgeOptions& options) {
   if (!(feature_size > 0.0)) throw InputError("feature size must be positive");
-  return threshold_raw(pre, pre.raw_ridges(), LineFamily::ridge, fields,
+  return threshold_raw(pre, pre.raw_ridges(), pre.raw_ridge_keys(), LineFamily::ridge, fields,
                        options.threshold / feature_size, options.cull_backfaces);
 }
 
 SegmentSoup extract_valleys(const LinePrecompute& pre, const ViewFields& fields,
                             double feature_size, const RidgeOptions& options) {
   if (!(feature_size > 0.0)) throw InputError("feature size must be positive");
-  return threshold_raw(pre, pre.raw_valleys(), LineFamily::valley, fields,
+  return threshold_raw(pre, pre.raw_valleys(), pre.raw_valley_keys(), LineFamily::valley, fields,
                        options.threshold / feature_size, options.cull_backfaces);
 }
 
 SegmentSoup extract_demarcating_curves(const LinePrecompute& pre, const ViewFields& fields,
                                        double feature_size, const DemarcatingOptions& options) {
   if (!(feature_size > 0.0)) throw InputError("feature size must be positive");
-  return threshold_raw(pre, pre.raw_demarcating(), LineFamily::demarcating, fields,
+  return threshold_raw(pre, pre.raw_demarcating(), pre.raw_demarcating_keys(),
+                       LineFamily::demarcating, fields,
                        options.threshold / (feature_size * feature_size), options.cull_backfaces);
 }
 

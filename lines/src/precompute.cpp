@@ -298,7 +298,6 @@ std::shared_ptr<const LinePrecompute::RawAbove> LinePrecompute::raw_above(LineFa
     const RawKey& k = (*keys)[i];
     if (raw_excess(k.m0, t) == 0.0 && raw_excess(k.m1, t) == 0.0) continue;
     a->index.push_back(static_cast<std::uint32_t>(i));
-    a->key.push_back(k);
   }
   std::lock_guard lock(cache_->above_mutex);
   cache_->above[slot] = a;

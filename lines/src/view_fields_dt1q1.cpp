@@ -360,30 +360,13 @@ void update_dt1q1(ViewFields& fields, const Surface& surface, bool cull,
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 2048),
                       [&](const tbb::blocked_range<std::size_t>& r) { pass(r.begin(), r.end()); });
   } else {
-    detail::parallel_range(nv, [&](std::size_t i) {
-      if (cull && !(sg[i] & kQ1Above)) {
-        // Branch-free over the ring (bytes, not q1: a small array).
-        unsigned any = 0;
-        const auto fs = topo.vertex_faces(i);
-        const auto cs = topo.vertex_face_corners(i);
-        for (std::size_t j = 0; j < fs.size(); ++j) {
-          const Face& f = faces[static_cast<std::size_t>(fs[j])];
-          const int c = cs[j];
-          any |= unsigned(sg[f[(c + 1) % 3]]) | unsigned(sg[f[(c + 2) % 3]]);
-        }
-        if (!(any & kQ1Above)) {
-          fields.dt1q1[i] = 0.0;
-          return;
-        }
-      }
+    // D_t1 q1 of vertex i by the walk over its faces (0 where not finite).
+    auto walk = [&](std::size_t i) {
       const Vec3& p0 = pos[i];
       const double ndotv = fields.ndotv[i];
       const Vec3& t1w = fields.t1_world[i];
       double result = 0.0;
-      if (t1w.squaredNorm() == 0.0) {
-        fields.dt1q1[i] = 0.0;
-        return;
-      }
+      if (t1w.squaredNorm() == 0.0) return 0.0;
       const Vec3 t2w = normals[i].cross(t1w);
       const double p0_t2 = p0.dot(t2w);
       const double q0 = q1[i];
@@ -417,9 +400,25 @@ void update_dt1q1(ViewFields& fields, const Surface& surface, bool cull,
           if (corner(f[(c + 1) % 3], f[(c + 2) % 3])) break;
         }
       }
-      fields.dt1q1[i] = std::isfinite(result) ? result : 0.0;
-    });
+      return std::isfinite(result) ? result : 0.0;
+    };
     detail::parallel_range(nv, [&](std::size_t i) {
+      if (cull && !(sg[i] & kQ1Above)) {
+        // Branch-free over the ring (bytes, not q1: a small array).
+        unsigned any = 0;
+        const auto fs = topo.vertex_faces(i);
+        const auto cs = topo.vertex_face_corners(i);
+        for (std::size_t j = 0; j < fs.size(); ++j) {
+          const Face& f = faces[static_cast<std::size_t>(fs[j])];
+          const int c = cs[j];
+          any |= unsigned(sg[f[(c + 1) % 3]]) | unsigned(sg[f[(c + 2) % 3]]);
+        }
+        if (!(any & kQ1Above)) {
+          fields.dt1q1[i] = 0.0;  // its record is never read: left as it is
+          return;
+        }
+      }
+      fields.dt1q1[i] = walk(i);
       store_apparent_vertex(fields.apparent_vertex[i], fields.dt1q1[i], fields.t1_world[i], q1[i],
                             pos[i]);
     });

@@ -46,8 +46,8 @@ void update_view_fields(ViewFields& fields, const Surface& surface, const Camera
 /// from the filled q1, t1, t1_world, ndotv and signs: Judd's one-sided
 /// finite differences along t1 (ALGORITHMS.md §6.2).
 /// With `cull`, only at vertices of faces with a corner carrying kQ1Above
-/// (dt1q1 0 elsewhere, records left as they were). `precompute` supplies the tangent ring; nullptr: from the
-/// topology.
+/// (dt1q1 0 elsewhere, records left as they were). `precompute` supplies
+/// the tangent ring; nullptr: from the topology.
 void update_dt1q1(ViewFields& fields, const Surface& surface, bool cull,
                   const LinePrecompute* precompute);
 

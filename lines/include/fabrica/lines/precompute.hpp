@@ -61,14 +61,13 @@ class LinePrecompute {
   static double raw_excess(float m, double t) { return std::max(double(m) - t, 0.0); }
   /// The raw segments of `family` (ridge, valley or demarcating) that pass
   /// the threshold t: their indices in raw_ridges() / raw_valleys() /
-  /// raw_demarcating(), ascending, and copies of their keys. The threshold
-  /// does not depend on the view, so the per-view extraction visits only
-  /// these (back-face culling stays per view). Cached for the last t of each
+  /// raw_demarcating() (and the keys), ascending. The threshold does not
+  /// depend on the view, so the per-view extraction visits only these
+  /// (back-face culling stays per view). Cached for the last t of each
   /// family (thread-safe; the list stays valid while held).
   struct RawAbove {
     double t = 0.0;
     std::vector<std::uint32_t> index;
-    std::vector<RawKey> key;
   };
   std::shared_ptr<const RawAbove> raw_above(LineFamily family, double t) const;
   const GradientOperator& gradient_operator() const;
