@@ -1,6 +1,7 @@
 // Ridges, valleys and demarcating curves (view-independent: precomputed once,
 // culled and thresholded per view) and apparent ridges (ALGORITHMS.md §5, §6, §8).
 #include <cmath>
+#include <string>
 
 #include "fabrica/core/error.hpp"
 #include "fabrica/lines/extract.hpp"
@@ -21,6 +22,12 @@ namespace {
 SegmentSoup threshold_raw(const LinePrecompute& pre, const std::vector<LineSegment>& raw,
                           const std::vector<LinePrecompute::RawKey>& keys, LineFamily family,
                           const ViewFields& fields, double t, bool cull) {
+  // A NaN or negative threshold would keep every raw segment with NaN or
+  // out-of-range strengths.
+  if (!(t >= 0.0) || !std::isfinite(t))
+    throw InputError(std::string(family_name(family)) +
+                     " threshold must be a finite non-negative number (got " + std::to_string(t) +
+                     " per feature size)");
   SegmentSoup soup;
   soup.family = family;
   const std::size_t nv = pre.surface().vertex_count();

@@ -190,6 +190,19 @@ TEST(Ridges, ThresholdListIsTheRawSegmentsAboveItAndExtractionUsesIt) {
   EXPECT_EQ(pre.raw_above(LineFamily::ridge, 0.0)->index.size(), keys.size());
   EXPECT_EQ(above->index, expect);  // the old list is still whole
   EXPECT_THROW((void)pre.raw_above(LineFamily::contour, t), Error);
+  // A threshold that is NaN or negative is an input error, not NaN strengths.
+  {
+    const ViewFields f = compute_view_fields(s, camera_at({0.0, 0.0, 6.0}), {}, &pre);
+    for (double bad : {std::nan(""), -1.0}) {
+      RidgeOptions r;
+      r.threshold = bad;
+      EXPECT_THROW((void)extract_ridges(pre, f, 0.5, r), InputError) << bad;
+      EXPECT_THROW((void)extract_valleys(pre, f, 0.5, r), InputError) << bad;
+      DemarcatingOptions d;
+      d.threshold = bad;
+      EXPECT_THROW((void)extract_demarcating_curves(pre, f, 0.5, d), InputError) << bad;
+    }
+  }
   // Seen along the crest (its slopes alternately towards and away from the
   // eye: part back-facing), ridges keep the listed segments with a corner
   // facing the eye, in list order.
