@@ -1,6 +1,7 @@
 #include "fabrica/lines/zero_crossing.hpp"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 
@@ -498,15 +499,126 @@ inline void crossing_bits(const Face* faces, const std::uint32_t* face, int n, c
     out[k] = static_cast<std::uint8_t>(crossing_bits_of(faces[face[k]], E));
 }
 
+// One face of fused_crossings' scan: appended to the contour candidates
+// (cc), the suggestive ones (sc) and the listed faces (lf) as it passes
+// each test, without branches.
+inline void scan_face(const Face* faces, std::size_t f, const std::uint8_t* sg, const SignTest& ct,
+                      const SignTest& stt, unsigned listed_bit, std::uint32_t* cc,
+                      std::uint32_t* sc, std::uint32_t* lf, std::size_t& nc, std::size_t& ns,
+                      std::size_t& nl) {
+  const Face& face = faces[f];
+  const unsigned a0 = sg[face[0]], a1 = sg[face[1]], a2 = sg[face[2]];
+  const unsigned any = a0 | a1 | a2;
+  const unsigned mixed = any & ~(a0 & a1 & a2);
+  cc[nc] = sc[ns] = lf[nl] = static_cast<std::uint32_t>(f);
+  nc += ct.pass(any, mixed);
+  ns += stt.pass(any, mixed);
+  nl += (any & listed_bit) != 0;
+}
+
+#if defined(FABRICA_LINES_AVX2)
+// For each 8-bit mask, the indices of its set bits in ascending order, one
+// byte each (unused bytes 0): the lane permutation that packs the selected
+// lanes to the front.
+constexpr std::array<std::uint64_t, 256> kPackLanes = [] {
+  std::array<std::uint64_t, 256> t{};
+  for (unsigned m = 0; m < 256; ++m) {
+    int n = 0;
+    for (unsigned l = 0; l < 8; ++l)
+      if (m >> l & 1) t[m] |= std::uint64_t{l} << (8 * n++);
+  }
+  return t;
+}();
+
+// Appends the lanes of `idx` selected by `mask` to out[n...] (writing all
+// eight lanes: out needs room for eight past n) and advances n.
+[[gnu::target("avx2"), gnu::always_inline]] inline void append_lanes(__m256i idx, unsigned mask,
+                                                                     std::uint32_t* out,
+                                                                     std::size_t& n) {
+  const __m256i perm =
+      _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kPackLanes[mask])));
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + n), _mm256_permutevar8x32_epi32(idx, perm));
+  n += static_cast<std::size_t>(std::popcount(mask));
+}
+
+// Lanes passing SignTest::pass for (any, mixed), as a bit mask.
+[[gnu::target("avx2"), gnu::always_inline]] inline unsigned pass_lanes(const SignTest& t,
+                                                                       __m256i any, __m256i mixed) {
+  const __m256i zero = _mm256_setzero_si256();
+  const __m256i no_side =
+      _mm256_cmpeq_epi32(_mm256_and_si256(mixed, _mm256_set1_epi32(int(t.sides))), zero);
+  const __m256i culled_ok =
+      _mm256_cmpeq_epi32(_mm256_andnot_si256(any, _mm256_set1_epi32(int(t.cull))), zero);
+  return static_cast<unsigned>(
+      _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_andnot_si256(no_side, culled_ok))));
+}
+
+// The face scan of fused_crossings eight faces at a time: the corners'
+// sign bytes gathered (four bytes from each corner's, the other three
+// masked off; a group with a corner among the last three vertices is
+// scanned face by face, so nothing past the array is read), the three
+// tests per lane, and the passing faces appended in order. Returns the
+// first face not scanned (fewer than eight are left).
+[[gnu::target("avx2")]] std::size_t scan_faces_avx2(const Face* faces, std::size_t b, std::size_t e,
+                                                    std::size_t vertex_count,
+                                                    const std::uint8_t* sg, const SignTest& ct,
+                                                    const SignTest& stt, unsigned listed_bit,
+                                                    std::uint32_t* cc, std::uint32_t* sc,
+                                                    std::uint32_t* lf, std::size_t& nc,
+                                                    std::size_t& ns, std::size_t& nl) {
+  static_assert(sizeof(Face) == 3 * sizeof(std::int32_t));
+  if (vertex_count < 4) return b;
+  const __m256i last = _mm256_set1_epi32(static_cast<int>(vertex_count - 4));
+  const __m256i byte = _mm256_set1_epi32(0xFF), lanes = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  const __m256i listed = _mm256_set1_epi32(int(listed_bit)), zero = _mm256_setzero_si256();
+  // Corner k of the eight faces from the 24 indices in three registers:
+  // blend the lanes holding it together, then put them in face order.
+  const __m256i order0 = _mm256_setr_epi32(0, 3, 6, 1, 4, 7, 2, 5);
+  const __m256i order1 = _mm256_setr_epi32(1, 4, 7, 2, 5, 0, 3, 6);
+  const __m256i order2 = _mm256_setr_epi32(2, 5, 0, 3, 6, 1, 4, 7);
+  const auto* sg32 = reinterpret_cast<const int*>(sg);
+  std::size_t f = b;
+  for (; f + 8 <= e; f += 8) {
+    const auto* q = reinterpret_cast<const __m256i*>(faces[f].data());
+    const __m256i x = _mm256_loadu_si256(q), y = _mm256_loadu_si256(q + 1),
+                  z = _mm256_loadu_si256(q + 2);
+    const __m256i c0 = _mm256_permutevar8x32_epi32(
+        _mm256_blend_epi32(_mm256_blend_epi32(x, y, 0x92), z, 0x24), order0);
+    const __m256i c1 = _mm256_permutevar8x32_epi32(
+        _mm256_blend_epi32(_mm256_blend_epi32(x, y, 0x24), z, 0x49), order1);
+    const __m256i c2 = _mm256_permutevar8x32_epi32(
+        _mm256_blend_epi32(_mm256_blend_epi32(x, y, 0x49), z, 0x92), order2);
+    const __m256i past = _mm256_cmpgt_epi32(_mm256_max_epi32(_mm256_max_epi32(c0, c1), c2), last);
+    if (!_mm256_testz_si256(past, past)) {
+      for (std::size_t g = f; g < f + 8; ++g)
+        scan_face(faces, g, sg, ct, stt, listed_bit, cc, sc, lf, nc, ns, nl);
+      continue;
+    }
+    const __m256i a0 = _mm256_and_si256(_mm256_i32gather_epi32(sg32, c0, 1), byte);
+    const __m256i a1 = _mm256_and_si256(_mm256_i32gather_epi32(sg32, c1, 1), byte);
+    const __m256i a2 = _mm256_and_si256(_mm256_i32gather_epi32(sg32, c2, 1), byte);
+    const __m256i any = _mm256_or_si256(_mm256_or_si256(a0, a1), a2);
+    const __m256i mixed = _mm256_andnot_si256(_mm256_and_si256(_mm256_and_si256(a0, a1), a2), any);
+    const __m256i idx = _mm256_add_epi32(_mm256_set1_epi32(static_cast<int>(f)), lanes);
+    append_lanes(idx, pass_lanes(ct, any, mixed), cc, nc);
+    append_lanes(idx, pass_lanes(stt, any, mixed), sc, ns);
+    const unsigned not_listed = static_cast<unsigned>(_mm256_movemask_ps(
+        _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(any, listed), zero))));
+    append_lanes(idx, ~not_listed & 0xFFu, lf, nl);
+  }
+  return f;
+}
+#endif
+
 // Contours (zeros of n·v, StoredNum test) and suggestive contours or
 // highlights (zeros of K_r, ShiftedNum test) in one scan over the faces'
 // sign bytes: each family's candidates and segments exactly as its own scan
 // makes them, in face order (two outputs of one ordered_chunks).
 void fused_crossings(const ScalarInputs& ci, const StoredNum& cn, const detail::SignBits& cb,
                      const ScalarInputs& si, const ShiftedNum& sn, const detail::SignBits& sb,
-                     std::size_t face_count, std::vector<LineSegment>& cout,
-                     std::vector<LineSegment>& sout, detail::FaceLists* listed,
-                     unsigned listed_bit) {
+                     std::size_t face_count, std::size_t vertex_count,
+                     std::vector<LineSegment>& cout, std::vector<LineSegment>& sout,
+                     detail::FaceLists* listed, unsigned listed_bit) {
   const std::size_t chunk = detail::kFaceChunk;
   const std::size_t chunks = (face_count + chunk - 1) / chunk;
   if (listed) {
@@ -527,16 +639,13 @@ void fused_crossings(const ScalarInputs& ci, const StoredNum& cn, const detail::
         std::uint32_t cc[detail::kFaceChunk], sc[detail::kFaceChunk], scratch[detail::kFaceChunk];
         std::uint32_t* lf = listed ? listed->face.data() + (b / chunk) * chunk : scratch;
         std::size_t nc = 0, ns = 0, nl = 0;
-        for (std::size_t f = b; f < e; ++f) {
-          const Face& face = faces[f];
-          const unsigned a0 = sg[face[0]], a1 = sg[face[1]], a2 = sg[face[2]];
-          const unsigned any = a0 | a1 | a2;
-          const unsigned mixed = any & ~(a0 & a1 & a2);
-          cc[nc] = sc[ns] = lf[nl] = static_cast<std::uint32_t>(f);
-          nc += ct.pass(any, mixed);
-          ns += stt.pass(any, mixed);
-          nl += (any & listed_bit) != 0;
-        }
+        std::size_t f = b;
+#if defined(FABRICA_LINES_AVX2)
+        if (detail::cpu_has_avx2())
+          f = scan_faces_avx2(faces, b, e, vertex_count, sg, ct, stt, listed_bit, cc, sc, lf, nc,
+                              ns, nl);
+#endif
+        for (; f < e; ++f) scan_face(faces, f, sg, ct, stt, listed_bit, cc, sc, lf, nc, ns, nl);
         if (listed) listed->count[b / chunk] = static_cast<std::uint32_t>(nl);
         ScalarBatch<StoredNum>{ci, cn, part, {}}.run(cc, nc);
         ScalarBatch<ShiftedNum>{si, sn, spart, {}}.run(sc, ns);
@@ -1097,7 +1206,8 @@ bool contour_suggestive_zero_crossings(const Surface& surface, std::span<const d
   }
   fused_crossings(scalar_inputs(surface, ndotv, contour), StoredNum{contour.test_num.data()},
                   contour_bits, suggestive_inputs(surface, test), ShiftedNum::of(test),
-                  suggestive_bits, surface.face_count(), contours, suggestive, listed, listed_bit);
+                  suggestive_bits, surface.face_count(), surface.vertex_count(), contours,
+                  suggestive, listed, listed_bit);
   return listed != nullptr;
 }
 
