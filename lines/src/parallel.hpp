@@ -90,16 +90,16 @@ inline constexpr std::pair<const void*, std::size_t> kOutputKey{nullptr, 0};
 /// fn(begin, end, part_0, ..., part_{N-1}) for fixed chunks of [0, n), each
 /// chunk writing N fresh parts; part k of every chunk is appended to
 /// *outs[k] in chunk order, so the result is the same at any thread count.
-/// Chunks are taken in index order (whichever task runs next takes the next
-/// chunk) and each finished run of consecutive chunks is appended at once
-/// by the thread that completes it, while its parts are still in cache; the
-/// part buffers are recycled most-recent-first. So the parts are not
-/// written to memory, read back and copied again after the loop (a second
-/// pass over the ~10 MB of segments of a view). A chunk taken when every
-/// chunk before it has been appended (always on one thread; at the front
-/// of the range on several) writes straight into the outputs: nothing
-/// else touches them until it is done, and its segments are not copied
-/// (a copy is ~0.8 ms of a ~12 ms view at one thread).
+/// A chunk taken when every chunk before it has been appended writes
+/// straight into the outputs (nothing else touches them until it is done,
+/// and its segments are not copied: a copy of a view's ~10 MB of segments
+/// is ~0.8 ms of a ~12 ms view at one thread). So the chunks are taken from
+/// both ends: the next chunk from the front when that holds (always on one
+/// thread), otherwise the last one left, into parts; each finished run of
+/// consecutive chunks is appended by the thread that completes it, and the
+/// part buffers are recycled most-recent-first. On two threads sharing a
+/// loop, one works forward in place and the other backward into parts,
+/// so about half of it is copied (taking chunks in turn, nearly all was).
 template <std::size_t N, class T, class Fn>
 void ordered_chunks(std::size_t n, Fn&& fn, const std::array<std::vector<T>*, N>& outs,
                     const void* site, std::size_t chunk = kFaceChunk) {
@@ -131,7 +131,8 @@ void ordered_chunks(std::size_t n, Fn&& fn, const std::array<std::vector<T>*, N>
     std::atomic<bool> done{false};
   };
   std::unique_ptr<Slot[]> slot(new Slot[chunks]);
-  std::atomic<std::size_t> next{0};
+  std::mutex claim;
+  std::size_t front = 0, back = chunks;  // unclaimed: [front, back); guarded by `claim`
   std::mutex append;
   // Chunks before `appended` are in the outputs; written with `append`
   // held (release), read without it (acquire) to find a chunk that can
@@ -149,10 +150,16 @@ void ordered_chunks(std::size_t n, Fn&& fn, const std::array<std::vector<T>*, N>
     }
   };
   auto run = [&] {
-    const std::size_t c = next.fetch_add(1);
+    std::size_t c;
+    bool direct;
+    {
+      std::lock_guard<std::mutex> lock(claim);
+      direct = appended.load(std::memory_order_acquire) == front;
+      c = direct ? front++ : --back;
+    }
     Slot& s = slot[c];
     const std::size_t b = c * chunk, e = std::min(n, (c + 1) * chunk);
-    if (appended.load(std::memory_order_acquire) == c) {
+    if (direct) {
       // Every earlier chunk is in the outputs, and no later one is
       // appended before this one is done: append in place.
       std::array<std::vector<T>*, N> o = outs;
