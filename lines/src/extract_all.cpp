@@ -66,6 +66,10 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
   // threshold expression as extract_apparent_ridges).
   if (req.apparent)
     req.apparent_cull_threshold = options_.apparent.threshold / (feature_size_ * feature_size_);
+  // The suggestive-contour test's rejection in the sign bytes (the same
+  // shift as suggestive_setup).
+  if (has(LineFamily::suggestive))
+    req.suggestive_test_shift = options_.suggestive.threshold / (feature_size_ * feature_size_);
   req.light = has(LineFamily::laplacian) || has(LineFamily::pel);
   req.pel = has(LineFamily::pel);
   if (has(LineFamily::pel) && has(LineFamily::laplacian) &&

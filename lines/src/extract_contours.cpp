@@ -91,8 +91,13 @@ detail::SignBits suggestive_setup(const Surface& surface, const ViewFields& fiel
   test.cull = cull;
   test.fade = fade / (fs * fs);
   detail::SignBits bits;
-  if (fields.signs.size() == nv)
+  if (fields.signs.size() == nv) {
     bits = {fields.signs.data(), kKrNegative, kKrPositive, cull ? unsigned(kNdotvNotBack) : 0u};
+    // The test's all-corner rejection from the bytes, when the fields were
+    // computed for this very numerator (suggestive contours: not negated).
+    if (!highlight && fields.suggestive_test_shift && *fields.suggestive_test_shift == test.shift)
+      bits.reject = kScOffFront | kScOffBack;
+  }
   return bits;
 }
 

@@ -70,8 +70,8 @@ inline ViewCurvature view_curvature_at(double k1, double k2, double ndotv, doubl
 struct VertexPassArgs {
   std::size_t nv;
   detail::ViewVector4 view;
-  bool want_sc = false, want_app = false, cull = false;
-  double cull_t = 0.0;
+  bool want_sc = false, want_app = false, cull = false, sc_bits = false;
+  double cull_t = 0.0, sc_shift = 0.0;
   double *ndotv = nullptr, *kr = nullptr, *sc_num = nullptr, *q1 = nullptr;
   Vec2* t1 = nullptr;
   Vec3* t1_world = nullptr;
@@ -115,6 +115,7 @@ template <class Other>
     const __m256d csc_pos = _mm256_cmp_pd(csc2, zero, _CMP_GT_OQ);
     _mm256_storeu_pd(A.ndotv + i, ndotv);
     _mm256_storeu_pd(A.kr + i, kr);
+    __m256i scbits = _mm256_setzero_si256();
     if (A.want_sc) {
       const __m256d a = FABRICA_LD(k.a), bb = FABRICA_LD(k.b), c = FABRICA_LD(k.c),
                     d = FABRICA_LD(k.d);
@@ -131,7 +132,19 @@ template <class Other>
       const __m256i dbits = _mm256_set1_epi64x((valid[b] >> 4) & 0xF);
       const __m256d dvalid =
           _mm256_castsi256_pd(_mm256_cmpeq_epi64(_mm256_and_si256(dbits, lane_bits), lane_bits));
-      _mm256_storeu_pd(A.sc_num + i, FABRICA_PICK(_mm256_and_pd(dvalid, csc_pos), num, zero));
+      const __m256d sc = FABRICA_PICK(_mm256_and_pd(dvalid, csc_pos), num, zero);
+      _mm256_storeu_pd(A.sc_num + i, sc);
+      if (A.sc_bits) {
+        // suggestive_test_bits, four lanes.
+        const __m256d n = _mm256_sub_pd(sc, _mm256_mul_pd(_mm256_set1_pd(A.sc_shift), ndotv));
+        scbits = _mm256_or_si256(
+            detail::mask_bits4(_mm256_and_pd(_mm256_cmp_pd(n, zero, _CMP_LE_OQ),
+                                             _mm256_cmp_pd(ndotv, zero, _CMP_GE_OQ)),
+                               kScOffFront),
+            detail::mask_bits4(_mm256_and_pd(_mm256_cmp_pd(n, zero, _CMP_GE_OQ),
+                                             _mm256_cmp_pd(ndotv, zero, _CMP_LE_OQ)),
+                               kScOffBack));
+      }
     }
     // The sign byte of each lane: the compare masks ANDed with their bits.
     __m256i sbits = _mm256_or_si256(
@@ -141,6 +154,7 @@ template <class Other>
             detail::mask_bits4(_mm256_cmp_pd(ndotv, zero, _CMP_NLE_UQ), kNdotvNotBack),
             _mm256_or_si256(detail::mask_bits4(_mm256_cmp_pd(kr, zero, _CMP_GT_OQ), kKrPositive),
                             detail::mask_bits4(_mm256_cmp_pd(kr, zero, _CMP_LT_OQ), kKrNegative))));
+    sbits = _mm256_or_si256(sbits, scbits);
     if (A.want_app) {
       const __m256d an = _mm256_andnot_pd(neg0, ndotv);
       const __m256d sec = FABRICA_PICK(_mm256_cmp_pd(an, zero, _CMP_GT_OQ),
@@ -235,6 +249,8 @@ void detail::update_view_fields(ViewFields& fields, const Surface& surface, cons
   detail::resize_or_clear(fields.signs, radial, nv);
   fields.apparent_cull_threshold =
       request.apparent ? request.apparent_cull_threshold : std::optional<double>{};
+  fields.suggestive_test_shift =
+      request.sc_test ? request.suggestive_test_shift : std::optional<double>{};
 
   const auto& pos = surface.positions();
   const auto& normals = surface.vertex_normals();
@@ -245,6 +261,16 @@ void detail::update_view_fields(ViewFields& fields, const Surface& surface, cons
     const bool want_app = request.apparent;
     const bool cull = want_app && request.apparent_cull_threshold.has_value();
     const double cull_t = cull ? *request.apparent_cull_threshold : 0.0;
+    const bool sc_bits = want_sc && request.suggestive_test_shift.has_value();
+    const double sc_shift = sc_bits ? *request.suggestive_test_shift : 0.0;
+    // kScOffFront / kScOffBack of vertex i from its stored sc_num and n·v
+    // (N as the suggestive-contour kernel's ShiftedNum computes it).
+    auto sc_test_bits = [&](std::size_t i, double ndotv) -> unsigned {
+      if (!sc_bits) return 0;
+      const double n = fields.sc_num[i] - sc_shift * ndotv;
+      return unsigned(n <= 0.0 && ndotv >= 0.0) * kScOffFront |
+             unsigned(n >= 0.0 && ndotv <= 0.0) * kScOffBack;
+    };
     // Pass 1: n·v, K_r, the suggestive-contour numerator, q1 and the sign
     // bits per vertex. Returns whether m (for t1) was filled.
     auto vertex = [&](std::size_t i, ViewCurvature& m) -> bool {
@@ -262,8 +288,8 @@ void detail::update_view_fields(ViewFields& fields, const Surface& surface, cons
           fields.t1[i] = Vec2(1.0, 0.0);
           fields.t1_world[i] = Vec3::Zero();
         }
-        fields.signs[i] =
-            static_cast<std::uint8_t>(nbits | unsigned(cull && !(0.0 <= cull_t)) * kQ1Above);
+        fields.signs[i] = static_cast<std::uint8_t>(
+            nbits | unsigned(cull && !(0.0 <= cull_t)) * kQ1Above | sc_test_bits(i, ndotv));
         return false;
       }
       const double k1 = curv.k1[i], k2 = curv.k2[i];
@@ -285,7 +311,7 @@ void detail::update_view_fields(ViewFields& fields, const Surface& surface, cons
         }
       }
       unsigned bits = nbits | unsigned(fields.kr[i] > 0.0) * kKrPositive |
-                      unsigned(fields.kr[i] < 0.0) * kKrNegative;
+                      unsigned(fields.kr[i] < 0.0) * kKrNegative | sc_test_bits(i, ndotv);
       if (!want_app) {
         fields.signs[i] = static_cast<std::uint8_t>(bits);
         return false;
@@ -312,6 +338,8 @@ void detail::update_view_fields(ViewFields& fields, const Surface& surface, cons
       args.want_app = want_app;
       args.cull = cull;
       args.cull_t = cull_t;
+      args.sc_bits = sc_bits;
+      args.sc_shift = sc_shift;
       args.ndotv = fields.ndotv.data();
       args.kr = fields.kr.data();
       args.sc_num = want_sc ? fields.sc_num.data() : nullptr;

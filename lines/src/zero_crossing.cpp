@@ -351,12 +351,15 @@ struct ScalarBatch {
 // of one value, which no vertex has both of, a face can have a lone sign
 // only if one of them is set at some corner but not at all three:
 // (a0 | a1 | a2) & ~(a0 & a1 & a2). `cull`: a face needs the bit at some
-// corner.
+// corner. `reject`: a face with one of these bits at all three corners is
+// rejected. From any = a0 | a1 | a2 and all = a0 & a1 & a2.
 struct SignTest {
-  unsigned sides, cull;
-  explicit SignTest(const detail::SignBits& b) : sides(b.negative | b.positive), cull(b.cull) {}
-  bool pass(unsigned any, unsigned mixed) const {
-    return ((mixed & sides) != 0) & ((~any & cull) == 0);  // no branch
+  unsigned sides, cull, reject;
+  explicit SignTest(const detail::SignBits& b)
+      : sides(b.negative | b.positive), cull(b.cull), reject(b.reject) {}
+  bool pass(unsigned any, unsigned all) const {
+    const unsigned mixed = any & ~all;
+    return ((mixed & sides) != 0) & ((~any & cull) == 0) & ((all & reject) == 0);  // no branch
   }
 };
 
@@ -380,7 +383,7 @@ void scalar_crossings(const ScalarInputs& in, const Num& num, std::size_t face_c
             const unsigned a0 = sg[face[0]], a1 = sg[face[1]], a2 = sg[face[2]];
             const unsigned any = a0 | a1 | a2;
             cand[nc] = static_cast<std::uint32_t>(f);
-            nc += st.pass(any, any & ~(a0 & a1 & a2));
+            nc += st.pass(any, a0 & a1 & a2);
           }
           ScalarBatch<Num>{in, num, part, {}}.run(cand, nc);
           return;
@@ -508,11 +511,10 @@ inline void scan_face(const Face* faces, std::size_t f, const std::uint8_t* sg, 
                       std::size_t& nl) {
   const Face& face = faces[f];
   const unsigned a0 = sg[face[0]], a1 = sg[face[1]], a2 = sg[face[2]];
-  const unsigned any = a0 | a1 | a2;
-  const unsigned mixed = any & ~(a0 & a1 & a2);
+  const unsigned any = a0 | a1 | a2, all = a0 & a1 & a2;
   cc[nc] = sc[ns] = lf[nl] = static_cast<std::uint32_t>(f);
-  nc += ct.pass(any, mixed);
-  ns += stt.pass(any, mixed);
+  nc += ct.pass(any, all);
+  ns += stt.pass(any, all);
   nl += (any & listed_bit) != 0;
 }
 
@@ -541,16 +543,18 @@ constexpr std::array<std::uint64_t, 256> kPackLanes = [] {
   n += static_cast<std::size_t>(std::popcount(mask));
 }
 
-// Lanes passing SignTest::pass for (any, mixed), as a bit mask.
+// Lanes passing SignTest::pass for (any, all), as a bit mask.
 [[gnu::target("avx2"), gnu::always_inline]] inline unsigned pass_lanes(const SignTest& t,
-                                                                       __m256i any, __m256i mixed) {
+                                                                       __m256i any, __m256i all) {
   const __m256i zero = _mm256_setzero_si256();
-  const __m256i no_side =
-      _mm256_cmpeq_epi32(_mm256_and_si256(mixed, _mm256_set1_epi32(int(t.sides))), zero);
+  const __m256i no_side = _mm256_cmpeq_epi32(
+      _mm256_and_si256(_mm256_andnot_si256(all, any), _mm256_set1_epi32(int(t.sides))), zero);
   const __m256i culled_ok =
       _mm256_cmpeq_epi32(_mm256_andnot_si256(any, _mm256_set1_epi32(int(t.cull))), zero);
-  return static_cast<unsigned>(
-      _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_andnot_si256(no_side, culled_ok))));
+  const __m256i kept =
+      _mm256_cmpeq_epi32(_mm256_and_si256(all, _mm256_set1_epi32(int(t.reject))), zero);
+  return static_cast<unsigned>(_mm256_movemask_ps(
+      _mm256_castsi256_ps(_mm256_and_si256(_mm256_andnot_si256(no_side, culled_ok), kept))));
 }
 
 // The face scan of fused_crossings eight faces at a time: the corners'
@@ -598,10 +602,10 @@ constexpr std::array<std::uint64_t, 256> kPackLanes = [] {
     const __m256i a1 = _mm256_and_si256(_mm256_i32gather_epi32(sg32, c1, 1), byte);
     const __m256i a2 = _mm256_and_si256(_mm256_i32gather_epi32(sg32, c2, 1), byte);
     const __m256i any = _mm256_or_si256(_mm256_or_si256(a0, a1), a2);
-    const __m256i mixed = _mm256_andnot_si256(_mm256_and_si256(_mm256_and_si256(a0, a1), a2), any);
+    const __m256i all = _mm256_and_si256(_mm256_and_si256(a0, a1), a2);
     const __m256i idx = _mm256_add_epi32(_mm256_set1_epi32(static_cast<int>(f)), lanes);
-    append_lanes(idx, pass_lanes(ct, any, mixed), cc, nc);
-    append_lanes(idx, pass_lanes(stt, any, mixed), sc, ns);
+    append_lanes(idx, pass_lanes(ct, any, all), cc, nc);
+    append_lanes(idx, pass_lanes(stt, any, all), sc, ns);
     const unsigned not_listed = static_cast<unsigned>(_mm256_movemask_ps(
         _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(any, listed), zero))));
     append_lanes(idx, ~not_listed & 0xFFu, lf, nl);

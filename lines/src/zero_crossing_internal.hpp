@@ -27,6 +27,10 @@ namespace fabrica::detail {
 struct SignBits {
   const std::uint8_t* signs = nullptr;
   unsigned negative = 0, positive = 0, cull = 0;
+  /// Bits meaning "the test function rejects this corner": a face with one
+  /// of them at all three corners is rejected (exactly the kernel's
+  /// all-corner test-function rejection for those bits); 0: none.
+  unsigned reject = 0;
 };
 
 /// scalar_zero_crossings with sign bytes for `values` (and options.cull).

@@ -78,6 +78,8 @@ void expect_same_vertex_pass(const Surface& surface, const LinePrecompute& pre,
                              const Camera& camera, bool cull) {
   ViewFieldsRequest req;
   req.apparent_cull_threshold = cull ? std::optional<double>(1.0e3) : std::nullopt;
+  // The suggestive-test bits in the sign bytes (compared with `signs`).
+  req.suggestive_test_shift = cull ? std::optional<double>(0.05) : std::nullopt;
   const auto [simd, portable] = both_ways(surface, pre, camera, req);
   EXPECT_SAME_FIELD(simd, portable, ndotv);
   EXPECT_SAME_FIELD(simd, portable, kr);
@@ -240,6 +242,57 @@ TEST(LinesViewFields, SimdAndPortableKernelsGiveTheSameSegments) {
   // The kernels' three-crossing (centroid) branch was compared too.
   EXPECT_GT(centroid_ends, 0u);
 #endif
+}
+
+// The suggestive-contour test in the sign bytes: kScOffFront and
+// kScOffBack mean what they say at every vertex, they reject faces the
+// scan would otherwise pass to the kernel, and the suggestive contours are
+// the same bits as from fields without them.
+TEST(LinesViewFields, SuggestiveTestBitsRejectExactlyWhatTheTestRejects) {
+  for (const char* rel : {"meshes/classic/c3d_cow.obj", "meshes/classic/libigl_camelhead.off"}) {
+    SCOPED_TRACE(rel);
+    const Surface surface = load(rel, true);
+    const Camera c = camera_towards(surface, Vec3(-0.4, 0.3, 1.0));
+    LineOptions o;
+    o.families = {LineFamily::contour, LineFamily::suggestive};
+    LineExtractor ex(surface, o);
+    const auto soups = ex.extract(c);
+    const ViewFields& f = ex.fields();
+    const double fs = ex.feature_size();
+    ASSERT_TRUE(f.suggestive_test_shift.has_value());
+    const double s = *f.suggestive_test_shift;
+    EXPECT_EQ(s, o.suggestive.threshold / (fs * fs));
+    std::size_t front = 0, back = 0, wrong = 0;
+    for (std::size_t i = 0; i < surface.vertex_count(); ++i) {
+      const double n = f.sc_num[i] - s * f.ndotv[i];
+      const bool a = n <= 0.0 && f.ndotv[i] >= 0.0, b = n >= 0.0 && f.ndotv[i] <= 0.0;
+      wrong += a != ((f.signs[i] & kScOffFront) != 0) || b != ((f.signs[i] & kScOffBack) != 0);
+      front += a;
+      back += b;
+    }
+    EXPECT_EQ(wrong, 0u);
+    EXPECT_GT(front, 0u);
+    EXPECT_GT(back, 0u);
+    // Faces with a K_r sign change, not all back-facing, that the bits reject.
+    std::size_t rejected = 0;
+    for (const Face& face : surface.faces()) {
+      const unsigned a0 = f.signs[face[0]], a1 = f.signs[face[1]], a2 = f.signs[face[2]];
+      const unsigned any = a0 | a1 | a2, all = a0 & a1 & a2;
+      rejected += (any & ~all & (kKrPositive | kKrNegative)) && (any & kNdotvNotBack) &&
+                  (all & (kScOffFront | kScOffBack));
+    }
+    std::printf("%s: %zu + %zu vertices with a bit, %zu candidate faces rejected\n", rel, front,
+                back, rejected);
+    EXPECT_GT(rejected, 0u);
+    ViewFieldsRequest req;
+    req.apparent = false;
+    const ViewFields plain = compute_view_fields(surface, c, req);
+    ASSERT_FALSE(plain.suggestive_test_shift.has_value());
+    const SegmentSoup without = extract_suggestive_contours(surface, plain, fs, o.suggestive);
+    ASSERT_EQ(soups[1].family, LineFamily::suggestive);
+    EXPECT_GT(without.segments.size(), 50u);
+    EXPECT_EQ(differing_segments(soups[1].segments, without.segments), 0u);
+  }
 }
 
 // D_t1 q1 from the precomputed tangent ring (neighbour fans, and two

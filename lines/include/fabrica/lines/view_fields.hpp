@@ -49,6 +49,12 @@ struct ViewFieldsRequest {
   /// threshold reads, and is 0 elsewhere; ViewFields::signs gets kQ1Above.
   /// q1, t1 and t1_world are always computed everywhere. nullopt: everywhere.
   std::optional<double> apparent_cull_threshold;
+  /// With a value s (the suggestive-contour test's shift in 1/mm², as the
+  /// extractor uses: threshold / feature size²) and sc_test:
+  /// ViewFields::signs gets kScOffFront and kScOffBack for the test
+  /// numerator N = sc_num - s · n·v, so faces the test rejects at every
+  /// corner are rejected from the sign bytes. nullopt: no such bits.
+  std::optional<double> suggestive_test_shift;
   bool light = false;  ///< light, light_gradient(_norm), light_laplacian, light_faces
   bool pel = false;    ///< pel_h, pel_maximum (PELs): D_w|∇f| and -D_w D_w|∇f|
   /// Light direction (towards the light) for PELs / Laplacian lines;
@@ -73,6 +79,9 @@ enum ViewSign : std::uint8_t {
   kKrPositive = 8,     ///< K_r > 0
   kKrNegative = 16,    ///< K_r < 0
   kQ1Above = 32,       ///< !(q1 <= apparent_cull_threshold) (only with a threshold)
+  /// With a suggestive_test_shift s and N = sc_num - s · n·v (only then):
+  kScOffFront = 64,  ///< N <= 0 and n·v >= 0
+  kScOffBack = 128,  ///< N >= 0 and n·v <= 0
 };
 
 /// What the apparent-ridge kernel reads at a face corner, in one 64-byte
@@ -101,6 +110,7 @@ struct ViewFields {
   std::vector<ApparentVertex> apparent_vertex;
   std::vector<std::uint8_t> signs;                ///< ViewSign bits (with the radial group)
   std::optional<double> apparent_cull_threshold;  ///< as requested
+  std::optional<double> suggestive_test_shift;    ///< as requested (with sc_num)
   std::vector<double> light, light_laplacian;
   std::vector<Vec3> light_gradient;
   /// |∇f| (1/mm; with `light`), D_w|∇f| (1/mm²) and -D_w D_w|∇f| (1/mm³,
