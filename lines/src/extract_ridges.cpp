@@ -91,7 +91,7 @@ namespace detail {
 
 SegmentSoup extract_apparent_ridges(const Surface& surface, const ViewFields& fields,
                                     double feature_size, const ApparentOptions& options,
-                                    const FaceLists* listed) {
+                                    const FaceLists* listed, const ChunkReady* ready) {
   if (!(feature_size > 0.0)) throw InputError("feature size must be positive");
   const std::size_t nv = surface.vertex_count();
   if (fields.q1.size() != nv || fields.dt1q1.size() != nv || fields.t1_world.size() != nv)
@@ -112,10 +112,12 @@ SegmentSoup extract_apparent_ridges(const Surface& surface, const ViewFields& fi
                 "apparent ridges: the view fields were computed for a higher threshold");
   const bool bits = fields.signs.size() == nv && cull_t && *cull_t == o.threshold;
   const bool packed = fields.apparent_vertex.size() == nv;
+  if (ready && !packed)
+    throw Error(ErrorKind::internal, "apparent ridges: a chunk gate needs the packed records");
   detail::vector_zero_crossings(surface, fields.dt1q1, fields.t1_world, fields.q1, o,
                                 bits ? fields.signs.data() : nullptr, kQ1Above, soup.segments,
                                 packed ? fields.apparent_vertex.data() : nullptr,
-                                packed ? listed : nullptr);
+                                packed ? listed : nullptr, packed ? ready : nullptr);
   return soup;
 }
 

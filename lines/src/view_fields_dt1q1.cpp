@@ -2,6 +2,8 @@
 // fields: see view_fields_light.hpp.
 #include <emmintrin.h>
 
+#include <algorithm>
+#include <atomic>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -313,7 +315,96 @@ struct RingPass {
   }
 };
 
+// The RingPass of update_dt1q1 over the precomputed tangent ring.
+RingPass ring_pass(ViewFields& fields, const Surface& surface, bool cull,
+                   const LinePrecompute& precompute) {
+  const auto& pos = surface.positions();
+  const double* q1 = fields.q1.data();
+  const std::uint8_t* sg = fields.signs.data();
+  // With the precomputed tangent ring: each neighbour's offset (x, y) in
+  // the vertex's principal frame, so with t1 = (c, s) in that frame,
+  // t2 = n × t1 = ±(-s, c) (the sign cancels in w1) and every product is
+  // two-dimensional. The formulas of the topology walk (update_dt1q1),
+  // evaluated from float offsets
+  // (relative differences ~1e-7). On a fan each neighbour's p·t2 is
+  // computed once for its two faces, and only the faces whose corners
+  // can give a crossing (a superset, see candidate_faces) are tested.
+  const LinePrecompute::TangentRing& tr = precompute.tangent_ring();
+  return RingPass{tr.offset.data(),
+                  tr.vertex.data(),
+                  tr.x.data(),
+                  tr.y.data(),
+                  tr.fan.data(),
+                  tr.rank.data(),
+                  sg,
+                  q1,
+                  fields.t1.data(),
+                  fields.t1_world.data(),
+                  fields.ndotv.data(),
+                  pos.data(),
+                  fields.dt1q1.data(),
+                  fields.apparent_vertex.data(),
+                  cull};
+}
+
 }  // namespace
+
+struct Dt1q1Blocks::State {
+  RingPass pass;
+  std::size_t nv, blocks;
+  std::atomic<std::size_t> next{0}, prefix{0};
+  std::unique_ptr<std::atomic<bool>[]> done;
+};
+
+Dt1q1Blocks::Dt1q1Blocks(ViewFields& fields, const Surface& surface, bool cull,
+                         const LinePrecompute& precompute) {
+  const std::size_t nv = surface.vertex_count(), blocks = (nv + kBlock - 1) / kBlock;
+  state_.reset(new State{ring_pass(fields, surface, cull, precompute),
+                         nv,
+                         blocks,
+                         {},
+                         {},
+                         std::make_unique<std::atomic<bool>[]>(blocks)});
+}
+
+Dt1q1Blocks::~Dt1q1Blocks() = default;
+
+// Moves the prefix of done blocks past every finished one. Sequentially
+// consistent: a block marked done while another thread advances is seen by
+// one of them (each marks, then advances), so the prefix never stops short.
+void Dt1q1Blocks::advance() {
+  State& s = *state_;
+  std::size_t p = s.prefix.load();
+  while (p < s.blocks && s.done[p].load())
+    if (s.prefix.compare_exchange_weak(p, p + 1)) ++p;
+}
+
+bool Dt1q1Blocks::run_one() {
+  State& s = *state_;
+  const std::size_t b = s.next.fetch_add(1);
+  if (b >= s.blocks) return false;
+  s.pass(b * kBlock, std::min(s.nv, (b + 1) * kBlock));
+  s.done[b].store(true);
+  advance();
+  return true;
+}
+
+void Dt1q1Blocks::run_all() {
+  while (run_one()) {
+  }
+}
+
+void Dt1q1Blocks::ready_through(std::size_t v) {
+  State& s = *state_;
+  const std::size_t need = std::min(s.blocks, v / kBlock + 1);
+  while (s.prefix.load() < need) {
+    if (run_one()) continue;
+    advance();
+    _mm_pause();  // a block another thread is running
+  }
+}
+
+namespace {}  // namespace
 
 void update_dt1q1(ViewFields& fields, const Surface& surface, bool cull,
                   const LinePrecompute* precompute) {
@@ -334,29 +425,7 @@ void update_dt1q1(ViewFields& fields, const Surface& surface, bool cull,
   const double* q1 = fields.q1.data();
   const std::uint8_t* sg = fields.signs.data();
   if (precompute) {
-    // With the precomputed tangent ring: each neighbour's offset (x, y) in
-    // the vertex's principal frame, so with t1 = (c, s) in that frame,
-    // t2 = n × t1 = ±(-s, c) (the sign cancels in w1) and every product is
-    // two-dimensional. Same formulas as below, evaluated from float offsets
-    // (relative differences ~1e-7). On a fan each neighbour's p·t2 is
-    // computed once for its two faces, and only the faces whose corners
-    // can give a crossing (a superset, see candidate_faces) are tested.
-    const LinePrecompute::TangentRing& tr = precompute->tangent_ring();
-    const RingPass pass{tr.offset.data(),
-                        tr.vertex.data(),
-                        tr.x.data(),
-                        tr.y.data(),
-                        tr.fan.data(),
-                        tr.rank.data(),
-                        sg,
-                        q1,
-                        fields.t1.data(),
-                        fields.t1_world.data(),
-                        fields.ndotv.data(),
-                        pos.data(),
-                        fields.dt1q1.data(),
-                        fields.apparent_vertex.data(),
-                        cull};
+    const RingPass pass = ring_pass(fields, surface, cull, *precompute);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 2048),
                       [&](const tbb::blocked_range<std::size_t>& r) { pass(r.begin(), r.end()); });
   } else {

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstddef>
+#include <memory>
 #include <vector>
 
 #include "fabrica/lines/view_fields.hpp"
@@ -50,5 +51,32 @@ void update_view_fields(ViewFields& fields, const Surface& surface, const Camera
 /// the tangent ring; nullptr: from the topology.
 void update_dt1q1(ViewFields& fields, const Surface& surface, bool cull,
                   const LinePrecompute* precompute);
+
+/// update_dt1q1 (with the precomputed tangent ring) in blocks of kBlock
+/// vertices that any thread can claim, in increasing vertex order, so a
+/// consumer can start on the vertices already done: ready_through(v)
+/// returns once every vertex <= v is done, computing unclaimed blocks
+/// itself while it waits (so nobody waits for work that no thread runs).
+/// Same values as update_dt1q1, at any thread count and interleaving.
+class Dt1q1Blocks {
+ public:
+  static constexpr std::size_t kBlock = 2048;
+  Dt1q1Blocks(ViewFields& fields, const Surface& surface, bool cull,
+              const LinePrecompute& precompute);
+  ~Dt1q1Blocks();
+  Dt1q1Blocks(const Dt1q1Blocks&) = delete;
+  Dt1q1Blocks& operator=(const Dt1q1Blocks&) = delete;
+  /// Runs unclaimed blocks until none is left (not waiting for blocks
+  /// other threads are running).
+  void run_all();
+  /// Returns once vertices [0, v] are done.
+  void ready_through(std::size_t v);
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+  bool run_one();
+  void advance();
+};
 
 }  // namespace fabrica::detail

@@ -1219,7 +1219,8 @@ void vector_zero_crossings(const Surface& surface, std::span<const double> deriv
                            std::span<const Vec3> direction, std::span<const double> magnitude,
                            const VectorCrossingOptions& options, const std::uint8_t* signs,
                            unsigned above_bit, std::vector<LineSegment>& out,
-                           const ApparentVertex* packed, const FaceLists* lists) {
+                           const ApparentVertex* packed, const FaceLists* lists,
+                           const ChunkReady* ready) {
   if (!signs) {
     fabrica::vector_zero_crossings(surface, derivative, direction, magnitude, options, out);
     return;
@@ -1241,6 +1242,7 @@ void vector_zero_crossings(const Surface& surface, std::span<const double> deriv
         surface.face_count(),
         [&](std::size_t b, std::size_t e, std::vector<LineSegment>& part) {
           const std::size_t c = b / detail::kFaceChunk;
+          if (ready) (*ready)(c);
           packed_chunk(in, packed->field.data(), signs, above_bit, b, e,
                        lists ? lists->face.data() + c * detail::kFaceChunk : nullptr,
                        lists ? lists->count[c] : 0, part);

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -72,7 +73,15 @@ void suggestive_zero_crossings(const Surface& surface, const SuggestiveTest& tes
 struct FaceLists {
   std::vector<std::uint32_t> face;
   std::vector<std::uint32_t> count;
+  /// Per chunk, its faces' largest corner index (view-independent: filled
+  /// once by the extractor, for the chunk gate below).
+  std::vector<std::int32_t> top_vertex;
 };
+
+/// Called by the packed apparent-ridge kernel with a face chunk's index
+/// before it reads the records of that chunk's corners (so D_t1 q1 can
+/// still be running for later vertices).
+using ChunkReady = std::function<void(std::size_t chunk)>;
 
 /// Contours (scalar_zero_crossings of ndotv with `contour`, sign bits
 /// `contour_bits`) and suggestive_zero_crossings(test, suggestive_bits) in
@@ -101,8 +110,8 @@ void vector_zero_crossings(const Surface& surface, std::span<const double> deriv
                            std::span<const Vec3> direction, std::span<const double> magnitude,
                            const VectorCrossingOptions& options, const std::uint8_t* signs,
                            unsigned above_bit, std::vector<LineSegment>& out,
-                           const ApparentVertex* packed = nullptr,
-                           const FaceLists* lists = nullptr);
+                           const ApparentVertex* packed = nullptr, const FaceLists* lists = nullptr,
+                           const ChunkReady* ready = nullptr);
 
 /// extract_contours and extract_suggestive_contours (the same soups) with
 /// one scan over the faces when the contours are interpolated. With
@@ -115,9 +124,10 @@ bool extract_contours_and_suggestive(const Surface& surface, const ViewFields& f
                                      FaceLists* apparent = nullptr);
 
 /// extract_apparent_ridges, with the candidate faces listed by
-/// extract_contours_and_suggestive for the same fields when `listed`.
+/// extract_contours_and_suggestive for the same fields when `listed`, and
+/// `ready` called before each face chunk (with the packed records).
 SegmentSoup extract_apparent_ridges(const Surface& surface, const ViewFields& fields,
                                     double feature_size, const ApparentOptions& options,
-                                    const FaceLists* listed);
+                                    const FaceLists* listed, const ChunkReady* ready = nullptr);
 
 }  // namespace fabrica::detail

@@ -6,6 +6,8 @@
 // suggestive numerator, q1, t1, the sign bytes) and the illumination pass
 // (f, Δf, ∇f, |∇f|, the PEL derivatives, the listed faces).
 #include <gtest/gtest.h>
+#include <tbb/parallel_invoke.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
@@ -20,6 +22,7 @@
 #include "fabrica/lines/extract.hpp"
 #include "simd_avx2.hpp"
 #include "test_support.hpp"
+#include "view_fields_light.hpp"
 
 using namespace fabrica;
 
@@ -292,6 +295,69 @@ TEST(LinesViewFields, SuggestiveTestBitsRejectExactlyWhatTheTestRejects) {
     ASSERT_EQ(soups[1].family, LineFamily::suggestive);
     EXPECT_GT(without.segments.size(), 50u);
     EXPECT_EQ(differing_segments(soups[1].segments, without.segments), 0u);
+  }
+}
+
+// D_t1 q1 in claimable blocks (the one-thread extraction computes it as
+// the apparent-ridge kernel's chunks need it): the same bits as the whole
+// pass, whoever computes which block, and ready_through(v) returns only
+// when every vertex up to v is done.
+TEST(LinesViewFields, Dt1q1InBlocksIsTheWholePass) {
+  const Surface surface = load("meshes/classic/libigl_camelhead.off", true);
+  const LinePrecompute pre(surface);
+  const Camera c = camera_towards(surface, Vec3(0.2, -0.3, 1.0));
+  ViewFieldsRequest req;
+  req.apparent_cull_threshold = 0.1 / (surface.feature_size() * surface.feature_size());
+  const ViewFields whole = compute_view_fields(surface, c, req, &pre);
+  const std::size_t nv = surface.vertex_count();
+  ASSERT_GT(nv, 3 * detail::Dt1q1Blocks::kBlock);  // several blocks
+  std::size_t nonzero = 0;
+  for (double d : whole.dt1q1) nonzero += d != 0.0;
+  EXPECT_GT(nonzero, nv / 10);
+  tbb::task_arena arena(2);
+  for (int round = 0; round < 4; ++round) {
+    ViewFields f;
+    detail::update_view_fields(f, surface, c, req, &pre, true);
+    detail::Dt1q1Blocks blocks(f, surface, true, pre);
+    std::size_t early_wrong = 0;
+    // Alone first (only the blocks up to v are computed), then with
+    // another thread running blocks at the same time.
+    const std::size_t first =
+        detail::Dt1q1Blocks::kBlock + 5 + 13 * static_cast<std::size_t>(round);
+    blocks.ready_through(first);
+    for (std::size_t i = 0; i <= first; ++i)
+      early_wrong += std::memcmp(&f.dt1q1[i], &whole.dt1q1[i], sizeof(double)) != 0;
+    const std::size_t mid = nv / 2 + 77 * static_cast<std::size_t>(round);
+    arena.execute([&] {
+      tbb::parallel_invoke(
+          [&] {
+            blocks.ready_through(mid);
+            for (std::size_t i = 0; i <= mid; ++i)
+              early_wrong += std::memcmp(&f.dt1q1[i], &whole.dt1q1[i], sizeof(double)) != 0;
+            blocks.ready_through(nv - 1);
+          },
+          [&] { blocks.run_all(); });
+    });
+    blocks.ready_through(nv - 1);
+    EXPECT_EQ(early_wrong, 0u) << "round " << round;
+    std::size_t wrong = 0;
+    for (std::size_t i = 0; i < nv; ++i)
+      wrong += std::memcmp(&f.dt1q1[i], &whole.dt1q1[i], sizeof(double)) != 0;
+    EXPECT_EQ(wrong, 0u) << "round " << round;
+    // The records the kernel reads (corners of faces with q1 above the
+    // threshold somewhere) are the whole pass's too.
+    std::size_t records = 0, differ = 0;
+    for (const Face& face : surface.faces()) {
+      if (!((whole.signs[face[0]] | whole.signs[face[1]] | whole.signs[face[2]]) & kQ1Above))
+        continue;
+      for (int k = 0; k < 3; ++k) {
+        ++records;
+        differ += std::memcmp(&f.apparent_vertex[face[k]], &whole.apparent_vertex[face[k]],
+                              sizeof(ApparentVertex)) != 0;
+      }
+    }
+    EXPECT_GT(records, 0u);
+    EXPECT_EQ(differ, 0u) << "round " << round;
   }
 }
 
