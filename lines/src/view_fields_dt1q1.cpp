@@ -325,10 +325,10 @@ RingPass ring_pass(ViewFields& fields, const Surface& surface, bool cull,
   // the vertex's principal frame, so with t1 = (c, s) in that frame,
   // t2 = n × t1 = ±(-s, c) (the sign cancels in w1) and every product is
   // two-dimensional. The formulas of the topology walk (update_dt1q1),
-  // evaluated from float offsets
-  // (relative differences ~1e-7). On a fan each neighbour's p·t2 is
-  // computed once for its two faces, and only the faces whose corners
-  // can give a crossing (a superset, see candidate_faces) are tested.
+  // evaluated from float offsets (relative differences ~1e-7). On a fan
+  // each neighbour's p·t2 is computed once for its two faces, and only the
+  // faces whose corners can give a crossing (a superset, see
+  // candidate_faces) are tested.
   const LinePrecompute::TangentRing& tr = precompute.tangent_ring();
   return RingPass{tr.offset.data(),
                   tr.vertex.data(),
@@ -403,8 +403,6 @@ void Dt1q1Blocks::ready_through(std::size_t v) {
     _mm_pause();  // a block another thread is running
   }
 }
-
-namespace {}  // namespace
 
 void update_dt1q1(ViewFields& fields, const Surface& surface, bool cull,
                   const LinePrecompute* precompute) {
