@@ -41,6 +41,19 @@ void LineExtractor::set_options(LineOptions options) {
   if (!(feature_size_ > 0.0) || !std::isfinite(feature_size_))
     throw InputError("feature size must be a positive number (got " +
                      std::to_string(feature_size_) + "); pass --feature-size");
+  // Every family's thresholds and fades up front (each extractor checks its
+  // own again), so a bad one is reported before any view is computed.
+  const LineOptions& o = options_;
+  detail::require_non_negative(o.suggestive.threshold, LineFamily::suggestive, "threshold");
+  detail::require_non_negative(o.suggestive.fade, LineFamily::suggestive, "fade");
+  detail::require_non_negative(o.highlight.threshold, LineFamily::highlight, "threshold");
+  detail::require_non_negative(o.highlight.fade, LineFamily::highlight, "fade");
+  detail::require_non_negative(o.ridge.threshold, LineFamily::ridge, "threshold");
+  detail::require_non_negative(o.valley.threshold, LineFamily::valley, "threshold");
+  detail::require_non_negative(o.apparent.threshold, LineFamily::apparent, "threshold");
+  detail::require_non_negative(o.pel.threshold, LineFamily::pel, "threshold");
+  detail::require_non_negative(o.laplacian.threshold, LineFamily::laplacian, "threshold");
+  detail::require_non_negative(o.demarcating.threshold, LineFamily::demarcating, "threshold");
 }
 
 void LineExtractor::extract(const Camera& camera, std::vector<SegmentSoup>& soups) {

@@ -83,6 +83,9 @@ detail::SignBits suggestive_setup(const Surface& surface, const ViewFields& fiel
   require_field(fields.sc_num, nv, "sc_num");
   require_field(fields.ndotv, nv, "ndotv");
   if (!(fs > 0.0)) throw InputError("feature size must be positive");
+  const LineFamily family = highlight ? LineFamily::highlight : LineFamily::suggestive;
+  detail::require_non_negative(threshold, family, "threshold");
+  detail::require_non_negative(fade, family, "fade");
   test.kr = fields.kr;
   test.sc_num = fields.sc_num;
   test.ndotv = fields.ndotv;

@@ -59,6 +59,7 @@ SegmentSoup extract_pels(const Surface& surface, const ViewFields& fields, doubl
   if (fields.pel_h.size() != nv || fields.pel_maximum.size() != nv ||
       fields.light_gradient_norm.size() != nv)
     throw Error(ErrorKind::internal, "PELs: view fields lack the illumination derivatives");
+  detail::require_non_negative(options.threshold, LineFamily::pel, "threshold");
   const double t = options.threshold / feature_size;
   require_support(fields, t, options.cull_backfaces, "PELs");
   SegmentSoup soup;
@@ -81,6 +82,7 @@ SegmentSoup extract_laplacian_lines(const Surface& surface, const ViewFields& fi
   const std::size_t nv = surface.vertex_count();
   if (fields.light_laplacian.size() != nv || fields.light_gradient_norm.size() != nv)
     throw Error(ErrorKind::internal, "Laplacian lines: view fields lack the illumination");
+  detail::require_non_negative(options.threshold, LineFamily::laplacian, "threshold");
   const double t = options.threshold / feature_size;
   require_support(fields, t, options.cull_backfaces, "Laplacian lines");
   SegmentSoup soup;

@@ -22,12 +22,7 @@ namespace {
 SegmentSoup threshold_raw(const LinePrecompute& pre, const std::vector<LineSegment>& raw,
                           const std::vector<LinePrecompute::RawKey>& keys, LineFamily family,
                           const ViewFields& fields, double t, bool cull) {
-  // A NaN or negative threshold would keep every raw segment with NaN or
-  // out-of-range strengths.
-  if (!(t >= 0.0) || !std::isfinite(t))
-    throw InputError(std::string(family_name(family)) +
-                     " threshold must be a finite non-negative number (got " + std::to_string(t) +
-                     " per feature size)");
+  detail::require_non_negative(t, family, "threshold (per feature size)");
   SegmentSoup soup;
   soup.family = family;
   const std::size_t nv = pre.surface().vertex_count();
@@ -89,10 +84,17 @@ SegmentSoup extract_apparent_ridges(const Surface& surface, const ViewFields& fi
 
 namespace detail {
 
+void require_non_negative(double value, LineFamily family, const char* what) {
+  if (!(value >= 0.0) || !std::isfinite(value))
+    throw InputError(std::string(family_name(family)) + " " + what +
+                     " must be a finite number >= 0 (got " + std::to_string(value) + ")");
+}
+
 SegmentSoup extract_apparent_ridges(const Surface& surface, const ViewFields& fields,
                                     double feature_size, const ApparentOptions& options,
                                     const FaceLists* listed, const ChunkReady* ready) {
   if (!(feature_size > 0.0)) throw InputError("feature size must be positive");
+  require_non_negative(options.threshold, LineFamily::apparent, "threshold");
   const std::size_t nv = surface.vertex_count();
   if (fields.q1.size() != nv || fields.dt1q1.size() != nv || fields.t1_world.size() != nv)
     throw Error(ErrorKind::internal, "apparent ridges: view fields lack q1/t1/Dt1q1");

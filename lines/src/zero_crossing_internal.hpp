@@ -21,6 +21,11 @@ struct SuggestiveOptions;
 
 namespace fabrica::detail {
 
+/// InputError naming the family unless `value` (one of its thresholds or
+/// fade constants, as given in its options) is a finite number >= 0: a NaN
+/// or negative one would keep segments with NaN or out-of-range strengths.
+void require_non_negative(double value, LineFamily family, const char* what);
+
 /// Per-vertex sign bytes (ViewFields::signs) for the quick face rejection
 /// of the scalar kernel: the bits meaning value < 0 and value > 0, and
 /// optionally the bit meaning "not culled" (!(cull <= 0)). Exactly the

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 
 #include "fabrica/core/camera.hpp"
 #include "fabrica/core/error.hpp"
@@ -194,14 +195,72 @@ TEST(Ridges, ThresholdListIsTheRawSegmentsAboveItAndExtractionUsesIt) {
   {
     const ViewFields f = compute_view_fields(s, camera_at({0.0, 0.0, 6.0}), {}, &pre);
     for (double bad : {std::nan(""), -1.0}) {
-      RidgeOptions r;
-      r.threshold = bad;
-      EXPECT_THROW((void)extract_ridges(pre, f, 0.5, r), InputError) << bad;
-      EXPECT_THROW((void)extract_valleys(pre, f, 0.5, r), InputError) << bad;
-      DemarcatingOptions d;
-      d.threshold = bad;
-      EXPECT_THROW((void)extract_demarcating_curves(pre, f, 0.5, d), InputError) << bad;
+      // Each family's function, and the extractor (which checks every
+      // family up front).
+      const std::function<void()> calls[] = {[&] {
+                                               RidgeOptions r;
+                                               r.threshold = bad;
+                                               (void)extract_ridges(pre, f, 0.5, r);
+                                             },
+                                             [&] {
+                                               RidgeOptions r;
+                                               r.threshold = bad;
+                                               (void)extract_valleys(pre, f, 0.5, r);
+                                             },
+                                             [&] {
+                                               DemarcatingOptions d;
+                                               d.threshold = bad;
+                                               (void)extract_demarcating_curves(pre, f, 0.5, d);
+                                             },
+                                             [&] {
+                                               SuggestiveOptions o;
+                                               o.threshold = bad;
+                                               (void)extract_suggestive_contours(s, f, 0.5, o);
+                                             },
+                                             [&] {
+                                               SuggestiveOptions o;
+                                               o.fade = bad;
+                                               (void)extract_suggestive_contours(s, f, 0.5, o);
+                                             },
+                                             [&] {
+                                               HighlightOptions o;
+                                               o.threshold = bad;
+                                               (void)extract_suggestive_highlights(s, f, 0.5, o);
+                                             },
+                                             [&] {
+                                               ApparentOptions o;
+                                               o.threshold = bad;
+                                               (void)extract_apparent_ridges(s, f, 0.5, o);
+                                             }};
+      for (std::size_t k = 0; k < std::size(calls); ++k)
+        EXPECT_THROW(calls[k](), InputError) << "function " << k << ", " << bad;
+      for (int k = 0; k < 10; ++k) {
+        LineOptions o;
+        o.families = all_families();
+        double* field[10] = {&o.suggestive.threshold, &o.suggestive.fade, &o.highlight.threshold,
+                             &o.highlight.fade,       &o.ridge.threshold, &o.valley.threshold,
+                             &o.apparent.threshold,   &o.pel.threshold,   &o.laplacian.threshold,
+                             &o.demarcating.threshold};
+        *field[k] = bad;
+        try {
+          LineExtractor ex(s, o);
+          ADD_FAILURE() << "option " << k << " = " << bad << " was accepted";
+        } catch (const InputError& e) {
+          // The message names the family.
+          const std::string what = e.what();
+          const char* names[10] = {"suggestive", "suggestive", "highlight", "highlight",
+                                   "ridge",      "valley",     "apparent",  "pel",
+                                   "laplacian",  "demarcating"};
+          EXPECT_NE(what.find(names[k]), std::string::npos) << what;
+        }
+      }
     }
+    // Zero is allowed (no threshold, no fade).
+    LineOptions zero;
+    zero.families = all_families();
+    zero.suggestive.threshold = zero.suggestive.fade = zero.apparent.threshold = 0.0;
+    zero.pel.threshold = zero.laplacian.threshold = 0.0;
+    EXPECT_NO_THROW({ LineExtractor ex(s, zero); });
   }
   // Seen along the crest (its slopes alternately towards and away from the
   // eye: part back-facing), ridges keep the listed segments with a corner
