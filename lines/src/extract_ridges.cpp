@@ -114,12 +114,10 @@ SegmentSoup extract_apparent_ridges(const Surface& surface, const ViewFields& fi
                 "apparent ridges: the view fields were computed for a higher threshold");
   const bool bits = fields.signs.size() == nv && cull_t && *cull_t == o.threshold;
   const bool packed = fields.apparent_vertex.size() == nv;
-  if (ready && !packed)
-    throw Error(ErrorKind::internal, "apparent ridges: a chunk gate needs the packed records");
   detail::vector_zero_crossings(surface, fields.dt1q1, fields.t1_world, fields.q1, o,
                                 bits ? fields.signs.data() : nullptr, kQ1Above, soup.segments,
                                 packed ? fields.apparent_vertex.data() : nullptr,
-                                packed ? listed : nullptr, packed ? ready : nullptr);
+                                packed ? listed : nullptr, ready);
   return soup;
 }
 

@@ -424,7 +424,7 @@ void update_dt1q1(ViewFields& fields, const Surface& surface, bool cull,
   const std::uint8_t* sg = fields.signs.data();
   if (precompute) {
     const RingPass pass = ring_pass(fields, surface, cull, *precompute);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 2048),
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, Dt1q1Blocks::kBlock),
                       [&](const tbb::blocked_range<std::size_t>& r) { pass(r.begin(), r.end()); });
   } else {
     // D_t1 q1 of vertex i by the walk over its faces (0 where not finite).

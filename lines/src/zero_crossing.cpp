@@ -1221,6 +1221,13 @@ void vector_zero_crossings(const Surface& surface, std::span<const double> deriv
                            unsigned above_bit, std::vector<LineSegment>& out,
                            const ApparentVertex* packed, const FaceLists* lists,
                            const ChunkReady* ready) {
+  // Only the packed path waits chunk by chunk; every other one reads any
+  // vertex from its first face, so it waits for every chunk first.
+  if (ready && !(signs && packed)) {
+    const std::size_t chunks = (surface.face_count() + detail::kFaceChunk - 1) / detail::kFaceChunk;
+    for (std::size_t c = 0; c < chunks; ++c) (*ready)(c);
+    ready = nullptr;
+  }
   if (!signs) {
     fabrica::vector_zero_crossings(surface, derivative, direction, magnitude, options, out);
     return;

@@ -83,9 +83,10 @@ struct FaceLists {
   std::vector<std::int32_t> top_vertex;
 };
 
-/// Called by the packed apparent-ridge kernel with a face chunk's index
-/// before it reads the records of that chunk's corners (so D_t1 q1 can
-/// still be running for later vertices).
+/// Called by the apparent-ridge kernel with a face chunk's index before it
+/// reads that chunk's corners (so D_t1 q1 can still be running for later
+/// vertices): chunk by chunk on the packed path, for every chunk up front
+/// on the others.
 using ChunkReady = std::function<void(std::size_t chunk)>;
 
 /// Contours (scalar_zero_crossings of ndotv with `contour`, sign bits
@@ -130,7 +131,7 @@ bool extract_contours_and_suggestive(const Surface& surface, const ViewFields& f
 
 /// extract_apparent_ridges, with the candidate faces listed by
 /// extract_contours_and_suggestive for the same fields when `listed`, and
-/// `ready` called before each face chunk (with the packed records).
+/// `ready` (see ChunkReady) before the face chunks are read.
 SegmentSoup extract_apparent_ridges(const Surface& surface, const ViewFields& fields,
                                     double feature_size, const ApparentOptions& options,
                                     const FaceLists* listed, const ChunkReady* ready = nullptr);

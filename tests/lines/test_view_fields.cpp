@@ -23,6 +23,7 @@
 #include "simd_avx2.hpp"
 #include "test_support.hpp"
 #include "view_fields_light.hpp"
+#include "zero_crossing_internal.hpp"
 
 using namespace fabrica;
 
@@ -359,6 +360,21 @@ TEST(LinesViewFields, Dt1q1InBlocksIsTheWholePass) {
     EXPECT_GT(records, 0u);
     EXPECT_EQ(differ, 0u) << "round " << round;
   }
+  // The kernel honours the gate on every path: with fields computed
+  // without the cull threshold (no q1 bits) it takes the plain path, which
+  // must wait for every chunk before reading any record.
+  ViewFieldsRequest plain;
+  const ViewFields all = compute_view_fields(surface, c, plain, &pre);
+  ViewFields g;
+  detail::update_view_fields(g, surface, c, plain, &pre, true);
+  detail::Dt1q1Blocks gate(g, surface, false, pre);
+  const detail::ChunkReady ready = [&](std::size_t) { gate.ready_through(nv - 1); };
+  const ApparentOptions ao;
+  const double fs = surface.feature_size();
+  const SegmentSoup want = extract_apparent_ridges(surface, all, fs, ao);
+  const SegmentSoup got = detail::extract_apparent_ridges(surface, g, fs, ao, nullptr, &ready);
+  EXPECT_GT(want.segments.size(), 50u);
+  EXPECT_EQ(differing_segments(got.segments, want.segments), 0u);
 }
 
 // D_t1 q1 from the precomputed tangent ring (neighbour fans, and two
