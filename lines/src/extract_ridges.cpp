@@ -15,13 +15,13 @@ namespace {
 
 // Keeps raw segments (strength = magnitude) whose face is not back-facing
 // and whose magnitude exceeds `t` at either end; strength becomes the fade
-// (m - t)/m (rtsc's k/(k + t) with k = m - t). The threshold test is
-// view-independent (LinePrecompute::raw_above lists the segments that pass
-// it); per view, the cull reads the listed segments' keys (and the view's
-// sign bytes when present), and only kept segments are copied.
-SegmentSoup threshold_raw(const LinePrecompute& pre, const std::vector<LineSegment>& raw,
-                          const std::vector<LinePrecompute::RawKey>& keys, LineFamily family,
-                          const ViewFields& fields, double t, bool cull) {
+// (m - t)/m (rtsc's k/(k + t) with k = m - t). The threshold and the fade
+// do not depend on the view: LinePrecompute::raw_above holds the segments
+// that pass it, faded. Per view only the back-face cull is decided (from
+// the listed faces' corners and the view's sign bytes, or n·v), and each
+// run of consecutive kept segments is copied whole.
+SegmentSoup threshold_raw(const LinePrecompute& pre, LineFamily family, const ViewFields& fields,
+                          double t, bool cull) {
   detail::require_non_negative(t, family, "threshold (per feature size)");
   SegmentSoup soup;
   soup.family = family;
@@ -30,23 +30,22 @@ SegmentSoup threshold_raw(const LinePrecompute& pre, const std::vector<LineSegme
   const std::uint8_t* sg = fields.signs.size() == nv ? fields.signs.data() : nullptr;
   const double* ndotv = fields.ndotv.data();
   const auto above = pre.raw_above(family, t);
-  const auto& index = above->index;
+  const LineSegment* seg = above->segments.data();
+  const auto* corners = above->corners.data();
+  auto kept = [&](std::size_t i) {
+    if (!do_cull) return true;
+    const auto& c = corners[i];
+    return sg ? ((sg[c[0]] | sg[c[1]] | sg[c[2]]) & kNdotvNotBack) != 0
+              : !(ndotv[c[0]] <= 0.0 && ndotv[c[1]] <= 0.0 && ndotv[c[2]] <= 0.0);
+  };
   detail::parallel_chunks<LineSegment>(
-      index.size(),
+      above->segments.size(),
       [&](std::size_t b, std::size_t e, std::vector<LineSegment>& out) {
-        for (std::size_t i = b; i < e; ++i) {
-          const LinePrecompute::RawKey& key = keys[index[i]];
-          const auto& c = key.corners;
-          if (do_cull) {
-            if (sg ? !((sg[c[0]] | sg[c[1]] | sg[c[2]]) & kNdotvNotBack)
-                   : ndotv[c[0]] <= 0.0 && ndotv[c[1]] <= 0.0 && ndotv[c[2]] <= 0.0)
-              continue;
-          }
-          const double k0 = LinePrecompute::raw_excess(key.m0, t);
-          const double k1 = LinePrecompute::raw_excess(key.m1, t);
-          LineSegment& s = out.emplace_back(raw[index[i]]);
-          s.end[0].strength = t > 0.0 ? static_cast<float>(k0 / (k0 + t)) : 1.0f;
-          s.end[1].strength = t > 0.0 ? static_cast<float>(k1 / (k1 + t)) : 1.0f;
+        for (std::size_t i = b; i < e;) {
+          while (i < e && !kept(i)) ++i;
+          const std::size_t run = i;
+          while (i < e && kept(i)) ++i;
+          out.insert(out.end(), seg + run, seg + i);
         }
       },
       soup.segments, 4096);
@@ -58,22 +57,21 @@ SegmentSoup threshold_raw(const LinePrecompute& pre, const std::vector<LineSegme
 SegmentSoup extract_ridges(const LinePrecompute& pre, const ViewFields& fields, double feature_size,
                            const RidgeOptions& options) {
   if (!(feature_size > 0.0)) throw InputError("feature size must be positive");
-  return threshold_raw(pre, pre.raw_ridges(), pre.raw_ridge_keys(), LineFamily::ridge, fields,
-                       options.threshold / feature_size, options.cull_backfaces);
+  return threshold_raw(pre, LineFamily::ridge, fields, options.threshold / feature_size,
+                       options.cull_backfaces);
 }
 
 SegmentSoup extract_valleys(const LinePrecompute& pre, const ViewFields& fields,
                             double feature_size, const RidgeOptions& options) {
   if (!(feature_size > 0.0)) throw InputError("feature size must be positive");
-  return threshold_raw(pre, pre.raw_valleys(), pre.raw_valley_keys(), LineFamily::valley, fields,
-                       options.threshold / feature_size, options.cull_backfaces);
+  return threshold_raw(pre, LineFamily::valley, fields, options.threshold / feature_size,
+                       options.cull_backfaces);
 }
 
 SegmentSoup extract_demarcating_curves(const LinePrecompute& pre, const ViewFields& fields,
                                        double feature_size, const DemarcatingOptions& options) {
   if (!(feature_size > 0.0)) throw InputError("feature size must be positive");
-  return threshold_raw(pre, pre.raw_demarcating(), pre.raw_demarcating_keys(),
-                       LineFamily::demarcating, fields,
+  return threshold_raw(pre, LineFamily::demarcating, fields,
                        options.threshold / (feature_size * feature_size), options.cull_backfaces);
 }
 

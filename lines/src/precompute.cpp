@@ -271,15 +271,16 @@ std::shared_ptr<const LinePrecompute::RawAbove> LinePrecompute::raw_above(LineFa
                                                                           double t) const {
   int slot;
   const std::vector<RawKey>* keys;
+  const std::vector<LineSegment>* raw;
   switch (family) {
     case LineFamily::ridge:
-      slot = 0, keys = &raw_ridge_keys();
+      slot = 0, keys = &raw_ridge_keys(), raw = &raw_ridges();
       break;
     case LineFamily::valley:
-      slot = 1, keys = &raw_valley_keys();
+      slot = 1, keys = &raw_valley_keys(), raw = &raw_valleys();
       break;
     case LineFamily::demarcating:
-      slot = 2, keys = &raw_demarcating_keys();
+      slot = 2, keys = &raw_demarcating_keys(), raw = &raw_demarcating();
       break;
     default:
       throw Error(ErrorKind::internal, "raw_above: not a precomputed family");
@@ -296,8 +297,13 @@ std::shared_ptr<const LinePrecompute::RawAbove> LinePrecompute::raw_above(LineFa
   a->t = t;
   for (std::size_t i = 0; i < keys->size(); ++i) {
     const RawKey& k = (*keys)[i];
-    if (raw_excess(k.m0, t) == 0.0 && raw_excess(k.m1, t) == 0.0) continue;
+    const double k0 = raw_excess(k.m0, t), k1 = raw_excess(k.m1, t);
+    if (k0 == 0.0 && k1 == 0.0) continue;
     a->index.push_back(static_cast<std::uint32_t>(i));
+    LineSegment& s = a->segments.emplace_back((*raw)[i]);
+    s.end[0].strength = t > 0.0 ? static_cast<float>(k0 / (k0 + t)) : 1.0f;
+    s.end[1].strength = t > 0.0 ? static_cast<float>(k1 / (k1 + t)) : 1.0f;
+    a->corners.push_back(k.corners);
   }
   std::lock_guard lock(cache_->above_mutex);
   cache_->above[slot] = a;

@@ -184,6 +184,10 @@ TEST(Ridges, ThresholdListIsTheRawSegmentsAboveItAndExtractionUsesIt) {
   for (std::size_t i = 0; i < keys.size(); ++i)
     if (double(keys[i].m0) > t || double(keys[i].m1) > t) expect.push_back(std::uint32_t(i));
   EXPECT_EQ(above->index, expect);
+  ASSERT_EQ(above->segments.size(), expect.size());
+  ASSERT_EQ(above->corners.size(), expect.size());
+  for (std::size_t j = 0; j < expect.size(); ++j)
+    EXPECT_EQ(above->corners[j], keys[expect[j]].corners);
   EXPECT_GT(expect.size(), 0u);
   EXPECT_LT(expect.size(), keys.size());
   // Cached while the threshold stays; a new threshold, a new list.
@@ -279,7 +283,18 @@ TEST(Ridges, ThresholdListIsTheRawSegmentsAboveItAndExtractionUsesIt) {
           fields.ndotv[corner[2]] > 0.0))
       continue;
     ASSERT_LT(kept, ridges.segments.size());
-    EXPECT_EQ(ridges.segments[kept].face, pre.raw_ridges()[i].face);
+    // The raw segment, with each end's strength the fade (m - t)/m.
+    const LineSegment& got = ridges.segments[kept];
+    const LineSegment& raw = pre.raw_ridges()[i];
+    EXPECT_EQ(got.face, raw.face);
+    const float m[2] = {keys[i].m0, keys[i].m1};
+    for (int e = 0; e < 2; ++e) {
+      EXPECT_EQ(got.end[e].position, raw.end[e].position);
+      EXPECT_EQ(got.end[e].anchor.bary, raw.end[e].anchor.bary);
+      EXPECT_EQ(got.end[e].element, raw.end[e].element);
+      const double k = std::max(double(m[e]) - t, 0.0);
+      EXPECT_EQ(got.end[e].strength, static_cast<float>(k / (k + t)));
+    }
     ++kept;
   }
   EXPECT_EQ(kept, ridges.segments.size());

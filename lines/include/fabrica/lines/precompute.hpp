@@ -65,9 +65,16 @@ class LinePrecompute {
   /// depend on the view, so the per-view extraction visits only these
   /// (back-face culling stays per view). Cached for the last t of each
   /// family (thread-safe; the list stays valid while held).
+  /// `segments` are those raw segments as the extraction returns them for
+  /// t (each end's strength the fade (m - t)/m, rtsc's k/(k + t) with
+  /// k = m - t; 1 for t = 0), and `corners` their faces' corners (for the
+  /// per-view back-face culling): a view then copies runs of kept
+  /// segments instead of rebuilding each one.
   struct RawAbove {
     double t = 0.0;
     std::vector<std::uint32_t> index;
+    std::vector<LineSegment> segments;
+    std::vector<std::array<std::int32_t, 3>> corners;
   };
   std::shared_ptr<const RawAbove> raw_above(LineFamily family, double t) const;
   const GradientOperator& gradient_operator() const;
