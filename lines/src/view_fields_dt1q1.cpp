@@ -267,11 +267,17 @@ struct RingPass {
         // is a fan whose last neighbour repeats the first.
         unsigned any = 0;
         if (je - jb <= kShort) {
-          // Without a loop: entries past the ring masked off (the last
-          // entry of an odd ring is a fan's first neighbour again).
+          // Without a loop: the eight entries' bytes in one word, those
+          // past the ring masked off (the last entry of an odd ring is a
+          // fan's first neighbour again); fewer instructions than masking
+          // each byte.
           const int n = je - jb;
+          std::uint64_t w = 0;
 #pragma GCC unroll 8
-          for (int j = 0; j < kShort; ++j) any |= sg[nbr[jb + j]] & -unsigned(j < n);
+          for (int j = 0; j < kShort; ++j) w |= std::uint64_t(sg[nbr[jb + j]]) << (8 * j);
+          const std::uint64_t in_ring =
+              n >= 8 ? ~std::uint64_t{0} : (std::uint64_t{1} << (8 * n)) - 1;
+          any = (w & in_ring & (0x0101010101010101ull * kQ1Above)) != 0 ? kQ1Above : 0;
         } else {
           for (std::int32_t j = jb; j + 2 <= je; j += 2) any |= sg[nbr[j]] | sg[nbr[j + 1]];
         }
