@@ -180,6 +180,21 @@ struct ScalarInputs {
   }
 }
 
+// Up to four points, consumed in pairs (rtsc's GL_LINES logic): p1 when
+// valid, the nq clip points (at z1 and z2, the nonzero ones), p2 when the
+// count is odd.
+[[gnu::always_inline]] inline void emit_points(const ScalarInputs& in, std::size_t f,
+                                               const int v[3], bool valid1, const ScalarEnd& p1,
+                                               const ScalarEnd* q, int nq, const ScalarEnd& p2,
+                                               std::vector<LineSegment>& out) {
+  const ScalarEnd* pts[4];
+  int npts = 0;
+  if (valid1) pts[npts++] = &p1;
+  for (int i = 0; i < nq; ++i) pts[npts++] = &q[i];
+  if (npts != 2) pts[npts++] = &p2;
+  for (int i = 0; i + 1 < npts; i += 2) emit_segment(in, f, v, *pts[i], *pts[i + 1], out);
+}
+
 // One face of the scalar kernel. The rejections (no lone sign, back-facing,
 // test function <= 0 at every corner) are independent predicates, so they
 // are tried cheapest and most selective first; the endpoints are built only
@@ -250,31 +265,20 @@ template <class Num>
   }
   if (!valid1 && z1 == 0.0 && z2 == 0.0) return;
 
-  // Up to four points, consumed in pairs (rtsc's GL_LINES logic): p1 when
-  // valid, the clip points at z1 and z2 when nonzero, p2 when the count is
-  // odd.
   ScalarEnd p1, p2, q[2];
   edge_end(in.m, f, v, e1, p1);
   edge_end(in.m, f, v, e2, p2);
   const double fade = in.fade;
-  const ScalarEnd* pts[4];
-  int npts = 0, nq = 0;
-  if (valid1) {
-    p1.strength = fade_strength(num1, den1, fade);
-    pts[npts++] = &p1;
-  }
+  if (valid1) p1.strength = fade_strength(num1, den1, fade);
+  int nq = 0;
   for (const double z : {z1, z2}) {
     if (z == 0.0) continue;
     ScalarEnd& c = q[nq++];
     lerp_end(p1, p2, z, c);
     c.strength = fade_strength((1.0 - z) * num1 + z * num2, (1.0 - z) * den1 + z * den2, fade);
-    pts[npts++] = &c;
   }
-  if (npts != 2) {
-    p2.strength = fade_strength(num2, den2, fade);
-    pts[npts++] = &p2;
-  }
-  for (int i = 0; i + 1 < npts; i += 2) emit_segment(in, f, v, *pts[i], *pts[i + 1], out);
+  if (int(valid1) + nq != 2) p2.strength = fade_strength(num2, den2, fade);
+  emit_points(in, f, v, valid1, p1, q, nq, p2, out);
 }
 
 template <class Num>
@@ -282,6 +286,301 @@ template <class Num>
                                    std::vector<LineSegment>& out) {
   scalar_face_body(in, num, f, out);
 }
+
+#if defined(FABRICA_LINES_AVX2)
+// Rows a, b, c, d of a 4×4 block of doubles as its four columns.
+[[gnu::target("avx2"), gnu::always_inline]] inline void transpose4(__m256d a, __m256d b, __m256d c,
+                                                                   __m256d d, __m256d col[4]) {
+  const __m256d t0 = _mm256_unpacklo_pd(a, b), t1 = _mm256_unpackhi_pd(a, b);
+  const __m256d t2 = _mm256_unpacklo_pd(c, d), t3 = _mm256_unpackhi_pd(c, d);
+  col[0] = _mm256_permute2f128_pd(t0, t2, 0x20);
+  col[1] = _mm256_permute2f128_pd(t1, t3, 0x20);
+  col[2] = _mm256_permute2f128_pd(t0, t2, 0x31);
+  col[3] = _mm256_permute2f128_pd(t1, t3, 0x31);
+}
+
+// Per lane: x1 where r1, else x2 where r2, else x0.
+[[gnu::target("avx2"), gnu::always_inline]] inline __m256d select3(__m256d r1, __m256d r2,
+                                                                   __m256d x0, __m256d x1,
+                                                                   __m256d x2) {
+  return _mm256_blendv_pd(_mm256_blendv_pd(x0, x2, r2), x1, r1);
+}
+
+// mask ? x : y per lane.
+[[gnu::target("avx2"), gnu::always_inline]] inline __m256d when(__m256d mask, __m256d x,
+                                                                __m256d y) {
+  return _mm256_blendv_pd(y, x, mask);
+}
+
+// a[v[l]] in lane l.
+[[gnu::target("avx2"), gnu::always_inline]] inline __m256d gather4(const double* a,
+                                                                   const int v[4]) {
+  return _mm256_set_pd(a[v[3]], a[v[2]], a[v[1]], a[v[0]]);
+}
+
+// The test numerator at the lanes' vertices, as Num computes it.
+[[gnu::target("avx2"), gnu::always_inline]] inline __m256d num4(const StoredNum& n,
+                                                                const int v[4]) {
+  return gather4(n.n, v);
+}
+[[gnu::target("avx2"), gnu::always_inline]] inline __m256d num4(const ShiftedNum& n,
+                                                                const int v[4]) {
+  __m256d sc = gather4(n.sc, v);
+  if (n.negate) sc = _mm256_xor_pd(sc, _mm256_set1_pd(-0.0));
+  return _mm256_sub_pd(sc, _mm256_mul_pd(_mm256_set1_pd(n.shift), gather4(n.den, v)));
+}
+
+// fade_strength per lane (fade > 0), as a double holding the float.
+[[gnu::target("avx2"), gnu::always_inline]] inline __m128 fade_strength4(__m256d num, __m256d den,
+                                                                         __m256d fade) {
+  const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0);
+  const __m256d d = _mm256_add_pd(_mm256_mul_pd(den, fade), num);
+  const __m256d q = _mm256_div_pd(num, d);
+  const __m256d abs_q = _mm256_andnot_pd(_mm256_set1_pd(-0.0), q);
+  __m256d r = when(_mm256_cmp_pd(abs_q, _mm256_set1_pd(HUGE_VAL), _CMP_LT_OQ), q, zero);
+  r = when(_mm256_cmp_pd(r, zero, _CMP_LT_OQ), zero, r);
+  r = when(_mm256_cmp_pd(one, r, _CMP_LT_OQ), one, r);
+  r = when(_mm256_cmp_pd(d, zero, _CMP_EQ_OQ), zero, r);
+  return _mm256_cvtpd_ps(r);
+}
+
+// lone_sign per lane.
+[[gnu::target("avx2"), gnu::always_inline]] inline __m256d lone_sign4(__m256d a, __m256d b,
+                                                                      __m256d c) {
+  const __m256d zero = _mm256_setzero_pd();
+  const __m256d lo = _mm256_and_pd(
+      _mm256_cmp_pd(a, zero, _CMP_LT_OQ),
+      _mm256_and_pd(_mm256_cmp_pd(b, zero, _CMP_GE_OQ), _mm256_cmp_pd(c, zero, _CMP_GE_OQ)));
+  const __m256d hi = _mm256_and_pd(
+      _mm256_cmp_pd(a, zero, _CMP_GT_OQ),
+      _mm256_and_pd(_mm256_cmp_pd(b, zero, _CMP_LE_OQ), _mm256_cmp_pd(c, zero, _CMP_LE_OQ)));
+  return _mm256_or_pd(lo, hi);
+}
+
+// Four faces' corners in lanes: the first lone-sign corner k (r1: k = 1,
+// r2: k = 2, else 0), and per corner its value, vertex index, test
+// numerator and denominator and position.
+struct Corners4 {
+  __m256d r1, r2;
+  const __m256d *s, *id, *na, *da;
+  const __m256d (*P)[4];
+  // x at corner (k + o) mod 3 of each lane.
+  [[gnu::target("avx2"), gnu::always_inline]] __m256d at(const __m256d* x, int o) const {
+    return select3(r1, r2, x[o % 3], x[(o + 1) % 3], x[(o + 2) % 3]);
+  }
+  [[gnu::target("avx2"), gnu::always_inline]] __m256d pos(int o, int k) const {
+    return select3(r1, r2, P[o % 3][k], P[(o + 1) % 3][k], P[(o + 2) % 3][k]);
+  }
+};
+
+// scalar_edge and edge_end from corner c0 = k to corner k + o: the ends
+// ordered by vertex index (corners lo, hi), t from the lower (u = 1 - t),
+// the ends' test numerators and denominators, and the point.
+struct Edge4 {
+  __m256d lo, hi, t, u, n_lo, n_hi, d_lo, d_hi, p[3];
+};
+[[gnu::target("avx2"), gnu::always_inline]] inline Edge4 edge4(const Corners4& c, int o) {
+  const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0);
+  const __m256d corner[3] = {zero, one, _mm256_set1_pd(2.0)};
+  const __m256d sw = _mm256_cmp_pd(c.at(c.id, 0), c.at(c.id, o), _CMP_GT_OQ);
+  const __m256d sa = c.at(c.s, 0), sb = c.at(c.s, o);
+  const __m256d va = when(sw, sb, sa), vb = when(sw, sa, sb);
+  Edge4 e;
+  e.lo = when(sw, c.at(corner, o), c.at(corner, 0));
+  e.hi = when(sw, c.at(corner, 0), c.at(corner, o));
+  const __m256d d = _mm256_sub_pd(va, vb);
+  __m256d t = when(_mm256_cmp_pd(d, zero, _CMP_NEQ_UQ), _mm256_div_pd(va, d), _mm256_set1_pd(0.5));
+  t = when(_mm256_cmp_pd(t, zero, _CMP_LT_OQ), zero, t);
+  t = when(_mm256_cmp_pd(one, t, _CMP_LT_OQ), one, t);
+  e.t = t;
+  e.u = _mm256_sub_pd(one, t);
+  const __m256d na = c.at(c.na, 0), nb = c.at(c.na, o), da = c.at(c.da, 0), db = c.at(c.da, o);
+  e.n_lo = when(sw, nb, na);
+  e.n_hi = when(sw, na, nb);
+  e.d_lo = when(sw, db, da);
+  e.d_hi = when(sw, da, db);
+  for (int k = 0; k < 3; ++k) {
+    const __m256d pa = c.pos(0, k), pb = c.pos(o, k);
+    e.p[k] =
+        _mm256_add_pd(_mm256_mul_pd(e.u, when(sw, pb, pa)), _mm256_mul_pd(t, when(sw, pa, pb)));
+  }
+  return e;
+}
+
+// scalar_face_body for the listed faces (which passed ScalarBatch's test
+// rejection; no magnitude threshold), four at a time: each lane evaluates
+// its expressions in the same operations (so the same bits), the points
+// and strengths of all four faces without branches; the segments are then
+// written lane by lane, in face order, as scalar_face_body writes them.
+template <class Num>
+[[gnu::target("avx2")]] void scalar_faces_avx2(const ScalarInputs& in, const Num& num,
+                                               const std::size_t* list, int n,
+                                               std::vector<LineSegment>& out) {
+  const Face* faces = in.m.faces;
+  const Vec3* pos = in.m.pos;
+  const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0);
+  const __m256d all = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
+  const __m256i xyz = _mm256_setr_epi64x(-1, -1, -1, 0);
+  const bool test = in.test, fade = in.fade > 0.0;
+  const __m256d vfade = _mm256_set1_pd(in.fade);
+  for (int j = 0; j < n; j += 4) {
+    const int lanes = std::min(4, n - j);
+    alignas(16) int v[3][4];  // unused lanes repeat lane 0
+    for (int l = 0; l < 4; ++l) {
+      const Face& fc = faces[list[j + (l < lanes ? l : 0)]];
+      for (int c = 0; c < 3; ++c) v[c][l] = fc[c];
+    }
+    __m256d s[3], id[3];
+    for (int c = 0; c < 3; ++c) {
+      s[c] = gather4(in.val, v[c]);
+      id[c] = _mm256_cvtepi32_pd(_mm_load_si128(reinterpret_cast<const __m128i*>(v[c])));
+    }
+    // lone_sign at corner 0, 1, 2; the first one is k.
+    const __m256d l0 = lone_sign4(s[0], s[1], s[2]), l1 = lone_sign4(s[1], s[2], s[0]);
+    const __m256d l2 = lone_sign4(s[2], s[0], s[1]);
+    __m256d live = _mm256_or_pd(l0, _mm256_or_pd(l1, l2));
+    const __m256d r1 = _mm256_andnot_pd(l0, l1);                    // k = 1
+    const __m256d r2 = _mm256_andnot_pd(_mm256_or_pd(l0, l1), l2);  // k = 2
+    if (in.cull) {
+      __m256d culled = all;
+      for (int c = 0; c < 3; ++c)
+        culled = _mm256_and_pd(culled, _mm256_cmp_pd(gather4(in.cull, v[c]), zero, _CMP_LE_OQ));
+      live = _mm256_andnot_pd(culled, live);
+    }
+    __m256d na[3] = {one, one, one}, da[3] = {one, one, one};
+    if (test) {
+      for (int c = 0; c < 3; ++c) na[c] = num4(num, v[c]);
+      __m256d reject;
+      if (!in.den) {
+        reject = all;
+        for (int c = 0; c < 3; ++c)
+          reject = _mm256_and_pd(reject, _mm256_cmp_pd(na[c], zero, _CMP_LE_OQ));
+      } else {
+        __m256d below = all, above = all;
+        for (int c = 0; c < 3; ++c) {
+          da[c] = gather4(in.den, v[c]);
+          below = _mm256_and_pd(below, _mm256_and_pd(_mm256_cmp_pd(na[c], zero, _CMP_LE_OQ),
+                                                     _mm256_cmp_pd(da[c], zero, _CMP_GE_OQ)));
+          above = _mm256_and_pd(above, _mm256_and_pd(_mm256_cmp_pd(na[c], zero, _CMP_GE_OQ),
+                                                     _mm256_cmp_pd(da[c], zero, _CMP_LE_OQ)));
+        }
+        reject = _mm256_or_pd(below, above);
+      }
+      live = _mm256_andnot_pd(reject, live);
+    }
+    const int live_bits = _mm256_movemask_pd(live) & ((1 << lanes) - 1);
+    if (!live_bits) continue;
+    // Positions: per corner, the four rows (x, y, z, 0) as columns.
+    __m256d P[3][4];
+    for (int c = 0; c < 3; ++c)
+      transpose4(_mm256_maskload_pd(pos[v[c][0]].data(), xyz),
+                 _mm256_maskload_pd(pos[v[c][1]].data(), xyz),
+                 _mm256_maskload_pd(pos[v[c][2]].data(), xyz),
+                 _mm256_maskload_pd(pos[v[c][3]].data(), xyz), P[c]);
+    const Corners4 cs{r1, r2, s, id, na, da, P};
+    const Edge4 e1 = edge4(cs, 1), e2 = edge4(cs, 2);
+    __m256d num1 = one, num2 = one, den1 = one, den2 = one, z1 = zero, z2 = zero;
+    __m256d valid1 = all;
+    if (test) {
+      num1 = _mm256_add_pd(_mm256_mul_pd(e1.u, e1.n_lo), _mm256_mul_pd(e1.t, e1.n_hi));
+      num2 = _mm256_add_pd(_mm256_mul_pd(e2.u, e2.n_lo), _mm256_mul_pd(e2.t, e2.n_hi));
+      if (in.den) {
+        den1 = _mm256_add_pd(_mm256_mul_pd(e1.u, e1.d_lo), _mm256_mul_pd(e1.t, e1.d_hi));
+        den2 = _mm256_add_pd(_mm256_mul_pd(e2.u, e2.d_lo), _mm256_mul_pd(e2.t, e2.d_hi));
+      }
+      const __m256d n1p = _mm256_cmp_pd(num1, zero, _CMP_GE_OQ);
+      const __m256d n2p = _mm256_cmp_pd(num2, zero, _CMP_GE_OQ);
+      const __m256d d1p = _mm256_cmp_pd(den1, zero, _CMP_GE_OQ);
+      const __m256d d2p = _mm256_cmp_pd(den2, zero, _CMP_GE_OQ);
+      valid1 = _mm256_xor_pd(_mm256_xor_pd(n1p, d1p), all);
+      const __m256d a =
+          when(_mm256_xor_pd(n1p, n2p), _mm256_div_pd(num1, _mm256_sub_pd(num1, num2)), zero);
+      const __m256d b =
+          when(_mm256_xor_pd(d1p, d2p), _mm256_div_pd(den1, _mm256_sub_pd(den1, den2)), zero);
+      const __m256d a_zero = _mm256_cmp_pd(a, zero, _CMP_EQ_OQ);
+      const __m256d b_first = _mm256_cmp_pd(b, a, _CMP_LT_OQ);
+      z1 = when(a_zero, b, when(b_first, b, a));
+      z2 = when(a_zero, zero, when(b_first, a, b));
+      const __m256d none = _mm256_andnot_pd(
+          valid1,
+          _mm256_and_pd(_mm256_cmp_pd(z1, zero, _CMP_EQ_OQ), _mm256_cmp_pd(z2, zero, _CMP_EQ_OQ)));
+      live = _mm256_andnot_pd(none, live);
+    }
+    int emit = _mm256_movemask_pd(live) & ((1 << lanes) - 1);
+    if (!emit) continue;
+    // The ends' barycentrics (u at lo, t at hi, 0 at the third corner),
+    // the clip points at z1 and z2, and the strengths.
+    __m256d b1[3], b2[3];
+    for (int k = 0; k < 3; ++k) {
+      const __m256d ck = _mm256_set1_pd(double(k));
+      b1[k] = when(_mm256_cmp_pd(e1.lo, ck, _CMP_EQ_OQ), e1.u,
+                   when(_mm256_cmp_pd(e1.hi, ck, _CMP_EQ_OQ), e1.t, zero));
+      b2[k] = when(_mm256_cmp_pd(e2.lo, ck, _CMP_EQ_OQ), e2.u,
+                   when(_mm256_cmp_pd(e2.hi, ck, _CMP_EQ_OQ), e2.t, zero));
+    }
+    alignas(32) double bary[4][3][4], at[4][3][4], zv[2][4], lo[2][4], hi[2][4];
+    alignas(16) float st[4][4];  // p1, clip at z1, clip at z2, p2
+    for (int k = 0; k < 3; ++k) {
+      _mm256_store_pd(bary[0][k], b1[k]);
+      _mm256_store_pd(bary[3][k], b2[k]);
+      _mm256_store_pd(at[0][k], e1.p[k]);
+      _mm256_store_pd(at[3][k], e2.p[k]);
+    }
+    const __m256d zs[2] = {z1, z2};
+    for (int i = 0; i < 2; ++i) {
+      const __m256d z = zs[i], u = _mm256_sub_pd(one, z);
+      for (int k = 0; k < 3; ++k) {
+        _mm256_store_pd(bary[1 + i][k],
+                        _mm256_add_pd(_mm256_mul_pd(u, b1[k]), _mm256_mul_pd(z, b2[k])));
+        _mm256_store_pd(at[1 + i][k],
+                        _mm256_add_pd(_mm256_mul_pd(u, e1.p[k]), _mm256_mul_pd(z, e2.p[k])));
+      }
+      _mm256_store_pd(zv[i], z);
+      if (fade)
+        _mm_store_ps(
+            st[1 + i],
+            fade_strength4(_mm256_add_pd(_mm256_mul_pd(u, num1), _mm256_mul_pd(z, num2)),
+                           _mm256_add_pd(_mm256_mul_pd(u, den1), _mm256_mul_pd(z, den2)), vfade));
+    }
+    if (fade) {
+      _mm_store_ps(st[0], fade_strength4(num1, den1, vfade));
+      _mm_store_ps(st[3], fade_strength4(num2, den2, vfade));
+    }
+    _mm256_store_pd(lo[0], e1.lo);
+    _mm256_store_pd(hi[0], e1.hi);
+    _mm256_store_pd(lo[1], e2.lo);
+    _mm256_store_pd(hi[1], e2.hi);
+    const int valid_bits = _mm256_movemask_pd(valid1);
+    const Topology& topo = *in.m.topo;
+    for (; emit; emit &= emit - 1) {
+      const int l = std::countr_zero(static_cast<unsigned>(emit));
+      const std::size_t f = list[j + l];
+      const int vl[3] = {v[0][l], v[1][l], v[2][l]};
+      ScalarEnd p[4];  // p1, clip at z1, clip at z2, p2
+      for (int i = 0; i < 4; ++i) {
+        for (int k = 0; k < 3; ++k) {
+          p[i].bary[k] = bary[i][k][l];
+          p[i].pos[k] = at[i][k][l];
+        }
+        p[i].strength = fade ? st[i][l] : 1.0f;
+      }
+      for (int i = 0; i < 2; ++i) {
+        ScalarEnd& e = p[3 * i];
+        e.element = topo.face_edge(f, 3 - int(lo[i][l]) - int(hi[i][l]));
+        e.kind = EndKind::edge;
+        p[1 + i].element = -1;
+        p[1 + i].kind = EndKind::interior;
+      }
+      // The clip points at the nonzero ones of z1, z2, in this order.
+      ScalarEnd q[2];
+      int nq = 0;
+      for (int i = 0; i < 2; ++i)
+        if (zv[i][l] != 0.0) q[nq++] = p[1 + i];
+      emit_points(in, f, vl, valid_bits >> l & 1, p[0], q, nq, p[3], out);
+    }
+  }
+}
+#endif
 
 // Candidates of one family in a scan over the sign bytes: batched with
 // their corners prefetched; at a flush, scalar_face's test-function
@@ -343,6 +642,12 @@ struct ScalarBatch {
       nk += int(!reject);
     }
     batch.n = 0;
+#if defined(FABRICA_LINES_AVX2)
+    if (!in.mag && detail::cpu_has_avx2()) {
+      scalar_faces_avx2(in, num, keep, nk, part);
+      return;
+    }
+#endif
     for (int k = 0; k < nk; ++k) scalar_face(in, num, keep[k], part);
   }
 };
@@ -445,17 +750,6 @@ inline bool two_crossings(unsigned z) {
 }
 
 #if defined(FABRICA_LINES_AVX2)
-// Rows a, b, c, d of a 4×4 block of doubles as its four columns.
-[[gnu::target("avx2"), gnu::always_inline]] inline void transpose4(__m256d a, __m256d b, __m256d c,
-                                                                   __m256d d, __m256d col[4]) {
-  const __m256d t0 = _mm256_unpacklo_pd(a, b), t1 = _mm256_unpackhi_pd(a, b);
-  const __m256d t2 = _mm256_unpacklo_pd(c, d), t3 = _mm256_unpackhi_pd(c, d);
-  col[0] = _mm256_permute2f128_pd(t0, t2, 0x20);
-  col[1] = _mm256_permute2f128_pd(t1, t3, 0x20);
-  col[2] = _mm256_permute2f128_pd(t0, t2, 0x31);
-  col[3] = _mm256_permute2f128_pd(t1, t3, 0x31);
-}
-
 // E (x, y, z) of four vertices from their records (ApparentVertex, whose
 // first four doubles are E and D_t1 q1), one lane each.
 [[gnu::target("avx2"), gnu::always_inline]] inline void load_field4(const double* E, int a, int b,
@@ -923,13 +1217,6 @@ struct Corner4 {
   c.q = hi[0], c.p[0] = hi[1], c.p[1] = hi[2], c.p[2] = hi[3];
   c.id = _mm256_cvtepi32_pd(_mm_loadu_si128(reinterpret_cast<const __m128i*>(v)));
   return c;
-}
-
-// Per lane: x1 where r1, else x2 where r2, else x0.
-[[gnu::target("avx2"), gnu::always_inline]] inline __m256d select3(__m256d r1, __m256d r2,
-                                                                   __m256d x0, __m256d x1,
-                                                                   __m256d x2) {
-  return _mm256_blendv_pd(_mm256_blendv_pd(x0, x2, r2), x1, r1);
 }
 
 // One end of a cut (its derivative, magnitude and position), per lane.

@@ -198,9 +198,11 @@ TEST(LinesViewFields, SimdAndPortablePassesGiveTheSameBits) {
 }
 
 // The face kernels also have AVX2 paths (the apparent-ridge crossing test
-// and segments four faces at a time); every family's segments, all fields
+// and segments, and the contour and suggestive-contour segments, four faces
+// at a time); every family's segments, all fields
 // of every segment, must be the same bits with and without them, also with
-// the maximum test off and with no threshold (every fade branch). And the
+// the maximum test off (and the scalar kernel without test function, fade
+// or culling) and with no threshold (every fade branch). And the
 // apparent ridges are the same whether their candidate faces come from the
 // extractor's shared scan or from their own.
 TEST(LinesViewFields, SimdAndPortableKernelsGiveTheSameSegments) {
@@ -216,7 +218,13 @@ TEST(LinesViewFields, SimdAndPortableKernelsGiveTheSameSegments) {
     for (int variant = 0; variant < 3; ++variant) {
       LineOptions o;
       o.families = all_families();
-      if (variant == 1) o.apparent.maximum_test = false;
+      if (variant == 1) {
+        o.apparent.maximum_test = false;
+        // The scalar kernel without test function, fade or culling.
+        o.contour.trim_concave = false;
+        o.suggestive.fade = o.highlight.fade = 0.0;
+        o.suggestive.cull_backfaces = o.highlight.cull_backfaces = false;
+      }
       if (variant == 2) o.apparent.threshold = 0.0;
       LineExtractor simd_x(surface, o), portable_x(surface, o);
       const auto simd = simd_x.extract(c);
