@@ -357,58 +357,78 @@ template <class Num>
   return _mm256_or_pd(lo, hi);
 }
 
-// Four faces' corners in lanes: the first lone-sign corner k (r1: k = 1,
-// r2: k = 2, else 0), and per corner its value, vertex index, test
-// numerator and denominator and position.
+// Four faces' corners in lanes, rotated so that corner o is corner k + o
+// (mod 3) of the face, k its first lone-sign corner: the value, vertex
+// index, corner number, test numerator and denominator, and position.
 struct Corners4 {
-  __m256d r1, r2;
-  const __m256d *s, *id, *na, *da;
-  const __m256d (*P)[4];
-  // x at corner (k + o) mod 3 of each lane.
-  [[gnu::target("avx2"), gnu::always_inline]] __m256d at(const __m256d* x, int o) const {
-    return select3(r1, r2, x[o % 3], x[(o + 1) % 3], x[(o + 2) % 3]);
-  }
-  [[gnu::target("avx2"), gnu::always_inline]] __m256d pos(int o, int k) const {
-    return select3(r1, r2, P[o % 3][k], P[(o + 1) % 3][k], P[(o + 2) % 3][k]);
-  }
+  __m256d s[3], id[3], corner[3], na[3], da[3], p[3][3];
 };
 
-// scalar_edge and edge_end from corner c0 = k to corner k + o: the ends
-// ordered by vertex index (corners lo, hi), t from the lower (u = 1 - t),
-// the ends' test numerators and denominators, and the point.
+// x rotated by k per lane (r1: k = 1, r2: k = 2, else 0).
+[[gnu::target("avx2"), gnu::always_inline]] inline void rotate3(__m256d r1, __m256d r2,
+                                                                const __m256d x[3],
+                                                                __m256d out[3]) {
+  for (int o = 0; o < 3; ++o) out[o] = select3(r1, r2, x[o], x[(o + 1) % 3], x[(o + 2) % 3]);
+}
+
+// scalar_edge and edge_end from corner 0 to corner o (of the rotated
+// corners): the ends ordered by vertex index (corners lo, hi), t from the
+// lower (u = 1 - t), the ends' test numerators and denominators, and the
+// point.
 struct Edge4 {
   __m256d lo, hi, t, u, n_lo, n_hi, d_lo, d_hi, p[3];
 };
 [[gnu::target("avx2"), gnu::always_inline]] inline Edge4 edge4(const Corners4& c, int o) {
   const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0);
-  const __m256d corner[3] = {zero, one, _mm256_set1_pd(2.0)};
-  const __m256d sw = _mm256_cmp_pd(c.at(c.id, 0), c.at(c.id, o), _CMP_GT_OQ);
-  const __m256d sa = c.at(c.s, 0), sb = c.at(c.s, o);
-  const __m256d va = when(sw, sb, sa), vb = when(sw, sa, sb);
+  const __m256d sw = _mm256_cmp_pd(c.id[0], c.id[o], _CMP_GT_OQ);
+  const __m256d va = when(sw, c.s[o], c.s[0]), vb = when(sw, c.s[0], c.s[o]);
   Edge4 e;
-  e.lo = when(sw, c.at(corner, o), c.at(corner, 0));
-  e.hi = when(sw, c.at(corner, 0), c.at(corner, o));
+  e.lo = when(sw, c.corner[o], c.corner[0]);
+  e.hi = when(sw, c.corner[0], c.corner[o]);
   const __m256d d = _mm256_sub_pd(va, vb);
   __m256d t = when(_mm256_cmp_pd(d, zero, _CMP_NEQ_UQ), _mm256_div_pd(va, d), _mm256_set1_pd(0.5));
   t = when(_mm256_cmp_pd(t, zero, _CMP_LT_OQ), zero, t);
   t = when(_mm256_cmp_pd(one, t, _CMP_LT_OQ), one, t);
   e.t = t;
   e.u = _mm256_sub_pd(one, t);
-  const __m256d na = c.at(c.na, 0), nb = c.at(c.na, o), da = c.at(c.da, 0), db = c.at(c.da, o);
-  e.n_lo = when(sw, nb, na);
-  e.n_hi = when(sw, na, nb);
-  e.d_lo = when(sw, db, da);
-  e.d_hi = when(sw, da, db);
-  for (int k = 0; k < 3; ++k) {
-    const __m256d pa = c.pos(0, k), pb = c.pos(o, k);
-    e.p[k] =
-        _mm256_add_pd(_mm256_mul_pd(e.u, when(sw, pb, pa)), _mm256_mul_pd(t, when(sw, pa, pb)));
-  }
+  e.n_lo = when(sw, c.na[o], c.na[0]);
+  e.n_hi = when(sw, c.na[0], c.na[o]);
+  e.d_lo = when(sw, c.da[o], c.da[0]);
+  e.d_hi = when(sw, c.da[0], c.da[o]);
+  for (int k = 0; k < 3; ++k)
+    e.p[k] = _mm256_add_pd(_mm256_mul_pd(e.u, when(sw, c.p[o][k], c.p[0][k])),
+                           _mm256_mul_pd(t, when(sw, c.p[0][k], c.p[o][k])));
   return e;
 }
 
-// scalar_face_body for the listed faces (which passed ScalarBatch's test
-// rejection; no magnitude threshold), four at a time: each lane evaluates
+// The four points of scalar_faces_avx2's lanes (p1, the clips at z1 and
+// z2, p2): barycentrics and positions per component and lane, strengths,
+// and the edge ends' elements (of the lane being written).
+struct LanePoints {
+  alignas(32) double bary[4][3][4], at[4][3][4];
+  alignas(16) float st[4][4];
+  std::int32_t el[4] = {-1, -1, -1, -1};
+  bool fade;
+};
+
+// Segment (points a, b) of lane l of face `face`, converted into the
+// LineSegment in place by emplace_back (each field written once), as
+// emit_segment writes it.
+struct LaneSegment {
+  const LanePoints& lp;
+  std::int32_t face;
+  int l, a, b;
+  SegmentEnd end(int i) const {
+    return SegmentEnd{
+        SurfacePoint{face, Vec3(lp.bary[i][0][l], lp.bary[i][1][l], lp.bary[i][2][l])},
+        Vec3(lp.at[i][0][l], lp.at[i][1][l], lp.at[i][2][l]), lp.el[i],
+        i == 0 || i == 3 ? EndKind::edge : EndKind::interior, lp.fade ? lp.st[i][l] : 1.0f};
+  }
+  operator LineSegment() const { return LineSegment{face, {end(a), end(b)}}; }
+};
+
+// scalar_face_body for the listed faces (no magnitude threshold), four at
+// a time: each lane evaluates
 // its expressions in the same operations (so the same bits), the points
 // and strengths of all four faces without branches; the segments are then
 // written lane by lane, in face order, as scalar_face_body writes them.
@@ -477,7 +497,21 @@ template <class Num>
                  _mm256_maskload_pd(pos[v[c][1]].data(), xyz),
                  _mm256_maskload_pd(pos[v[c][2]].data(), xyz),
                  _mm256_maskload_pd(pos[v[c][3]].data(), xyz), P[c]);
-    const Corners4 cs{r1, r2, s, id, na, da, P};
+    Corners4 cs;
+    rotate3(r1, r2, s, cs.s);
+    rotate3(r1, r2, id, cs.id);
+    const __m256d corner[3] = {zero, one, _mm256_set1_pd(2.0)};
+    rotate3(r1, r2, corner, cs.corner);
+    // (ones, not rotated, without a test function or denominator)
+    for (int o = 0; o < 3; ++o) cs.na[o] = cs.da[o] = one;
+    if (test) rotate3(r1, r2, na, cs.na);
+    if (test && in.den) rotate3(r1, r2, da, cs.da);
+    for (int k = 0; k < 3; ++k) {
+      const __m256d pk[3] = {P[0][k], P[1][k], P[2][k]};
+      __m256d rk[3];
+      rotate3(r1, r2, pk, rk);
+      for (int o = 0; o < 3; ++o) cs.p[o][k] = rk[o];
+    }
     const Edge4 e1 = edge4(cs, 1), e2 = edge4(cs, 2);
     __m256d num1 = one, num2 = one, den1 = one, den2 = one, z1 = zero, z2 = zero;
     __m256d valid1 = all;
@@ -518,33 +552,34 @@ template <class Num>
       b2[k] = when(_mm256_cmp_pd(e2.lo, ck, _CMP_EQ_OQ), e2.u,
                    when(_mm256_cmp_pd(e2.hi, ck, _CMP_EQ_OQ), e2.t, zero));
     }
-    alignas(32) double bary[4][3][4], at[4][3][4], zv[2][4], lo[2][4], hi[2][4];
-    alignas(16) float st[4][4];  // p1, clip at z1, clip at z2, p2
+    LanePoints lp;
+    alignas(32) double zv[2][4], lo[2][4], hi[2][4];
+    lp.fade = fade;
     for (int k = 0; k < 3; ++k) {
-      _mm256_store_pd(bary[0][k], b1[k]);
-      _mm256_store_pd(bary[3][k], b2[k]);
-      _mm256_store_pd(at[0][k], e1.p[k]);
-      _mm256_store_pd(at[3][k], e2.p[k]);
+      _mm256_store_pd(lp.bary[0][k], b1[k]);
+      _mm256_store_pd(lp.bary[3][k], b2[k]);
+      _mm256_store_pd(lp.at[0][k], e1.p[k]);
+      _mm256_store_pd(lp.at[3][k], e2.p[k]);
     }
     const __m256d zs[2] = {z1, z2};
     for (int i = 0; i < 2; ++i) {
       const __m256d z = zs[i], u = _mm256_sub_pd(one, z);
       for (int k = 0; k < 3; ++k) {
-        _mm256_store_pd(bary[1 + i][k],
+        _mm256_store_pd(lp.bary[1 + i][k],
                         _mm256_add_pd(_mm256_mul_pd(u, b1[k]), _mm256_mul_pd(z, b2[k])));
-        _mm256_store_pd(at[1 + i][k],
+        _mm256_store_pd(lp.at[1 + i][k],
                         _mm256_add_pd(_mm256_mul_pd(u, e1.p[k]), _mm256_mul_pd(z, e2.p[k])));
       }
       _mm256_store_pd(zv[i], z);
       if (fade)
         _mm_store_ps(
-            st[1 + i],
+            lp.st[1 + i],
             fade_strength4(_mm256_add_pd(_mm256_mul_pd(u, num1), _mm256_mul_pd(z, num2)),
                            _mm256_add_pd(_mm256_mul_pd(u, den1), _mm256_mul_pd(z, den2)), vfade));
     }
     if (fade) {
-      _mm_store_ps(st[0], fade_strength4(num1, den1, vfade));
-      _mm_store_ps(st[3], fade_strength4(num2, den2, vfade));
+      _mm_store_ps(lp.st[0], fade_strength4(num1, den1, vfade));
+      _mm_store_ps(lp.st[3], fade_strength4(num2, den2, vfade));
     }
     _mm256_store_pd(lo[0], e1.lo);
     _mm256_store_pd(hi[0], e1.hi);
@@ -555,28 +590,18 @@ template <class Num>
     for (; emit; emit &= emit - 1) {
       const int l = std::countr_zero(static_cast<unsigned>(emit));
       const std::size_t f = list[j + l];
-      const int vl[3] = {v[0][l], v[1][l], v[2][l]};
-      ScalarEnd p[4];  // p1, clip at z1, clip at z2, p2
-      for (int i = 0; i < 4; ++i) {
-        for (int k = 0; k < 3; ++k) {
-          p[i].bary[k] = bary[i][k][l];
-          p[i].pos[k] = at[i][k][l];
-        }
-        p[i].strength = fade ? st[i][l] : 1.0f;
-      }
-      for (int i = 0; i < 2; ++i) {
-        ScalarEnd& e = p[3 * i];
-        e.element = topo.face_edge(f, 3 - int(lo[i][l]) - int(hi[i][l]));
-        e.kind = EndKind::edge;
-        p[1 + i].element = -1;
-        p[1 + i].kind = EndKind::interior;
-      }
-      // The clip points at the nonzero ones of z1, z2, in this order.
-      ScalarEnd q[2];
-      int nq = 0;
-      for (int i = 0; i < 2; ++i)
-        if (zv[i][l] != 0.0) q[nq++] = p[1 + i];
-      emit_points(in, f, vl, valid_bits >> l & 1, p[0], q, nq, p[3], out);
+      lp.el[0] = topo.face_edge(f, 3 - int(lo[0][l]) - int(hi[0][l]));
+      lp.el[3] = topo.face_edge(f, 3 - int(lo[1][l]) - int(hi[1][l]));
+      // emit_points' order: p1 when valid, the clip points at the nonzero
+      // ones of z1, z2, p2 when the count is odd; consumed in pairs.
+      int pts[4], npts = 0;
+      if (valid_bits >> l & 1) pts[npts++] = 0;
+      if (zv[0][l] != 0.0) pts[npts++] = 1;
+      if (zv[1][l] != 0.0) pts[npts++] = 2;
+      if (npts != 2) pts[npts++] = 3;
+      const auto fi = static_cast<std::int32_t>(f);
+      for (int i = 0; i + 1 < npts; i += 2)
+        out.emplace_back(LaneSegment{lp, fi, l, pts[i], pts[i + 1]});
     }
   }
 }
@@ -617,6 +642,14 @@ struct ScalarBatch {
     }
   }
   void flush() {
+#if defined(FABRICA_LINES_AVX2)
+    // The SIMD kernel tests every face itself, the test function included.
+    if (!in.mag && detail::cpu_has_avx2()) {
+      scalar_faces_avx2(in, num, batch.face, batch.n, part);
+      batch.n = 0;
+      return;
+    }
+#endif
     const Face* faces = in.m.faces;
     std::size_t keep[CandidateBatch::kSize];
     int nk = 0;
@@ -642,12 +675,6 @@ struct ScalarBatch {
       nk += int(!reject);
     }
     batch.n = 0;
-#if defined(FABRICA_LINES_AVX2)
-    if (!in.mag && detail::cpu_has_avx2()) {
-      scalar_faces_avx2(in, num, keep, nk, part);
-      return;
-    }
-#endif
     for (int k = 0; k < nk; ++k) scalar_face(in, num, keep[k], part);
   }
 };
