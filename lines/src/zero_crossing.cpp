@@ -4,6 +4,7 @@
 #include <array>
 #include <bit>
 #include <cmath>
+#include <cstring>
 
 #include "fabrica/core/error.hpp"
 #include "parallel.hpp"
@@ -776,6 +777,23 @@ inline bool two_crossings(unsigned z) {
   return (0xE8u >> (z & 7)) & 1;
 }
 
+// The kept faces of a packed chunk (at least two crossing edges) and
+// their crossing bits.
+struct KeptFaces {
+  std::uint32_t f[detail::kFaceChunk];
+  std::uint8_t z[detail::kFaceChunk];
+  std::size_t n = 0;
+};
+
+// Appends face f with crossing bits z to `kept` when two edges cross (no
+// branch), and prefetches its edges for the segments.
+inline void keep_if_crossed(std::uint32_t f, unsigned z, const Topology& topo, KeptFaces& kept) {
+  kept.f[kept.n] = f;
+  kept.z[kept.n] = static_cast<std::uint8_t>(z);
+  __builtin_prefetch(topo.face_edge_row(f));
+  kept.n += two_crossings(z);
+}
+
 #if defined(FABRICA_LINES_AVX2)
 // E (x, y, z) of four vertices from their records (ApparentVertex, whose
 // first four doubles are E and D_t1 q1), one lane each.
@@ -787,41 +805,74 @@ inline bool two_crossings(unsigned z) {
              _mm256_load_pd(E + std::size_t(d) * kApparentStride), e);
 }
 
-// Lane bits where E_a·E_b <= 0 (Eigen's dot order).
-[[gnu::target("avx2"), gnu::always_inline]] inline int dot_le0(const __m256d a[4],
-                                                               const __m256d b[4]) {
-  return _mm256_movemask_pd(_mm256_cmp_pd(detail::dot4(a[0], a[1], a[2], b[0], b[1], b[2]),
-                                          _mm256_setzero_pd(), _CMP_LE_OQ));
+// For each 4-bit lane mask: the byte shuffle that packs the selected 32-bit
+// lanes of a 128-bit register to the front, and the one that packs their
+// low bytes (unused bytes zeroed).
+struct PackTables {
+  std::array<std::array<std::uint8_t, 16>, 16> lanes{}, low_bytes{};
+};
+constexpr PackTables kPack4 = [] {
+  PackTables t;
+  for (unsigned m = 0; m < 16; ++m) {
+    for (auto& b : t.lanes[m]) b = 0x80;
+    for (auto& b : t.low_bytes[m]) b = 0x80;
+    unsigned n = 0;
+    for (unsigned l = 0; l < 4; ++l) {
+      if (!(m >> l & 1)) continue;
+      for (unsigned b = 0; b < 4; ++b) t.lanes[m][4 * n + b] = static_cast<std::uint8_t>(4 * l + b);
+      t.low_bytes[m][n] = static_cast<std::uint8_t>(4 * l);
+      ++n;
+    }
+  }
+  return t;
+}();
+
+// Lanes where E_a·E_b <= 0 (Eigen's dot order), as a compare mask.
+[[gnu::target("avx2"), gnu::always_inline]] inline __m256d dot_le0(const __m256d a[4],
+                                                                   const __m256d b[4]) {
+  return _mm256_cmp_pd(detail::dot4(a[0], a[1], a[2], b[0], b[1], b[2]), _mm256_setzero_pd(),
+                       _CMP_LE_OQ);
 }
 
-[[gnu::target("avx2")]] void crossing_bits_avx2(const Face* faces, const std::uint32_t* face, int n,
-                                                const double* E, std::uint8_t* out) {
+// keep_if_crossed for n listed faces, four at a time: the crossing bits
+// from the four faces' records in lanes, and the faces with two crossings
+// packed onto the end of `kept`, in order, through kPack4 (writing four
+// entries: `kept` has room, holding fewer faces than were listed).
+[[gnu::target("avx2")]] void keep_crossed_avx2(const Face* faces, const std::uint32_t* face, int n,
+                                               const double* E, const Topology& topo,
+                                               KeptFaces& kept) {
+  const __m256i bit[3] = {_mm256_set1_epi64x(1), _mm256_set1_epi64x(2), _mm256_set1_epi64x(4)};
+  const __m256i low32 = _mm256_setr_epi32(0, 2, 4, 6, 0, 2, 4, 6);
   int k = 0;
   for (; k + 4 <= n; k += 4) {
     const Face &f0 = faces[face[k]], &f1 = faces[face[k + 1]], &f2 = faces[face[k + 2]],
                &f3 = faces[face[k + 3]];
+    for (int l = 0; l < 4; ++l) __builtin_prefetch(topo.face_edge_row(face[k + l]));
     __m256d e[3][4];
     for (int c = 0; c < 3; ++c) load_field4(E, f0[c], f1[c], f2[c], f3[c], e[c]);
-    const int m01 = dot_le0(e[0], e[1]), m12 = dot_le0(e[1], e[2]), m20 = dot_le0(e[2], e[0]);
-    for (int l = 0; l < 4; ++l)
-      out[k + l] = static_cast<std::uint8_t>(((m01 >> l) & 1) | ((m12 >> l) & 1) << 1 |
-                                             ((m20 >> l) & 1) << 2);
+    const __m256d c01 = dot_le0(e[0], e[1]), c12 = dot_le0(e[1], e[2]), c20 = dot_le0(e[2], e[0]);
+    const __m256d two = _mm256_or_pd(_mm256_or_pd(_mm256_and_pd(c01, c12), _mm256_and_pd(c12, c20)),
+                                     _mm256_and_pd(c20, c01));
+    const unsigned m = static_cast<unsigned>(_mm256_movemask_pd(two));
+    if (!m) continue;
+    const __m256i z =
+        _mm256_or_si256(_mm256_or_si256(_mm256_and_si256(_mm256_castpd_si256(c01), bit[0]),
+                                        _mm256_and_si256(_mm256_castpd_si256(c12), bit[1])),
+                        _mm256_and_si256(_mm256_castpd_si256(c20), bit[2]));
+    const __m128i z32 = _mm256_castsi256_si128(_mm256_permutevar8x32_epi32(z, low32));
+    const __m128i idx = _mm_loadu_si128(reinterpret_cast<const __m128i*>(face + k));
+    _mm_storeu_si128(
+        reinterpret_cast<__m128i*>(kept.f + kept.n),
+        _mm_shuffle_epi8(
+            idx, _mm_loadu_si128(reinterpret_cast<const __m128i*>(kPack4.lanes[m].data()))));
+    const int zb = _mm_cvtsi128_si32(_mm_shuffle_epi8(
+        z32, _mm_loadu_si128(reinterpret_cast<const __m128i*>(kPack4.low_bytes[m].data()))));
+    std::memcpy(kept.z + kept.n, &zb, 4);
+    kept.n += static_cast<std::size_t>(std::popcount(m));
   }
-  for (; k < n; ++k) out[k] = static_cast<std::uint8_t>(crossing_bits_of(faces[face[k]], E));
+  for (; k < n; ++k) keep_if_crossed(face[k], crossing_bits_of(faces[face[k]], E), topo, kept);
 }
 #endif
-
-inline void crossing_bits(const Face* faces, const std::uint32_t* face, int n, const double* E,
-                          std::uint8_t* out) {
-#if defined(FABRICA_LINES_AVX2)
-  if (detail::cpu_has_avx2()) {
-    crossing_bits_avx2(faces, face, n, E, out);
-    return;
-  }
-#endif
-  for (int k = 0; k < n; ++k)
-    out[k] = static_cast<std::uint8_t>(crossing_bits_of(faces[face[k]], E));
-}
 
 // One face of fused_crossings' scan: appended to the contour candidates
 // (cc), the suggestive ones (sc) and the listed faces (lf) as it passes
@@ -1204,14 +1255,6 @@ template <bool ToCenter>
   vector_face_segments(in, f, v, E, z, out);
 }
 
-// The kept faces of a packed chunk (at least two crossing edges) and
-// their crossing bits.
-struct KeptFaces {
-  std::uint32_t f[detail::kFaceChunk];
-  std::uint8_t z[detail::kFaceChunk];
-  std::size_t n = 0;
-};
-
 // vector_face_segments for the kept faces, one at a time.
 void kept_segments_scalar(const VectorInputs& in, const double* field, const KeptFaces& kept,
                           std::vector<LineSegment>& out) {
@@ -1440,15 +1483,14 @@ void packed_chunk(const VectorInputs& in, const double* field, const std::uint8_
   for (std::size_t j = 0; j < nc; j += kb) {
     const std::size_t je = std::min(nc, j + kb);
     prefetch(je, std::min(nc, je + kb));
-    std::uint8_t zb[kb];
-    crossing_bits(faces, cand + j, static_cast<int>(je - j), field, zb);
-    for (std::size_t k = j; k < je; ++k) {
-      const unsigned z = zb[k - j];
-      kept.f[kept.n] = cand[k];
-      kept.z[kept.n] = static_cast<std::uint8_t>(z);
-      __builtin_prefetch(topo.face_edge_row(cand[k]));
-      kept.n += two_crossings(z);
+#if defined(FABRICA_LINES_AVX2)
+    if (detail::cpu_has_avx2()) {
+      keep_crossed_avx2(faces, cand + j, static_cast<int>(je - j), field, topo, kept);
+      continue;
     }
+#endif
+    for (std::size_t k = j; k < je; ++k)
+      keep_if_crossed(cand[k], crossing_bits_of(faces[cand[k]], field), topo, kept);
   }
 #if defined(FABRICA_LINES_AVX2)
   if (detail::cpu_has_avx2()) {
