@@ -1405,46 +1405,56 @@ struct Cut4 {
     for (int l = 0; l < lanes; ++l) centroid |= int(kept.z[j + l] == 7) << l;
     const int emit = ((~_mm256_movemask_pd(reject) & ((1 << lanes) - 1)) | centroid);
     if (!emit) continue;
-    // ridge_strength for both ends.
-    alignas(32) double sa4[4], sb4[4], t_a[4], t_b[4], m_a[4], m_b[4], xa[3][4], xb[3][4];
-    const bool fade = sp.raw || sp.threshold > 0.0;
+    // The ends as LanePoints 0 (a) and 3 (b): set_edge_end's barycentrics
+    // (1 - t at the lower corner, t at the upper), the points, and
+    // ridge_strength.
+    LanePoints lp;
+    lp.fade = sp.raw || sp.threshold > 0.0;
     if (sp.raw) {
-      _mm256_store_pd(sa4, a.m);
-      _mm256_store_pd(sb4, b.m);
-    } else if (fade) {
-      _mm256_store_pd(sa4, _mm256_div_pd(a.k, _mm256_add_pd(a.k, th)));
-      _mm256_store_pd(sb4, _mm256_div_pd(b.k, _mm256_add_pd(b.k, th)));
+      _mm_store_ps(lp.st[0], _mm256_cvtpd_ps(a.m));
+      _mm_store_ps(lp.st[3], _mm256_cvtpd_ps(b.m));
+    } else if (lp.fade) {
+      _mm_store_ps(lp.st[0], _mm256_cvtpd_ps(_mm256_div_pd(a.k, _mm256_add_pd(a.k, th))));
+      _mm_store_ps(lp.st[3], _mm256_cvtpd_ps(_mm256_div_pd(b.k, _mm256_add_pd(b.k, th))));
     }
-    _mm256_store_pd(t_a, a.t);
-    _mm256_store_pd(t_b, b.t);
-    _mm256_store_pd(m_a, a.m);
-    _mm256_store_pd(m_b, b.m);
+    const __m256d corner[3] = {zero, _mm256_set1_pd(1.0), _mm256_set1_pd(2.0)};
+    __m256d c[3];  // the corner numbers c0, c1, c2
+    for (int o = 0; o < 3; ++o)
+      c[o] = select3(r1, r2, corner[o], corner[(o + 1) % 3], corner[(o + 2) % 3]);
+    const __m256d alo = when(swap_a, c[1], c[0]), ahi = when(swap_a, c[0], c[1]);
+    const __m256d blo = when(swap_b, c[2], c[1]), bhi = when(swap_b, c[1], c[2]);
+    const __m256d one = _mm256_set1_pd(1.0);
+    const __m256d ua = _mm256_sub_pd(one, a.t), ub = _mm256_sub_pd(one, b.t);
     for (int k = 0; k < 3; ++k) {
-      _mm256_store_pd(xa[k], a.p[k]);
-      _mm256_store_pd(xb[k], b.p[k]);
+      _mm256_store_pd(lp.bary[0][k],
+                      when(_mm256_cmp_pd(alo, corner[k], _CMP_EQ_OQ), ua,
+                           when(_mm256_cmp_pd(ahi, corner[k], _CMP_EQ_OQ), a.t, zero)));
+      _mm256_store_pd(lp.bary[3][k],
+                      when(_mm256_cmp_pd(blo, corner[k], _CMP_EQ_OQ), ub,
+                           when(_mm256_cmp_pd(bhi, corner[k], _CMP_EQ_OQ), b.t, zero)));
+      _mm256_store_pd(lp.at[0][k], a.p[k]);
+      _mm256_store_pd(lp.at[3][k], b.p[k]);
     }
+    // The edge slot 3 - lo - hi of each end.
+    alignas(16) std::int32_t slot[2][4];
+    const __m256d three = _mm256_set1_pd(3.0);
+    _mm_store_si128(reinterpret_cast<__m128i*>(slot[0]),
+                    _mm256_cvtpd_epi32(_mm256_sub_pd(_mm256_sub_pd(three, alo), ahi)));
+    _mm_store_si128(reinterpret_cast<__m128i*>(slot[1]),
+                    _mm256_cvtpd_epi32(_mm256_sub_pd(_mm256_sub_pd(three, blo), bhi)));
     for (int bits = emit; bits; bits &= bits - 1) {
       const int l = std::countr_zero(static_cast<unsigned>(bits));
       const std::size_t f = kept.f[j + l];
-      const Face& fg = faces[f];
-      const unsigned z = kept.z[j + l];
       if (centroid >> l & 1) {
+        const Face& fg = faces[f];
         const int vv[3] = {fg[0], fg[1], fg[2]};
         const Vec3 E[3] = {field_at(field, fg[0]), field_at(field, fg[1]), field_at(field, fg[2])};
         vector_centroid_segments(in, sp, f, vv, E, out);
         continue;
       }
-      const int c0 = first_corner(z), c1 = next_corner(c0), c2 = next_corner(c1);
-      const bool sa = fg[c0] > fg[c1], sb = fg[c1] > fg[c2];
-      const int alo = sa ? c1 : c0, ahi = sa ? c0 : c1, blo = sb ? c2 : c1, bhi = sb ? c1 : c2;
-      const EdgeCut ca{alo, ahi, std::size_t(fg[alo]), std::size_t(fg[ahi]), t_a[l], m_a[l]};
-      const EdgeCut cb{blo, bhi, std::size_t(fg[blo]), std::size_t(fg[bhi]), t_b[l], m_b[l]};
-      const double pa[3] = {xa[0][l], xa[1][l], xa[2][l]};
-      const double pb[3] = {xb[0][l], xb[1][l], xb[2][l]};
-      const auto fi = static_cast<std::int32_t>(f);
-      out.emplace_back(SegmentRecord<false>{
-          fi, ca, cb, pa, pb, topo.face_edge(f, 3 - alo - ahi), topo.face_edge(f, 3 - blo - bhi),
-          fade ? static_cast<float>(sa4[l]) : 1.0f, fade ? static_cast<float>(sb4[l]) : 1.0f});
+      lp.el[0] = topo.face_edge(f, slot[0][l]);
+      lp.el[3] = topo.face_edge(f, slot[1][l]);
+      out.emplace_back(LaneSegment{lp, static_cast<std::int32_t>(f), l, 0, 3});
     }
   }
 }
