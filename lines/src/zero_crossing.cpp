@@ -609,10 +609,12 @@ template <class Num>
 #endif
 
 // Candidates of one family in a scan over the sign bytes: batched with
-// their corners prefetched; at a flush, scalar_face's test-function
-// rejection (N <= 0 at every corner, or N/D <= 0 at every corner) is
-// evaluated for the whole batch without branches and compacted, and
-// scalar_face (which repeats it) runs on the survivors.
+// their corners prefetched; at a flush, the batch goes to
+// scalar_faces_avx2 (four faces at a time), or, without AVX2,
+// scalar_face's test-function rejection (N <= 0 at every corner, or
+// N/D <= 0 at every corner) is evaluated for the whole batch without
+// branches and compacted, and scalar_face (which repeats it) runs on the
+// survivors.
 template <class Num>
 struct ScalarBatch {
   const ScalarInputs& in;
