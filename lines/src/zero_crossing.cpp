@@ -402,6 +402,25 @@ struct Edge4 {
   return e;
 }
 
+// An edge end's barycentrics per lane (u at corner lo, t at corner hi, 0
+// at the third; edge_end and set_edge_end), and its edge's slot in the
+// face, 3 - lo - hi.
+[[gnu::target("avx2"), gnu::always_inline]] inline void edge_bary4(__m256d lo, __m256d hi,
+                                                                   __m256d t, __m256d u,
+                                                                   __m256d bary[3]) {
+  const __m256d zero = _mm256_setzero_pd();
+  for (int k = 0; k < 3; ++k) {
+    const __m256d ck = _mm256_set1_pd(double(k));
+    bary[k] = when(_mm256_cmp_pd(lo, ck, _CMP_EQ_OQ), u,
+                   when(_mm256_cmp_pd(hi, ck, _CMP_EQ_OQ), t, zero));
+  }
+}
+[[gnu::target("avx2"), gnu::always_inline]] inline void edge_slot4(__m256d lo, __m256d hi,
+                                                                   std::int32_t slot[4]) {
+  _mm_storeu_si128(reinterpret_cast<__m128i*>(slot),
+                   _mm256_cvtpd_epi32(_mm256_sub_pd(_mm256_sub_pd(_mm256_set1_pd(3.0), lo), hi)));
+}
+
 // The four points of scalar_faces_avx2's lanes (p1, the clips at z1 and
 // z2, p2): barycentrics and positions per component and lane, strengths,
 // and the edge ends' elements (of the lane being written).
@@ -429,8 +448,8 @@ struct LaneSegment {
 };
 
 // scalar_face_body for the listed faces (no magnitude threshold), four at
-// a time: each lane evaluates
-// its expressions in the same operations (so the same bits), the points
+// a time: each lane evaluates its expressions in the same operations (so
+// the same bits), the points
 // and strengths of all four faces without branches; the segments are then
 // written lane by lane, in face order, as scalar_face_body writes them.
 template <class Num>
@@ -546,15 +565,13 @@ template <class Num>
     // The ends' barycentrics (u at lo, t at hi, 0 at the third corner),
     // the clip points at z1 and z2, and the strengths.
     __m256d b1[3], b2[3];
-    for (int k = 0; k < 3; ++k) {
-      const __m256d ck = _mm256_set1_pd(double(k));
-      b1[k] = when(_mm256_cmp_pd(e1.lo, ck, _CMP_EQ_OQ), e1.u,
-                   when(_mm256_cmp_pd(e1.hi, ck, _CMP_EQ_OQ), e1.t, zero));
-      b2[k] = when(_mm256_cmp_pd(e2.lo, ck, _CMP_EQ_OQ), e2.u,
-                   when(_mm256_cmp_pd(e2.hi, ck, _CMP_EQ_OQ), e2.t, zero));
-    }
+    edge_bary4(e1.lo, e1.hi, e1.t, e1.u, b1);
+    edge_bary4(e2.lo, e2.hi, e2.t, e2.u, b2);
     LanePoints lp;
-    alignas(32) double zv[2][4], lo[2][4], hi[2][4];
+    alignas(32) double zv[2][4];
+    std::int32_t slot[2][4];
+    edge_slot4(e1.lo, e1.hi, slot[0]);
+    edge_slot4(e2.lo, e2.hi, slot[1]);
     lp.fade = fade;
     for (int k = 0; k < 3; ++k) {
       _mm256_store_pd(lp.bary[0][k], b1[k]);
@@ -582,17 +599,13 @@ template <class Num>
       _mm_store_ps(lp.st[0], fade_strength4(num1, den1, vfade));
       _mm_store_ps(lp.st[3], fade_strength4(num2, den2, vfade));
     }
-    _mm256_store_pd(lo[0], e1.lo);
-    _mm256_store_pd(hi[0], e1.hi);
-    _mm256_store_pd(lo[1], e2.lo);
-    _mm256_store_pd(hi[1], e2.hi);
     const int valid_bits = _mm256_movemask_pd(valid1);
     const Topology& topo = *in.m.topo;
     for (; emit; emit &= emit - 1) {
       const int l = std::countr_zero(static_cast<unsigned>(emit));
       const std::size_t f = list[j + l];
-      lp.el[0] = topo.face_edge(f, 3 - int(lo[0][l]) - int(hi[0][l]));
-      lp.el[3] = topo.face_edge(f, 3 - int(lo[1][l]) - int(hi[1][l]));
+      lp.el[0] = topo.face_edge(f, slot[0][l]);
+      lp.el[3] = topo.face_edge(f, slot[1][l]);
       // emit_points' order: p1 when valid, the clip points at the nonzero
       // ones of z1, z2, p2 when the count is odd; consumed in pairs.
       int pts[4], npts = 0;
@@ -782,7 +795,7 @@ inline bool two_crossings(unsigned z) {
 // The kept faces of a packed chunk (at least two crossing edges) and
 // their crossing bits.
 struct KeptFaces {
-  std::uint32_t f[detail::kFaceChunk];
+  std::uint32_t f[detail::kFaceChunk + 8];  // + 8: keep_crossed_avx2 writes eight lanes
   std::uint8_t z[detail::kFaceChunk];
   std::size_t n = 0;
 };
@@ -807,27 +820,33 @@ inline void keep_if_crossed(std::uint32_t f, unsigned z, const Topology& topo, K
              _mm256_load_pd(E + std::size_t(d) * kApparentStride), e);
 }
 
-// For each 4-bit lane mask: the byte shuffle that packs the selected 32-bit
-// lanes of a 128-bit register to the front, and the one that packs their
-// low bytes (unused bytes zeroed).
-struct PackTables {
-  std::array<std::array<std::uint8_t, 16>, 16> lanes{}, low_bytes{};
-};
-constexpr PackTables kPack4 = [] {
-  PackTables t;
-  for (unsigned m = 0; m < 16; ++m) {
-    for (auto& b : t.lanes[m]) b = 0x80;
-    for (auto& b : t.low_bytes[m]) b = 0x80;
-    unsigned n = 0;
-    for (unsigned l = 0; l < 4; ++l) {
-      if (!(m >> l & 1)) continue;
-      for (unsigned b = 0; b < 4; ++b) t.lanes[m][4 * n + b] = static_cast<std::uint8_t>(4 * l + b);
-      t.low_bytes[m][n] = static_cast<std::uint8_t>(4 * l);
-      ++n;
-    }
+// For each 8-bit mask, the indices of its set bits in ascending order, one
+// byte each (unused bytes 0): the lane permutation that packs the selected
+// lanes to the front.
+constexpr std::array<std::uint64_t, 256> kPackLanes = [] {
+  std::array<std::uint64_t, 256> t{};
+  for (unsigned m = 0; m < 256; ++m) {
+    int n = 0;
+    for (unsigned l = 0; l < 8; ++l)
+      if (m >> l & 1) t[m] |= std::uint64_t{l} << (8 * n++);
   }
   return t;
 }();
+
+// Appends the lanes of `idx` selected by `mask` to out[n...] (writing all
+// eight lanes: out needs room for eight past n) and advances n.
+// The permutation of kPackLanes[mask] as a vpermd index vector.
+[[gnu::target("avx2"), gnu::always_inline]] inline __m256i pack_lanes(unsigned mask) {
+  return _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kPackLanes[mask])));
+}
+
+[[gnu::target("avx2"), gnu::always_inline]] inline void append_lanes(__m256i idx, unsigned mask,
+                                                                     std::uint32_t* out,
+                                                                     std::size_t& n) {
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + n),
+                      _mm256_permutevar8x32_epi32(idx, pack_lanes(mask)));
+  n += static_cast<std::size_t>(std::popcount(mask));
+}
 
 // Lanes where E_a·E_b <= 0 (Eigen's dot order), as a compare mask.
 [[gnu::target("avx2"), gnu::always_inline]] inline __m256d dot_le0(const __m256d a[4],
@@ -838,13 +857,16 @@ constexpr PackTables kPack4 = [] {
 
 // keep_if_crossed for n listed faces, four at a time: the crossing bits
 // from the four faces' records in lanes, and the faces with two crossings
-// packed onto the end of `kept`, in order, through kPack4 (writing four
-// entries: `kept` has room, holding fewer faces than were listed).
+// packed onto the end of `kept`, in order, through kPackLanes (writing
+// eight indices and four bytes; `kept` holds at most the faces before
+// these four, and KeptFaces::f has eight entries of room past them).
 [[gnu::target("avx2")]] void keep_crossed_avx2(const Face* faces, const std::uint32_t* face, int n,
                                                const double* E, const Topology& topo,
                                                KeptFaces& kept) {
   const __m256i bit[3] = {_mm256_set1_epi64x(1), _mm256_set1_epi64x(2), _mm256_set1_epi64x(4)};
   const __m256i low32 = _mm256_setr_epi32(0, 2, 4, 6, 0, 2, 4, 6);
+  const __m128i low_bytes =
+      _mm_setr_epi8(0, 4, 8, 12, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1);
   int k = 0;
   for (; k + 4 <= n; k += 4) {
     const Face &f0 = faces[face[k]], &f1 = faces[face[k + 1]], &f2 = faces[face[k + 2]],
@@ -861,16 +883,15 @@ constexpr PackTables kPack4 = [] {
         _mm256_or_si256(_mm256_or_si256(_mm256_and_si256(_mm256_castpd_si256(c01), bit[0]),
                                         _mm256_and_si256(_mm256_castpd_si256(c12), bit[1])),
                         _mm256_and_si256(_mm256_castpd_si256(c20), bit[2]));
-    const __m128i z32 = _mm256_castsi256_si128(_mm256_permutevar8x32_epi32(z, low32));
-    const __m128i idx = _mm_loadu_si128(reinterpret_cast<const __m128i*>(face + k));
-    _mm_storeu_si128(
-        reinterpret_cast<__m128i*>(kept.f + kept.n),
-        _mm_shuffle_epi8(
-            idx, _mm_loadu_si128(reinterpret_cast<const __m128i*>(kPack4.lanes[m].data()))));
-    const int zb = _mm_cvtsi128_si32(_mm_shuffle_epi8(
-        z32, _mm_loadu_si128(reinterpret_cast<const __m128i*>(kPack4.low_bytes[m].data()))));
+    // The kept lanes' bits (the low byte of each lane's 32-bit word, packed
+    // as the face indices are) and face indices.
+    const __m256i z32 =
+        _mm256_permutevar8x32_epi32(_mm256_permutevar8x32_epi32(z, low32), pack_lanes(m));
+    const int zb = _mm_cvtsi128_si32(_mm_shuffle_epi8(_mm256_castsi256_si128(z32), low_bytes));
     std::memcpy(kept.z + kept.n, &zb, 4);
-    kept.n += static_cast<std::size_t>(std::popcount(m));
+    append_lanes(
+        _mm256_zextsi128_si256(_mm_loadu_si128(reinterpret_cast<const __m128i*>(face + k))), m,
+        kept.f, kept.n);
   }
   for (; k < n; ++k) keep_if_crossed(face[k], crossing_bits_of(faces[face[k]], E), topo, kept);
 }
@@ -893,30 +914,6 @@ inline void scan_face(const Face* faces, std::size_t f, const std::uint8_t* sg, 
 }
 
 #if defined(FABRICA_LINES_AVX2)
-// For each 8-bit mask, the indices of its set bits in ascending order, one
-// byte each (unused bytes 0): the lane permutation that packs the selected
-// lanes to the front.
-constexpr std::array<std::uint64_t, 256> kPackLanes = [] {
-  std::array<std::uint64_t, 256> t{};
-  for (unsigned m = 0; m < 256; ++m) {
-    int n = 0;
-    for (unsigned l = 0; l < 8; ++l)
-      if (m >> l & 1) t[m] |= std::uint64_t{l} << (8 * n++);
-  }
-  return t;
-}();
-
-// Appends the lanes of `idx` selected by `mask` to out[n...] (writing all
-// eight lanes: out needs room for eight past n) and advances n.
-[[gnu::target("avx2"), gnu::always_inline]] inline void append_lanes(__m256i idx, unsigned mask,
-                                                                     std::uint32_t* out,
-                                                                     std::size_t& n) {
-  const __m256i perm =
-      _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kPackLanes[mask])));
-  _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + n), _mm256_permutevar8x32_epi32(idx, perm));
-  n += static_cast<std::size_t>(std::popcount(mask));
-}
-
 // Lanes passing SignTest::pass for (any, all), as a bit mask.
 [[gnu::target("avx2"), gnu::always_inline]] inline unsigned pass_lanes(const SignTest& t,
                                                                        __m256i any, __m256i all) {
@@ -1421,29 +1418,22 @@ struct Cut4 {
     }
     const __m256d corner[3] = {zero, _mm256_set1_pd(1.0), _mm256_set1_pd(2.0)};
     __m256d c[3];  // the corner numbers c0, c1, c2
-    for (int o = 0; o < 3; ++o)
-      c[o] = select3(r1, r2, corner[o], corner[(o + 1) % 3], corner[(o + 2) % 3]);
+    rotate3(r1, r2, corner, c);
     const __m256d alo = when(swap_a, c[1], c[0]), ahi = when(swap_a, c[0], c[1]);
     const __m256d blo = when(swap_b, c[2], c[1]), bhi = when(swap_b, c[1], c[2]);
     const __m256d one = _mm256_set1_pd(1.0);
-    const __m256d ua = _mm256_sub_pd(one, a.t), ub = _mm256_sub_pd(one, b.t);
+    __m256d ba[3], bb[3];
+    edge_bary4(alo, ahi, a.t, _mm256_sub_pd(one, a.t), ba);
+    edge_bary4(blo, bhi, b.t, _mm256_sub_pd(one, b.t), bb);
     for (int k = 0; k < 3; ++k) {
-      _mm256_store_pd(lp.bary[0][k],
-                      when(_mm256_cmp_pd(alo, corner[k], _CMP_EQ_OQ), ua,
-                           when(_mm256_cmp_pd(ahi, corner[k], _CMP_EQ_OQ), a.t, zero)));
-      _mm256_store_pd(lp.bary[3][k],
-                      when(_mm256_cmp_pd(blo, corner[k], _CMP_EQ_OQ), ub,
-                           when(_mm256_cmp_pd(bhi, corner[k], _CMP_EQ_OQ), b.t, zero)));
+      _mm256_store_pd(lp.bary[0][k], ba[k]);
+      _mm256_store_pd(lp.bary[3][k], bb[k]);
       _mm256_store_pd(lp.at[0][k], a.p[k]);
       _mm256_store_pd(lp.at[3][k], b.p[k]);
     }
-    // The edge slot 3 - lo - hi of each end.
-    alignas(16) std::int32_t slot[2][4];
-    const __m256d three = _mm256_set1_pd(3.0);
-    _mm_store_si128(reinterpret_cast<__m128i*>(slot[0]),
-                    _mm256_cvtpd_epi32(_mm256_sub_pd(_mm256_sub_pd(three, alo), ahi)));
-    _mm_store_si128(reinterpret_cast<__m128i*>(slot[1]),
-                    _mm256_cvtpd_epi32(_mm256_sub_pd(_mm256_sub_pd(three, blo), bhi)));
+    std::int32_t slot[2][4];
+    edge_slot4(alo, ahi, slot[0]);
+    edge_slot4(blo, bhi, slot[1]);
     for (int bits = emit; bits; bits &= bits - 1) {
       const int l = std::countr_zero(static_cast<unsigned>(bits));
       const std::size_t f = kept.f[j + l];
