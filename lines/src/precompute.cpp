@@ -8,6 +8,7 @@
 #include "fabrica/core/error.hpp"
 #include "fabrica/lines/zero_crossing.hpp"
 #include "parallel.hpp"
+#include "zero_crossing_internal.hpp"
 
 namespace fabrica {
 
@@ -285,7 +286,9 @@ std::shared_ptr<const LinePrecompute::RawAbove> LinePrecompute::raw_above(LineFa
     default:
       throw Error(ErrorKind::internal, "raw_above: not a precomputed family");
   }
-  // The same t bit for bit (NaN included).
+  // A NaN or negative t would give NaN or out-of-range strengths.
+  detail::require_non_negative(t, family, "threshold (per feature size)");
+  // The same t bit for bit.
   auto same = [&](const std::shared_ptr<const RawAbove>& a) {
     return a && std::memcmp(&a->t, &t, sizeof t) == 0;
   };

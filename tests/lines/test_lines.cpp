@@ -238,6 +238,9 @@ TEST(Ridges, ThresholdListIsTheRawSegmentsAboveItAndExtractionUsesIt) {
                                              }};
       for (std::size_t k = 0; k < std::size(calls); ++k)
         EXPECT_THROW(calls[k](), InputError) << "function " << k << ", " << bad;
+      // The precomputed list itself (public API) refuses it too.
+      for (LineFamily fam : {LineFamily::ridge, LineFamily::valley, LineFamily::demarcating})
+        EXPECT_THROW((void)pre.raw_above(fam, bad), InputError) << family_name(fam) << ", " << bad;
       for (int k = 0; k < 10; ++k) {
         LineOptions o;
         o.families = all_families();

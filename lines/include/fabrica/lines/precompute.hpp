@@ -69,7 +69,8 @@ class LinePrecompute {
   /// t (each end's strength the fade (m - t)/m, rtsc's k/(k + t) with
   /// k = m - t; 1 for t = 0), and `corners` their faces' corners (for the
   /// per-view back-face culling): a view then copies runs of kept
-  /// segments instead of rebuilding each one.
+  /// segments instead of rebuilding each one. Throws InputError when t is
+  /// NaN, infinite or negative.
   struct RawAbove {
     double t = 0.0;
     std::vector<std::uint32_t> index;
