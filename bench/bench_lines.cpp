@@ -13,8 +13,9 @@
 // times the fields alone, and the BM_*PerView benchmarks time the whole
 // LineExtractor::extract(camera) (fields + extraction), which is what a new
 // camera costs (BM_PerViewReused: extract(camera, soups), recycling the
-// previous view's segment storage). Chaining and visibility are timed
-// separately.
+// previous view's segment storage; BM_PerViewOrbit: the same with a new
+// camera each iteration, turning about the model). Chaining and visibility
+// are timed separately.
 // Argument: TBB thread count.
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
@@ -200,6 +201,40 @@ void BM_PerViewReused(benchmark::State& state, std::vector<LineFamily> families)
   count_segments(state, soups);
 }
 
+// A turning view: LineExtractor::extract(camera, soups) with the v1 camera
+// swung about the vertical (its up axis, through its centre) in steps of
+// 15 degrees, a new azimuth each iteration (24 cameras, a full turn), so
+// no two consecutive views are alike, as when a user turns the model.
+void BM_PerViewOrbit(benchmark::State& state, std::vector<LineFamily> families) {
+  Fixture& f = fixture();
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
+                            static_cast<std::size_t>(state.range(0)));
+  std::vector<Camera> cameras;
+  const Vec3 axis = f.camera.up.normalized();
+  const Vec3 arm = f.camera.eye - f.camera.center;
+  for (int k = 0; k < 24; ++k) {
+    Camera c = f.camera;
+    const Eigen::AngleAxisd turn(k * 15.0 * 3.14159265358979323846 / 180.0, axis);
+    c.eye = f.camera.center + turn * arm;
+    cameras.push_back(c);
+  }
+  LineOptions o;
+  o.families = std::move(families);
+  o.feature_size = f.feature_size;
+  LineExtractor ex(*f.surface, o);
+  std::vector<SegmentSoup> soups;
+  for (const Camera& c : cameras) ex.extract(c, soups);
+  std::size_t k = 0, total = 0, views = 0;
+  for (auto _ : state) {
+    ex.extract(cameras[k], soups);
+    benchmark::DoNotOptimize(soups.data());
+    for (const auto& soup : soups) total += soup.segments.size();
+    ++views;
+    k = (k + 1) % cameras.size();
+  }
+  state.counters["segments"] = views ? static_cast<double>(total) / views : 0.0;
+}
+
 // Chaining the reference set's soups into polylines.
 void BM_Chain(benchmark::State& state) {
   Fixture& f = fixture();
@@ -295,6 +330,12 @@ void register_all() {
         ->UseRealTime();
     benchmark::RegisterBenchmark((std::string("BM_PerViewReused/") + set.name).c_str(),
                                  [fams](benchmark::State& s) { BM_PerViewReused(s, fams); })
+        ->Arg(1)
+        ->Arg(2)
+        ->Unit(ms)
+        ->UseRealTime();
+    benchmark::RegisterBenchmark((std::string("BM_PerViewOrbit/") + set.name).c_str(),
+                                 [fams](benchmark::State& s) { BM_PerViewOrbit(s, fams); })
         ->Arg(1)
         ->Arg(2)
         ->Unit(ms)
