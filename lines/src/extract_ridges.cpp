@@ -22,14 +22,13 @@ namespace {
 // run of consecutive kept segments is copied whole.
 SegmentSoup threshold_raw(const LinePrecompute& pre, LineFamily family, const ViewFields& fields,
                           double t, bool cull) {
-  detail::require_non_negative(t, family, "threshold (per feature size)");
   SegmentSoup soup;
   soup.family = family;
   const std::size_t nv = pre.surface().vertex_count();
   const bool do_cull = cull && fields.ndotv.size() == nv;
   const std::uint8_t* sg = fields.signs.size() == nv ? fields.signs.data() : nullptr;
   const double* ndotv = fields.ndotv.data();
-  const auto above = pre.raw_above(family, t);
+  const auto above = pre.raw_above(family, t);  // rejects a NaN or negative t
   const LineSegment* seg = above->segments.data();
   const auto* corners = above->corners.data();
   auto kept = [&](std::size_t i) {
