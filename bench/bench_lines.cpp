@@ -24,6 +24,7 @@
 #include <cstdio>
 #include <fstream>
 #include <memory>
+#include <numbers>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -184,40 +185,17 @@ void BM_PerView(benchmark::State& state, std::vector<LineFamily> families) {
 
 // The same, recycling the previous view's soups (extract(camera, soups)),
 // as a redraw loop would.
-void BM_PerViewReused(benchmark::State& state, std::vector<LineFamily> families) {
+// LineExtractor::extract(camera, soups) over `cameras` in turn, recycling
+// the previous view's storage. BM_PerViewReused: the v1 camera every time.
+// BM_PerViewOrbit: a turning view, the v1 camera swung about its up axis
+// (through its centre) in 15 degree steps (24 cameras, a full turn), so no
+// two consecutive views are alike, as when a user turns the model. The
+// counter is the mean segment count per view.
+void per_view_reused(benchmark::State& state, std::vector<LineFamily> families,
+                     const std::vector<Camera>& cameras) {
   Fixture& f = fixture();
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
                             static_cast<std::size_t>(state.range(0)));
-  LineOptions o;
-  o.families = std::move(families);
-  o.feature_size = f.feature_size;
-  LineExtractor ex(*f.surface, o);
-  std::vector<SegmentSoup> soups;
-  ex.extract(f.camera, soups);
-  for (auto _ : state) {
-    ex.extract(f.camera, soups);
-    benchmark::DoNotOptimize(soups.data());
-  }
-  count_segments(state, soups);
-}
-
-// A turning view: LineExtractor::extract(camera, soups) with the v1 camera
-// swung about the vertical (its up axis, through its centre) in steps of
-// 15 degrees, a new azimuth each iteration (24 cameras, a full turn), so
-// no two consecutive views are alike, as when a user turns the model.
-void BM_PerViewOrbit(benchmark::State& state, std::vector<LineFamily> families) {
-  Fixture& f = fixture();
-  tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
-                            static_cast<std::size_t>(state.range(0)));
-  std::vector<Camera> cameras;
-  const Vec3 axis = f.camera.up.normalized();
-  const Vec3 arm = f.camera.eye - f.camera.center;
-  for (int k = 0; k < 24; ++k) {
-    Camera c = f.camera;
-    const Eigen::AngleAxisd turn(k * 15.0 * 3.14159265358979323846 / 180.0, axis);
-    c.eye = f.camera.center + turn * arm;
-    cameras.push_back(c);
-  }
   LineOptions o;
   o.families = std::move(families);
   o.feature_size = f.feature_size;
@@ -233,6 +211,23 @@ void BM_PerViewOrbit(benchmark::State& state, std::vector<LineFamily> families) 
     k = (k + 1) % cameras.size();
   }
   state.counters["segments"] = views ? static_cast<double>(total) / views : 0.0;
+}
+
+void BM_PerViewReused(benchmark::State& state, std::vector<LineFamily> families) {
+  per_view_reused(state, std::move(families), {fixture().camera});
+}
+
+void BM_PerViewOrbit(benchmark::State& state, std::vector<LineFamily> families) {
+  const Camera& v1 = fixture().camera;
+  const Vec3 axis = v1.up.normalized();
+  std::vector<Camera> cameras;
+  for (int k = 0; k < 24; ++k) {
+    Camera c = v1;
+    c.eye = v1.center +
+            Eigen::AngleAxisd(k * 15.0 * std::numbers::pi / 180.0, axis) * (v1.eye - v1.center);
+    cameras.push_back(c);
+  }
+  per_view_reused(state, std::move(families), cameras);
 }
 
 // Chaining the reference set's soups into polylines.
@@ -287,16 +282,21 @@ void BM_RenderDepth(benchmark::State& state) {
   }
 }
 
+// Registers a benchmark at 1 and 2 threads (its argument), in ms, wall clock.
+template <class Fn>
+void register_1t_2t(const std::string& name, Fn fn) {
+  benchmark::RegisterBenchmark(name.c_str(), fn)
+      ->Arg(1)
+      ->Arg(2)
+      ->Unit(benchmark::kMillisecond)
+      ->UseRealTime();
+}
+
 void register_all() {
-  const auto ms = benchmark::kMillisecond;
   for (int i = 0; i < kLineFamilyCount; ++i) {
     const auto fam = static_cast<LineFamily>(i);
-    benchmark::RegisterBenchmark((std::string("BM_Family/") + family_name(fam)).c_str(),
-                                 [fam](benchmark::State& s) { BM_Family(s, fam); })
-        ->Arg(1)
-        ->Arg(2)
-        ->Unit(ms)
-        ->UseRealTime();
+    register_1t_2t(std::string("BM_Family/") + family_name(fam),
+                   [fam](benchmark::State& s) { BM_Family(s, fam); });
   }
   const std::vector<LineFamily> cs = {LineFamily::contour, LineFamily::suggestive};
   const std::vector<LineFamily> pl = {LineFamily::pel, LineFamily::laplacian};
@@ -309,60 +309,24 @@ void register_all() {
        {Set{"reference_set", reference_set(), true, false},
         Set{"contour_suggestive", cs, false, false}, Set{"pel_laplacian", pl, false, true}}) {
     const auto fams = set.families;
-    benchmark::RegisterBenchmark((std::string("BM_SetFamiliesOnly/") + set.name).c_str(),
-                                 [fams](benchmark::State& s) { BM_SetFamiliesOnly(s, fams); })
-        ->Arg(1)
-        ->Arg(2)
-        ->Unit(ms)
-        ->UseRealTime();
+    register_1t_2t(std::string("BM_SetFamiliesOnly/") + set.name,
+                   [fams](benchmark::State& s) { BM_SetFamiliesOnly(s, fams); });
     const bool ap = set.apparent, li = set.light;
-    benchmark::RegisterBenchmark((std::string("BM_ViewFields/") + set.name).c_str(),
-                                 [ap, li](benchmark::State& s) { BM_ViewFields(s, ap, li); })
-        ->Arg(1)
-        ->Arg(2)
-        ->Unit(ms)
-        ->UseRealTime();
-    benchmark::RegisterBenchmark((std::string("BM_PerView/") + set.name).c_str(),
-                                 [fams](benchmark::State& s) { BM_PerView(s, fams); })
-        ->Arg(1)
-        ->Arg(2)
-        ->Unit(ms)
-        ->UseRealTime();
-    benchmark::RegisterBenchmark((std::string("BM_PerViewReused/") + set.name).c_str(),
-                                 [fams](benchmark::State& s) { BM_PerViewReused(s, fams); })
-        ->Arg(1)
-        ->Arg(2)
-        ->Unit(ms)
-        ->UseRealTime();
-    benchmark::RegisterBenchmark((std::string("BM_PerViewOrbit/") + set.name).c_str(),
-                                 [fams](benchmark::State& s) { BM_PerViewOrbit(s, fams); })
-        ->Arg(1)
-        ->Arg(2)
-        ->Unit(ms)
-        ->UseRealTime();
+    register_1t_2t(std::string("BM_ViewFields/") + set.name,
+                   [ap, li](benchmark::State& s) { BM_ViewFields(s, ap, li); });
+    register_1t_2t(std::string("BM_PerView/") + set.name,
+                   [fams](benchmark::State& s) { BM_PerView(s, fams); });
+    register_1t_2t(std::string("BM_PerViewReused/") + set.name,
+                   [fams](benchmark::State& s) { BM_PerViewReused(s, fams); });
+    register_1t_2t(std::string("BM_PerViewOrbit/") + set.name,
+                   [fams](benchmark::State& s) { BM_PerViewOrbit(s, fams); });
   }
-  benchmark::RegisterBenchmark("BM_Chain/reference_set", BM_Chain)
-      ->Arg(1)
-      ->Arg(2)
-      ->Unit(ms)
-      ->UseRealTime();
-  benchmark::RegisterBenchmark("BM_Visibility/reference_set",
-                               [](benchmark::State& s) { BM_Visibility(s, true); })
-      ->Arg(1)
-      ->Arg(2)
-      ->Unit(ms)
-      ->UseRealTime();
-  benchmark::RegisterBenchmark("BM_VisibilityGivenDepth/reference_set",
-                               [](benchmark::State& s) { BM_Visibility(s, false); })
-      ->Arg(1)
-      ->Arg(2)
-      ->Unit(ms)
-      ->UseRealTime();
-  benchmark::RegisterBenchmark("BM_RenderDepth", BM_RenderDepth)
-      ->Arg(1)
-      ->Arg(2)
-      ->Unit(ms)
-      ->UseRealTime();
+  register_1t_2t("BM_Chain/reference_set", BM_Chain);
+  register_1t_2t("BM_Visibility/reference_set",
+                 [](benchmark::State& s) { BM_Visibility(s, true); });
+  register_1t_2t("BM_VisibilityGivenDepth/reference_set",
+                 [](benchmark::State& s) { BM_Visibility(s, false); });
+  register_1t_2t("BM_RenderDepth", BM_RenderDepth);
 }
 
 }  // namespace
