@@ -1,6 +1,6 @@
 // Per-view cost of the feature-line engine on a real scan: c3d_igea.ply
 // (134,345 vertices, 268,686 triangles), camera and feature size of the
-// reference view c3d_igea_v1 (../shared/reference/rtsc/index.tsv), image
+// reference view c3d_igea_v1 (tests/data: reference/rtsc/index.tsv), image
 // 1024x1024. Targets (issue 3, docs/PERFORMANCE.md): the set {contour,
 // suggestive, ridge, valley, apparent} <= 5 ms per view at 2 threads (rtsc
 // single-threaded ~25 ms, ~6 ms for contours + suggestive contours); PELs +

@@ -1,4 +1,4 @@
-// The reference view c3d_igea_v1 (../shared/reference/rtsc/index.tsv):
+// The reference view c3d_igea_v1 (tests/data: reference/rtsc/index.tsv):
 // rtsc's camera and feature size, shared by the line benchmarks.
 #pragma once
 
@@ -24,7 +24,7 @@ inline Camera igea_v1_camera() {
 
 inline constexpr double kIgeaV1FeatureSize = 0.000873700483;
 
-/// c3d_igea.ply from the shared data, prepared for lines.
+/// c3d_igea.ply from the bundled data, prepared for lines.
 inline std::unique_ptr<Surface> load_igea() {
   auto loaded = io::read_mesh(std::string(FABRICA_BENCH_DATA) + "/meshes/classic/c3d_igea.ply");
   TriangleMesh mesh = std::move(loaded.mesh);

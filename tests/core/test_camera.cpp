@@ -79,7 +79,7 @@ TEST(Camera, JsonRoundTripAndExtraKeysIgnored) {
 }
 
 TEST(Camera, ReadsTheHeaderOfAReferenceSegFile) {
-  const auto seg = test::shared_reference() / "rtsc" / "c3d_cow_v1.seg.xz";
+  const auto seg = test::bundled_reference() / "rtsc" / "c3d_cow_v1.seg.xz";
   ASSERT_TRUE(std::filesystem::exists(seg));
   const auto out = test::temp_dir("camera-seg") / "cow.seg";
   const std::string cmd = "xz -dc '" + seg.string() + "' | head -n 1 > '" + out.string() + "'";

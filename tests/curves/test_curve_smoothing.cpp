@@ -359,7 +359,7 @@ TEST(CurveSmoothing, DegenerateFacesDoNotProduceNaN) {
 // smoothed; the result stays a valid curve on the surface, never grows, and
 // loses most of its geodesic curvature.
 TEST(CurveSmoothing, HeartSectionOnRealMesh) {
-  const auto path = test::shared_data() / "meshes/anatomy/heart/sofa_coeur1.off";
+  const auto path = test::bundled_data() / "meshes/anatomy/heart/sofa_coeur1.off";
   if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " not found";
   const TriangleMesh mesh = test::read_off_triangles(path);
   ASSERT_EQ(mesh.face_count(), 15552u);

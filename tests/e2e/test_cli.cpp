@@ -225,11 +225,11 @@ std::string joined(const std::vector<std::string>& v) {
 }
 
 fs::path aneurysm() {
-  return test::shared_data() / "meshes" / "anatomy" / "vessels" / "sofa_aneurysm3D_1.off";
+  return test::bundled_data() / "meshes" / "anatomy" / "vessels" / "sofa_aneurysm3D_1.off";
 }
 
 fs::path totalseg() {
-  return test::shared_data() / "meshes" / "volumes" / "totalseg_example_seg.nii.gz";
+  return test::bundled_data() / "meshes" / "volumes" / "totalseg_example_seg.nii.gz";
 }
 
 /// The output file extension a command writes with -o.
@@ -713,7 +713,7 @@ TEST(Outputs, InterruptedWriteLeavesNoTemporary) {
   // SIGTERM while the CSV is being written (a 56 MB file for igea): the
   // process dies by the signal and leaves neither the target nor its temporary.
   if (!has_command("geometry")) GTEST_SKIP() << "no geometry command in this build";
-  const fs::path mesh = test::shared_data() / "meshes" / "classic" / "c3d_igea.ply";
+  const fs::path mesh = test::bundled_data() / "meshes" / "classic" / "c3d_igea.ply";
   if (!fs::exists(mesh)) GTEST_SKIP() << "no " << mesh;
   const fs::path dir = work_dir();
   const fs::path csv = dir / "igea.csv";

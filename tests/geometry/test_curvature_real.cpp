@@ -66,7 +66,7 @@ Jet jet_curvature(const Surface& s, std::size_t v) {
 }
 
 void compare_with_jets(const char* relative_path, double max_median, double max_p90) {
-  const auto path = test::shared_data() / relative_path;
+  const auto path = test::bundled_data() / relative_path;
   Surface s(io::read_mesh(path).mesh);
   const auto& curv = s.curvature();
   std::vector<double> scale_samples, diff;

@@ -93,7 +93,7 @@ std::unique_ptr<fr::Renderer> make_renderer() {
 // ------------------------------------------------------------- command
 
 fs::path aneurysm() {
-  return fabrica::test::shared_data() / "meshes" / "anatomy" / "vessels" / "sofa_aneurysm3D_1.off";
+  return fabrica::test::bundled_data() / "meshes" / "anatomy" / "vessels" / "sofa_aneurysm3D_1.off";
 }
 
 /// Runs the fabrica executable (arguments shell-quoted); returns its exit code.

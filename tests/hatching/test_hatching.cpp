@@ -162,7 +162,7 @@ ToneResult tone_correlation(const Surface& surface, const Camera& camera, const 
 }
 
 Surface load(const std::string& relative) {
-  return Surface(io::read_mesh(test::shared_data() / "meshes" / relative).mesh);
+  return Surface(io::read_mesh(test::bundled_data() / "meshes" / relative).mesh);
 }
 
 }  // namespace

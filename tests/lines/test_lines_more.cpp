@@ -321,7 +321,7 @@ bool same_bits(const Vec3& a, const Vec3& b) {
 }  // namespace
 
 TEST(LinesDeterminism, SameSegmentsAndLinesAtOneAndTwoThreads) {
-  const auto path = test::shared_data() / "meshes/anatomy/vessels/sofa_aneurysm3D_1.off";
+  const auto path = test::bundled_data() / "meshes/anatomy/vessels/sofa_aneurysm3D_1.off";
   TriangleMesh mesh = io::read_mesh(path).mesh;
   const RunOutput one = run_with_threads(1, mesh);
   const RunOutput two = run_with_threads(2, mesh);

@@ -90,7 +90,7 @@ TEST(PhoticSphere, PelsAndLaplacianLinesTraceTheTerminator) {
 // headlight and fixed light, several thresholds and views, with and
 // without back-face culling.
 TEST(PhoticSparseFields, SameSegmentsAsFieldsComputedEverywhere) {
-  auto loaded = io::read_mesh(test::shared_data() / "meshes/anatomy/bones/gfxmorph_femur.stl");
+  auto loaded = io::read_mesh(test::bundled_data() / "meshes/anatomy/bones/gfxmorph_femur.stl");
   TriangleMesh mesh = std::move(loaded.mesh);
   io::prepare_for_lines(mesh);
   Surface surface(std::move(mesh));

@@ -1,4 +1,4 @@
-// Fidelity against rtsc (../shared/reference/rtsc): for every reference file,
+// Fidelity against rtsc (the bundled tests/data/, reference/rtsc): for every reference file,
 // the same mesh, eye and feature size; contours, suggestive contours,
 // apparent ridges, ridges and valleys compared by length-weighted
 // precision/recall/F at 0.5% of the reference bounding-box diagonal,
@@ -28,7 +28,7 @@ struct Row {
 };
 
 std::vector<Row> run_reference(const std::vector<std::string>& only = {}) {
-  const auto ref_dir = test::shared_reference() / "rtsc";
+  const auto ref_dir = test::bundled_reference() / "rtsc";
   const auto entries = test::read_reference_index(ref_dir / "index.tsv");
   std::vector<Row> rows;
   std::string loaded_path;
@@ -37,7 +37,7 @@ std::vector<Row> run_reference(const std::vector<std::string>& only = {}) {
     if (!only.empty() && std::find(only.begin(), only.end(), e.file) == only.end()) continue;
     const SegFile ref = test::read_seg_xz(ref_dir / e.file);
     if (e.mesh_path != loaded_path) {
-      auto loaded = io::read_mesh(test::shared_data() / "meshes" / e.mesh_path);
+      auto loaded = io::read_mesh(test::bundled_data() / "meshes" / e.mesh_path);
       test::orient_like_reference(loaded.mesh);
       surface = std::make_unique<Surface>(std::move(loaded.mesh));
       surface->precompute();

@@ -467,7 +467,7 @@ LineSet smoothed_with_threads(int threads, const TriangleMesh& mesh) {
 }  // namespace
 
 TEST(LinesSmooth, SameBitsAtOneAndTwoThreads) {
-  const auto path = test::shared_data() / "meshes/anatomy/vessels/sofa_aneurysm3D_1.off";
+  const auto path = test::bundled_data() / "meshes/anatomy/vessels/sofa_aneurysm3D_1.off";
   TriangleMesh mesh = io::read_mesh(path).mesh;
   io::prepare_for_lines(mesh);
   const LineSet one = smoothed_with_threads(1, mesh);
@@ -482,7 +482,7 @@ TEST(LinesSmooth, SameBitsAtOneAndTwoThreads) {
 class LinesSmoothRealMesh : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(LinesSmoothRealMesh, EveryFamilySmoothsWithoutFailure) {
-  TriangleMesh mesh = io::read_mesh(test::shared_data() / "meshes" / GetParam()).mesh;
+  TriangleMesh mesh = io::read_mesh(test::bundled_data() / "meshes" / GetParam()).mesh;
   io::prepare_for_lines(mesh);
   Surface surface(mesh);
   const Camera cam = anatomical_camera(AnatomicalView::anterior, bounding_box(mesh.positions),

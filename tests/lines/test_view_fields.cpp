@@ -141,7 +141,7 @@ void expect_same_light_pass(const Surface& surface, const LinePrecompute& pre, c
 // faces are put first, so the first two blocks of four mix vertices with
 // invalid curvature and valid ones.
 Surface load(const char* rel, bool degenerate) {
-  auto loaded = io::read_mesh(test::shared_data() / rel);
+  auto loaded = io::read_mesh(test::bundled_data() / rel);
   io::prepare_for_lines(loaded.mesh);
   TriangleMesh mesh = std::move(loaded.mesh);
   if (degenerate) {

@@ -1,4 +1,4 @@
-// Reading the shared real meshes: counts from SOURCES.md / rtsc, agreement
+// Reading the bundled real meshes: counts from SOURCES.md / rtsc, agreement
 // with independent readers (OpenMesh, VTK), and read speed.
 #include <gtest/gtest.h>
 
@@ -26,7 +26,7 @@ namespace fabrica {
 namespace {
 
 std::filesystem::path mesh_path(const std::string& relative) {
-  return test::shared_data() / "meshes" / relative;
+  return test::bundled_data() / "meshes" / relative;
 }
 
 struct Expected {

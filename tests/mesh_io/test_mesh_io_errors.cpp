@@ -142,7 +142,7 @@ TEST_F(MalformedFiles, VtkFilesFailQuietly) {
                      "");
   // A truncated copy of a real file (this crashes vtkPolyDataReader).
   const std::string fran =
-      test::read_bytes(test::shared_data() / "meshes/classic/vtkdata_fran_cut.vtk");
+      test::read_bytes(test::bundled_data() / "meshes/classic/vtkdata_fran_cut.vtk");
   ASSERT_GT(fran.size(), 117480u);
   expect_input_error(file("truncated.vtk", fran.substr(0, 117480)), "");
   expect_input_error(file("truncated_points.vtk", fran.substr(0, 2000)), "truncated");

@@ -1,6 +1,6 @@
 // Neuroimaging surface formats: GIfTI (.gii, .gii.gz), MNI BIC .obj and
 // FreeSurfer binary surfaces. Real files agree with their OFF conversions in
-// shared/data (same vertex order and faces); files written here in every
+// the bundled data (same vertex order and faces); files written here in every
 // encoding/endianness/order read back exactly; malformed files give an
 // InputError naming the file.
 #include <gtest/gtest.h>
@@ -28,7 +28,7 @@ using test::read_bytes;
 using test::write_bytes;
 
 std::filesystem::path brain(const std::string& relative) {
-  return test::shared_data() / "meshes" / "anatomy" / "brain" / relative;
+  return test::bundled_data() / "meshes" / "anatomy" / "brain" / relative;
 }
 
 bool has_note(const io::MeshFileInfo& info, const std::string& fragment) {

@@ -246,7 +246,7 @@ TEST(GoldenImages, FocusAndContextScene) {
 }
 
 TEST(GoldenImages, FemurHybridApparentRidges) {
-  const fs::path femur = fabrica::test::shared_data() / "meshes/anatomy/bones/gfxmorph_femur.stl";
+  const fs::path femur = fabrica::test::bundled_data() / "meshes/anatomy/bones/gfxmorph_femur.stl";
   if (!fs::exists(femur)) GTEST_SKIP() << femur << " not present";
   const Loaded l = load(femur);
   const Camera cam = fabrica::anatomical_camera(AnatomicalView::anterior, l.box, l.space, 240, 320);

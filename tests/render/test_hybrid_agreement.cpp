@@ -49,7 +49,7 @@ fr::Renderer& renderer() {
 
 struct Case {
   const char* name;
-  const char* path;  // under shared_data()
+  const char* path;  // under bundled_data()
   fabrica::AnatomicalView view;
   double min_f;           // guard: a bit below the measured F
   double max_chamfer;     // guard: a bit above the measured chamfer distance (px)
@@ -176,7 +176,7 @@ Loaded load(const Case& c) {
   Loaded l;
   fabrica::io::ReadOptions ro;
   if (std::string(c.name) == "pial") ro.space = fabrica::Space::ras;  // FreeSurfer: RAS
-  auto file = fabrica::io::read_mesh(fabrica::test::shared_data() / c.path, ro);
+  auto file = fabrica::io::read_mesh(fabrica::test::bundled_data() / c.path, ro);
   fabrica::io::prepare_for_lines(file.mesh);
   const auto box = fabrica::bounding_box(file.mesh.positions);
   const auto space = file.mesh.space;

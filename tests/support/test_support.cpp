@@ -10,8 +10,8 @@
 
 namespace fabrica::test {
 
-std::filesystem::path shared_data() { return FABRICA_SHARED_DATA; }
-std::filesystem::path shared_reference() { return FABRICA_SHARED_REFERENCE; }
+std::filesystem::path bundled_data() { return FABRICA_TEST_MESHES; }
+std::filesystem::path bundled_reference() { return FABRICA_TEST_REFERENCE; }
 
 std::filesystem::path temp_dir(const std::string& name) {
   // ctest runs every test case as its own process, several at once: the

@@ -1,4 +1,4 @@
-// Helpers shared by the tests: where the shared data lives, analytic test
+// Helpers shared by the tests: where the bundled data lives, analytic test
 // surfaces (sphere, cylinder, torus, ellipsoid, plane) at any resolution.
 #pragma once
 
@@ -9,10 +9,11 @@
 
 namespace fabrica::test {
 
-/// ../shared/data (meshes/, SOURCES.md).
-std::filesystem::path shared_data();
-/// ../shared/reference.
-std::filesystem::path shared_reference();
+/// The bundled real data, unpacked from tests/data/ into the build folder:
+/// meshes/ (anatomy, classic, volumes; tests/data/SOURCES.md).
+std::filesystem::path bundled_data();
+/// The bundled reference lines: rtsc/ (index.tsv and NAME_vK.seg.xz).
+std::filesystem::path bundled_reference();
 /// A fresh empty temporary folder for one test (unique per process).
 std::filesystem::path temp_dir(const std::string& name);
 

@@ -44,7 +44,7 @@ CommandResult run_fabrica(const std::string& args) {
 }
 
 std::string aorta() {
-  return (test::shared_data() / "meshes/anatomy/vessels/vmtk_aorta-surface.stl").string();
+  return (test::bundled_data() / "meshes/anatomy/vessels/vmtk_aorta-surface.stl").string();
 }
 
 TEST(InfoCli, ReadableReportOfTheAorta) {

@@ -1,5 +1,5 @@
 // Validation of real meshes against the counts an independent pure-Python
-// checker measured (../shared/data/SOURCES.md), plus repair of the two known
+// checker measured (tests/data/SOURCES.md), plus repair of the two known
 // defective classics: the inward aorta and the cow's non-manifold vertex.
 #include <gtest/gtest.h>
 
@@ -43,7 +43,7 @@ class RealMesh : public ::testing::TestWithParam<Expected> {};
 
 TEST_P(RealMesh, CountsMatchTheIndependentChecker) {
   const Expected& e = GetParam();
-  const auto loaded = io::read_mesh(test::shared_data() / "meshes" / e.path);
+  const auto loaded = io::read_mesh(test::bundled_data() / "meshes" / e.path);
   const auto r = io::validate_mesh(loaded.mesh);
   EXPECT_EQ(r.vertices, e.vertices);
   EXPECT_EQ(r.faces, e.faces);
@@ -88,10 +88,10 @@ INSTANTIATE_TEST_SUITE_P(SharedData, RealMesh, ::testing::ValuesIn(kMeshes),
                          });
 
 TEST(RealMeshes, AortaIsClosedAndInwardUntilRepaired) {
-  // The reference lines (../shared/reference/README.md) were made after
+  // The reference lines (tests/data/SOURCES.md, reference lines) were made after
   // flipping every face of the welded aorta: its faces point inward.
   const auto loaded =
-      io::read_mesh(test::shared_data() / "meshes/anatomy/vessels/vmtk_aorta-surface.stl");
+      io::read_mesh(test::bundled_data() / "meshes/anatomy/vessels/vmtk_aorta-surface.stl");
   const auto r = io::validate_mesh(loaded.mesh);
   EXPECT_TRUE(r.closed);
   EXPECT_TRUE(r.consistently_oriented);
@@ -116,7 +116,7 @@ TEST(RealMeshes, AortaIsClosedAndInwardUntilRepaired) {
 }
 
 TEST(RealMeshes, CowNonManifoldVertexIsSplit) {
-  const auto loaded = io::read_mesh(test::shared_data() / "meshes/classic/c3d_cow.obj");
+  const auto loaded = io::read_mesh(test::bundled_data() / "meshes/classic/c3d_cow.obj");
   TriangleMesh m = loaded.mesh;
   const auto rep = io::repair_mesh(m);
   EXPECT_EQ(rep.split_nonmanifold_vertices, 1u);
@@ -128,7 +128,7 @@ TEST(RealMeshes, CowNonManifoldVertexIsSplit) {
 }
 
 TEST(RealMeshes, IgeaValidatesQuickly) {
-  const auto loaded = io::read_mesh(test::shared_data() / "meshes/classic/c3d_igea.ply");
+  const auto loaded = io::read_mesh(test::bundled_data() / "meshes/classic/c3d_igea.ply");
   io::validate_mesh(loaded.mesh);  // warm up
   const auto start = std::chrono::steady_clock::now();
   const auto r = io::validate_mesh(loaded.mesh);

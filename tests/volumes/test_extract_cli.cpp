@@ -34,7 +34,7 @@ CommandRun run_fabrica(const std::string& args, const std::filesystem::path& log
 }
 
 std::filesystem::path totalseg() {
-  return test::shared_data() / "meshes" / "volumes" / "totalseg_example_seg.nii.gz";
+  return test::bundled_data() / "meshes" / "volumes" / "totalseg_example_seg.nii.gz";
 }
 
 }  // namespace

@@ -1,4 +1,4 @@
-// Real volumes from ../shared/data/meshes/volumes: the TotalSegmentator
+// Real volumes from the bundled data (tests/data/, meshes/volumes): the TotalSegmentator
 // label map (NIfTI, sform, label-table extension), the frog label map
 // (MetaImage + zlib .zraw) and the vmtk aorta level set (MetaImage with a
 // mirrored TransformMatrix) against the vmtk surface of the same aorta.
@@ -18,7 +18,7 @@ using namespace fabrica;
 namespace {
 
 std::filesystem::path volumes() {
-  return test::shared_data() / "meshes" / "volumes";
+  return test::bundled_data() / "meshes" / "volumes";
 }
 
 const io::ExtractedSurface& find(const std::vector<io::ExtractedSurface>& s, int label) {
@@ -133,7 +133,7 @@ TEST(VolumeData, VmtkAortaLevelSetMatchesTheVmtkSurface) {
   EXPECT_GT(test::enclosed_volume(ours), 0.0);
 
   // vmtk writes world coordinates in RAS (x, y negated w.r.t. ITK's LPS).
-  TriangleMesh vmtk = io::read_mesh(test::shared_data() / "meshes" / "anatomy" / "vessels" /
+  TriangleMesh vmtk = io::read_mesh(test::bundled_data() / "meshes" / "anatomy" / "vessels" /
                                     "vmtk_aorta-surface.stl")
                           .mesh;
   ASSERT_EQ(vmtk.faces.size(), 12932u);
