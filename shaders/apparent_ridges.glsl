@@ -1,5 +1,5 @@
 // View-dependent curvature of Judd et al. (2007) as in seed 000 (Jardim &
-// de Figueiredo 2011, listing A.1, with the errata of ALGORITHMS.md §6.4 and
+// de Figueiredo 2011, listing A.1, with the errata of docs/algorithms.md §6.4 and
 // Appendix A fixed): q1 is the largest eigenvalue of Q^T Q (q1 squared in
 // Judd's notation, as rtsc and the seed store it; 1/mm^2), t1 its screen
 // direction in eye-space xy, oriented so the 3D vector points away from the

@@ -1,5 +1,5 @@
 // Hybrid apparent ridges, image-space stage (seed 000, listing A.2, as
-// reconstructed in ALGORITHMS.md §6.4): the direction-adaptive Laplacian-like
+// reconstructed in docs/algorithms.md §6.4): the direction-adaptive Laplacian-like
 // filter v = (8 + 8 lambda) q4 - sum_n w_n q_n with
 // w_n = 1 + 2 lambda cos^2(phi_n - theta), theta = t1 quantised to 0, 45, 90
 // or 135 degrees; a line where v > threshold, grey 1 - v (fade) or black.

@@ -1,5 +1,5 @@
 // Rusinkiewicz (2004) curvature and curvature-derivative estimation, written
-// from the paper and ALGORITHMS.md §2 (not from trimesh2's code).
+// from the paper and docs/algorithms.md §2 (not from trimesh2's code).
 //
 // Layout for speed and determinism: one parallel pass over faces writes
 // per-face results into flat arrays, then one parallel pass over vertices
@@ -169,7 +169,7 @@ void vertex_frame(const TriangleMesh& mesh, const Topology& topo, std::size_t vt
 
 namespace {
 
-/// The least-squares fit of II on one face (ALGORITHMS.md §2.1), in the
+/// The least-squares fit of II on one face (docs/algorithms.md §2.1), in the
 /// frame (t, b = nT x t); false if the normal equations are singular.
 inline bool fit_second_fundamental_form(const Vec3 (&e)[3], const Vec3* const (&n)[3],
                                         const Vec3& t, const Vec3& b, double (&x)[3]) {

@@ -1,5 +1,5 @@
 // Contours, boundaries, creases, suggestive contours and suggestive
-// highlights (ALGORITHMS.md §3, §4, §8).
+// highlights (docs/algorithms.md §3, §4, §8).
 #include <cmath>
 
 #include "fabrica/core/error.hpp"

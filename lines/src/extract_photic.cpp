@@ -1,5 +1,5 @@
 // Photic extremum lines (Xie et al. 2007) and Laplacian lines (Zhang et al.
-// 2009/2011), ALGORITHMS.md §7, on f = n·l (headlight or a fixed light).
+// 2009/2011), docs/algorithms.md §7, on f = n·l (headlight or a fixed light).
 #include <algorithm>
 #include <cmath>
 #include <limits>

@@ -1,5 +1,5 @@
 // Ridges, valleys and demarcating curves (view-independent: precomputed once,
-// culled and thresholded per view) and apparent ridges (ALGORITHMS.md §5, §6, §8).
+// culled and thresholded per view) and apparent ridges (docs/algorithms.md §5, §6, §8).
 #include <cmath>
 #include <string>
 

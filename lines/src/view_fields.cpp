@@ -18,7 +18,7 @@ namespace fabrica {
 namespace {
 
 // QᵀQ for Q = S P⁻¹ in principal coordinates (Judd et al. 2007;
-// ALGORITHMS.md §6.1) and its largest eigenvalue q1. u2, uv, w2 are the
+// docs/algorithms.md §6.1) and its largest eigenvalue q1. u2, uv, w2 are the
 // components of ŵ (the unit projected view direction) squared/multiplied.
 struct ViewCurvature {
   double m11, m12, m22, q1;

@@ -415,7 +415,7 @@ void update_dt1q1(ViewFields& fields, const Surface& surface, bool cull,
   const std::size_t nv = surface.vertex_count();
   const auto& pos = surface.positions();
   const auto& normals = surface.vertex_normals();
-  // Pass 2: D_t1 q1 by Judd's finite differences (ALGORITHMS.md §6.2):
+  // Pass 2: D_t1 q1 by Judd's finite differences (docs/algorithms.md §6.2):
   // along the line through p_i in direction t1, find the crossing with
   // the opposite edge of each incident face, and average the (at most
   // two) one-sided differences, measured in projected (screen) distance.

@@ -1,6 +1,6 @@
 // Illumination fields of ViewFields (PELs and Laplacian lines): f = n·l,
 // its gradient and Laplacian, and the PEL derivatives D_w|∇f| and
-// -D_w D_w|∇f| (ALGORITHMS.md §7). Split from view_fields.cpp so the
+// -D_w D_w|∇f| (docs/algorithms.md §7). Split from view_fields.cpp so the
 // illumination and the radial/apparent fields can be worked on separately.
 //
 // f, ∇f and Δf are computed everywhere. The thresholds leave only a small

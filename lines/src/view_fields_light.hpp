@@ -45,7 +45,7 @@ void update_view_fields(ViewFields& fields, const Surface& surface, const Camera
 /// D_t1 q1 (fields.dt1q1) and the apparent-ridge kernel's records
 /// (fields.apparent_vertex: E = D_t1 q1 t1_world, D_t1 q1, q1, position)
 /// from the filled q1, t1, t1_world, ndotv and signs: Judd's one-sided
-/// finite differences along t1 (ALGORITHMS.md §6.2).
+/// finite differences along t1 (docs/algorithms.md §6.2).
 /// With `cull`, only at vertices of faces with a corner carrying kQ1Above
 /// (dt1q1 0 elsewhere, records left as they were). `precompute` supplies
 /// the tangent ring; nullptr: from the topology.

@@ -1,5 +1,5 @@
 // Headless GL contexts: EGL surfaceless (Mesa's EGL_MESA_platform_surfaceless)
-// and OSMesa opened with dlopen (PLATFORM.md, "GL entry points").
+// and OSMesa opened with dlopen (docs/DEVELOPING.md, "GL entry points").
 #include "fabrica/render/context.hpp"
 
 #include <EGL/egl.h>

@@ -1,4 +1,4 @@
-// PELs and Laplacian lines (ALGORITHMS.md §7): the analytic case of a sphere
+// PELs and Laplacian lines (docs/algorithms.md §7): the analytic case of a sphere
 // under a directional light, and the sparse illumination fields (computed
 // only where a line can be kept, ViewFieldsRequest::light_threshold) giving
 // the same segments, bit for bit, as fields computed everywhere.

@@ -1,4 +1,4 @@
-// Second- and third-order surface geometry (ALGORITHMS.md §2):
+// Second- and third-order surface geometry (docs/algorithms.md §2):
 // Rusinkiewicz (3DPVT 2004) per-face fit of the second fundamental form from
 // vertex-normal differences, re-expressed at vertices with corner-area
 // weights, and the per-face fit of the curvature-derivative tensor from
@@ -15,7 +15,7 @@
 // Differences from trimesh2 2.16 (on purpose): double precision; the 3x3
 // normal equations of the per-face fit are solved correctly (trimesh2's
 // small-matrix LDLᵀ computes its last pivot too early, biasing curvature
-// low on anisotropic triangles, see ALGORITHMS.md appendix A); vertex
+// low on anisotropic triangles, see docs/algorithms.md Appendix A); vertex
 // averages are normalised by the weights of the faces actually used.
 #pragma once
 
@@ -52,14 +52,14 @@ inline double curvature_derivative_form(double a, double b, double c, double d, 
 }
 
 /// D_u kappa(u) = C(u,u,u) for u = (u1, u2) in the principal frame
-/// (ALGORITHMS.md §2.4): the derivative along u of the normal curvature in
+/// (docs/algorithms.md §2.4): the derivative along u of the normal curvature in
 /// direction u (u need not be unit; the result scales with |u|^3).
 inline double curvature_derivative_along(double a, double b, double c, double d, double u1,
                                          double u2) {
   return u1 * u1 * (a * u1 + 3.0 * b * u2) + u2 * u2 * (3.0 * c * u1 + d * u2);
 }
 
-/// Smooths a curvature field in place (rtsc's diffuse_curv, ALGORITHMS.md
+/// Smooths a curvature field in place (rtsc's diffuse_curv, docs/algorithms.md
 /// §2.7): each vertex averages the second fundamental forms of the vertices
 /// reachable through edges within 2.5 sigma (Euclidean distance), weighted by
 /// exp(-d²/(2 sigma²)) * A_j * (n_i . n_j) (neighbours with n_i . n_j <= 0 are
@@ -88,7 +88,7 @@ struct FeatureSizeOptions {
   bool rtsc_sampling = false;
 };
 
-/// Feature size (ALGORITHMS.md §2.6) from per-vertex curvature: the
+/// Feature size (docs/algorithms.md §2.6) from per-vertex curvature: the
 /// `percentile` value kappa_p of all |k1| and |k2| at valid vertices, then
 /// min(0.01 / kappa_p, 0.05 R). Returns 0.05 R when kappa_p is 0 or no
 /// vertex is valid, and 1 (mm) when R is 0 (empty or single-point mesh), so

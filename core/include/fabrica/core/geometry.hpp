@@ -1,5 +1,5 @@
 // First-order discrete differential geometry on triangle meshes
-// (ALGORITHMS.md §1): face normals and areas, vertex normals (area, angle or
+// (docs/algorithms.md §1): face normals and areas, vertex normals (area, angle or
 // Max 1999 weights), mixed Voronoi corner and vertex areas (Meyer, Desbrun,
 // Schröder & Barr 2002, or trimesh2's clipped variant), gradients of
 // piecewise-linear per-vertex fields, covariant derivatives, the minimal
@@ -48,7 +48,7 @@ std::vector<Vec3> vertex_normals(const TriangleMesh& mesh, const Topology& topol
 
 /// Minimal rotation, about from x to, taking a vector tangent to the plane
 /// with unit normal `from` into the plane with unit normal `to` (R_{T->i}
-/// of ALGORITHMS.md §1). Falls back to projection when the normals are
+/// of docs/algorithms.md §1). Falls back to projection when the normals are
 /// opposite.
 Vec3 rotate_to_tangent_plane(const Vec3& x, const Vec3& from, const Vec3& to);
 

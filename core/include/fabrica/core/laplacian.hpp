@@ -1,5 +1,5 @@
 // Cotangent Laplace–Beltrami operator (Pinkall & Polthier 1993; Meyer et al.
-// 2002; ALGORITHMS.md §1):
+// 2002; docs/algorithms.md §1):
 //   (Δf)_i = 1/A_i * sum_j w_ij (f_j - f_i),  w_ij = (cot α_ij + cot β_ij) / 2,
 // with α, β the angles opposite edge ij (a boundary edge has one term; a
 // non-manifold edge one term per face) and A_i the mixed Voronoi vertex

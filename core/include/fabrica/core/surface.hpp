@@ -2,7 +2,7 @@
 // geometry (normals, mixed Voronoi areas, principal curvatures and the
 // curvature-derivative tensor, feature size).
 //
-// Conventions (docs/conventions.md, ALGORITHMS.md §0–2):
+// Conventions (docs/conventions.md, docs/algorithms.md §0–2):
 //  - normals point outward for an outward-oriented mesh (CCW faces);
 //  - shape operator S = D n (derivative of the outward normal): a sphere of
 //    radius R has k1 = k2 = +1/R (convex positive);
@@ -31,14 +31,14 @@
 
 namespace fabrica {
 
-/// Weights for averaging face normals to vertex normals (ALGORITHMS.md §1).
+/// Weights for averaging face normals to vertex normals (docs/algorithms.md §1).
 enum class NormalWeighting {
   area,   ///< face area
   angle,  ///< interior angle at the vertex (Thürmer & Wüthrich)
   max,    ///< Max (1999): sin(angle) / (|e_a| |e_b|); the default, as trimesh2
 };
 
-/// How a triangle's area is split among its corners (ALGORITHMS.md §1).
+/// How a triangle's area is split among its corners (docs/algorithms.md §1).
 enum class MixedAreaScheme {
   /// trimesh2's variant (the default, so that curvature agrees with rtsc):
   /// Voronoi cells clipped to the triangle. Acute triangles: exact Voronoi
@@ -55,7 +55,7 @@ struct SurfaceOptions {
   NormalWeighting normal_weighting = NormalWeighting::max;
   MixedAreaScheme mixed_areas = MixedAreaScheme::clipped;
   /// Passes of rtsc-style smoothing of the curvature tensor (0 = none),
-  /// ALGORITHMS.md §2.7.
+  /// docs/algorithms.md §2.7.
   int curvature_smoothing_passes = 0;
   /// Gaussian width of that smoothing in multiples of the median edge length.
   double curvature_smoothing_sigma = 1.0;
@@ -110,7 +110,7 @@ class Surface {
   const std::vector<double>& vertex_areas() const;
   const PrincipalCurvatures& curvature() const;
   const CurvatureDerivatives& curvature_derivatives() const;
-  /// rtsc's feature size (ALGORITHMS.md §2.6), deterministic.
+  /// rtsc's feature size (docs/algorithms.md §2.6), deterministic.
   double feature_size() const;
   /// Median edge length (trimesh2's feature_size()).
   double median_edge_length() const;

@@ -8,7 +8,7 @@
 // the "curve smoothing and splitting step" of Lawonn, Gasteiger, Rössl &
 // Preim, "Adaptive and robust curve smoothing on surface meshes", Computers &
 // Graphics 40 (2014), and Lawonn's dissertation (Magdeburg 2014, ch. 3); see
-// ALGORITHMS.md §10 and docs/curves.md. Interior points lie on mesh edges;
+// docs/algorithms.md §10 and docs/curves.md. Interior points lie on mesh edges;
 // each one slides along its edge towards the point where the curve is
 // straight in the unfolding of the edge's two faces (zero geodesic
 // curvature); a point that reaches a mesh vertex is re-routed through the

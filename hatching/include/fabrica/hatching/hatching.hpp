@@ -1,5 +1,5 @@
 // Shading-stroke hatching after Singh & Schaefer 2010, "Suggestive Hatching"
-// (ALGORITHMS.md §9): strokes that follow the gradient of the diffuse
+// (docs/algorithms.md §9): strokes that follow the gradient of the diffuse
 // intensity I, spaced in image space by a hierarchical proximity grid so that
 // their density tracks the tone 1 − I.
 //

@@ -1,5 +1,5 @@
 // The diffuse-intensity field that shading strokes follow (Singh & Schaefer
-// 2010, "Suggestive Hatching", §3.1; ALGORITHMS.md §9).
+// 2010, "Suggestive Hatching", §3.1; docs/algorithms.md §9).
 //
 //  - Per vertex I_i = n_i · l_i, UNCLAMPED (negative in shadow, so the field
 //    stays consistent there; the density rule uses max(I, 0)). n_i is the

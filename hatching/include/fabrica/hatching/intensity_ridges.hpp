@@ -1,4 +1,4 @@
-// Ridges of the diffuse intensity I (Singh & Schaefer 2010, §4; ALGORITHMS.md
+// Ridges of the diffuse intensity I (Singh & Schaefer 2010, §4; docs/algorithms.md
 // §9): the curves that attract shading strokes although they are bright.
 //
 // 1. Vertex gradient: G_i = angle-weighted mean of the face gradients around

@@ -1,5 +1,5 @@
 // Hierarchical proximity grid in image space (Singh & Schaefer 2010, §3.3;
-// ALGORITHMS.md §9) with midpoint (√2) subdivision.
+// docs/algorithms.md §9) with midpoint (√2) subdivision.
 //
 // Level d has cell size s_d = S / √2^d pixels, S = max(width, height), on a
 // square of side S centred on the image. Even levels 2k are square lattices

@@ -1,4 +1,4 @@
-// Chaining (ALGORITHMS.md §11.1–2): joins the segments of each family into
+// Chaining (docs/algorithms.md §11.1–2): joins the segments of each family into
 // polylines and closed loops by the identity of their endpoints (family +
 // mesh edge, vertex, or face centroid), never by coordinates, then drops
 // short chains. Endpoints shared by exactly two segments are joined; an

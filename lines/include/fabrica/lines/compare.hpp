@@ -1,5 +1,5 @@
-// Comparing two sets of 3D line segments (ALGORITHMS.md §12, and the scores
-// of ../shared/reference/README.md "Calibration"): every segment is sampled
+// Comparing two sets of 3D line segments (docs/algorithms.md §12, and the scores
+// of docs/lines-fidelity.md "How it is measured"): every segment is sampled
 // at spacing <= `spacing`; a sample is matched when its exact distance to
 // some segment of the other set is <= `tolerance`. Precision = matched
 // fraction of the test set's length, recall = matched fraction of the

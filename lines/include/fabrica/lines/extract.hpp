@@ -1,4 +1,4 @@
-// One extractor per line family (ALGORITHMS.md §3–8), each a free function
+// One extractor per line family (docs/algorithms.md §3–8), each a free function
 // returning the family's segment soup (segments.hpp), plus LineExtractor,
 // which keeps the view-independent precomputation and the per-view buffers
 // and extracts any set of families for one camera.

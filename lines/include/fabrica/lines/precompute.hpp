@@ -18,7 +18,7 @@
 namespace fabrica {
 
 /// Sparse per-vertex gradient operator: ∇f_i = Σ_k coeff[k] f[column[k]],
-/// k in [offset[i], offset[i+1]). Each face gradient (ALGORITHMS.md §1) is
+/// k in [offset[i], offset[i+1]). Each face gradient (docs/algorithms.md §1) is
 /// rotated into the vertex tangent plane and averaged with corner-area
 /// weights. Coefficients are float (bandwidth), accumulation is double.
 struct GradientOperator {

@@ -1,5 +1,5 @@
 // The .seg text format of the reference rtsc line files
-// (../shared/reference/README.md): line 1 is "# " followed by one JSON object
+// (docs/formats.md ".seg"): line 1 is "# " followed by one JSON object
 // (the header: camera, parameters, counts), then one straight segment per
 // line, "type x0 y0 z0 x1 y1 z1", in the mesh's own units, 7 significant
 // digits. Types appear grouped, in the order contour, suggestive, apparent,

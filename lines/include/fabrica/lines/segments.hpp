@@ -3,10 +3,10 @@
 // on the mesh (a Topology edge, a vertex, the face centroid where three
 // crossings are joined, or inside the face where a test function clipped the
 // segment), so chaining can join segments by identity instead of by
-// coordinates (ALGORITHMS.md §11).
+// coordinates (docs/algorithms.md §11).
 //
 // Positions are in the mesh's units (mm). Strength is the fade value in
-// [0,1] (ALGORITHMS.md §0 step 4): 1 = fully drawn.
+// [0,1] (docs/algorithms.md §0 step 4): 1 = fully drawn.
 #pragma once
 
 #include <cstdint>

@@ -1,4 +1,4 @@
-// Smoothing chained feature lines on the surface (ALGORITHMS.md §10, §11).
+// Smoothing chained feature lines on the surface (docs/algorithms.md §10, §11).
 //
 // Every polyline of a LineSet is a curve on the surface: its points carry a
 // surface anchor (face + barycentric coordinates) and most lie on mesh edges,

@@ -1,4 +1,4 @@
-// Styling for vector output (ALGORITHMS.md §11.5): strength -> width or
+// Styling for vector output (docs/algorithms.md §11.5): strength -> width or
 // opacity, tapered ends, thicker contours, and hidden lines omitted or
 // dashed. Produces projected stroke pieces (pixel coordinates, y down) that
 // the SVG and PDF writers draw as real vector paths. Widths are given for a

@@ -4,7 +4,7 @@
 // stays cached in the Surface (curvature) or in LinePrecompute (ridges,
 // demarcating curves, the gradient operator, the Laplacian of the normals).
 //
-// Definitions (ALGORITHMS.md §0, §4, §6; DeCarlo et al. 2003/2004; Judd et
+// Definitions (docs/algorithms.md §0, §4, §6; DeCarlo et al. 2003/2004; Judd et
 // al. 2007), with v the unit view vector at the vertex (towards the eye for
 // perspective, as rtsc), n the vertex normal, (e1, e2, k1, k2) the principal
 // frame (|k1| >= |k2|, convex positive), (a, b, c, d) the curvature

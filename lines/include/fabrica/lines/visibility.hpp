@@ -1,9 +1,9 @@
-// Hidden-line removal for vector output (ALGORITHMS.md §3.5 item 2, §11.3):
+// Hidden-line removal for vector output (docs/algorithms.md §3.5 item 2, §11.3):
 // the mesh is rasterised on the CPU into a depth buffer of linear eye depth
 // at image resolution; each polyline is sampled every <= 1 px and a sample
 // is visible when its depth <= (depth of the 3x3 pixels around it) + epsilon,
-// where the window's depth is its MAXIMUM by default. The minimum (as
-// ALGORITHMS.md §3.5 words it) hides interpolated contours: at a silhouette
+// where the window's depth is its MAXIMUM by default. The minimum (see
+// docs/algorithms.md §3.5) hides interpolated contours: at a silhouette
 // the surface in front of the contour point, one pixel inside, is nearer by
 // about sqrt(2 r px) (r the radius of curvature, px the pixel size), far more
 // than any sensible epsilon. With the maximum a sample is visible when some

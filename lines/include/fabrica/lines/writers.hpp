@@ -1,4 +1,4 @@
-// Vector output of a LineSet (ALGORITHMS.md §11.6), all written atomically
+// Vector output of a LineSet (docs/algorithms.md §11.6), all written atomically
 // (core/atomic_file.hpp):
 //  - SVG: real paths, one <g> per family (id and class = family name, in
 //    draw_order()), viewBox in pixels, transparent background, two decimals,

@@ -1,4 +1,4 @@
-// The zero-crossing kernel (ALGORITHMS.md §0 "ZC" and "ZC-vec"): nearly every
+// The zero-crossing kernel (docs/algorithms.md §0 "ZC" and "ZC-vec"): nearly every
 // line family is the zero set of a per-vertex scalar, or the sign-free zero
 // set of a per-vertex derivative along an unsigned direction, extracted face
 // by face with linear interpolation along edges.

@@ -2,8 +2,8 @@
 // function pointers filled from the backend's GetProcAddress (eglGetProcAddress,
 // OSMesaGetProcAddress, glfwGetProcAddress). fabrica never calls gl* symbols
 // directly: with libGL/libOpenGL and libOSMesa in one process, direct calls
-// reach whichever library the dynamic linker saw first (PLATFORM.md, "GL
-// entry points"), while pointers from the context's own loader always reach
+// reach whichever library the dynamic linker saw first (docs/DEVELOPING.md,
+// "GL entry points"), while pointers from the context's own loader always reach
 // the right driver. One table per context.
 #pragma once
 

@@ -17,7 +17,7 @@
 
 namespace fabrica::render {
 
-/// Hybrid apparent ridges (seed 000; ALGORITHMS.md §6.4). The defaults are the
+/// Hybrid apparent ridges (seed 000; docs/algorithms.md §6.4). The defaults are the
 /// seed's method; per_fragment, sign_free and float_target are the thesis'
 /// future-work improvements.
 struct HybridOptions {
@@ -34,7 +34,7 @@ struct HybridOptions {
 };
 
 /// tau = log2(k s_f^2) with k = 0.25, since q1 has units of 1/length^2
-/// (ALGORITHMS.md §6.4 suggestion); 0 when the feature size is unknown.
+/// (docs/algorithms.md §6.4); 0 when the feature size is unknown.
 double default_tau(double feature_size);
 
 struct RenderOptions {

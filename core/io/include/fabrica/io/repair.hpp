@@ -1,4 +1,4 @@
-// Mesh repair: the hygiene steps of ALGORITHMS.md §1 that keep the file's
+// Mesh repair: the hygiene steps of docs/algorithms.md §1 that keep the file's
 // vertex numbering.
 //
 // Vertex order promise: vertex i before repair is vertex i after repair.

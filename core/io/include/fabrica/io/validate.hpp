@@ -1,5 +1,5 @@
 // Mesh validation: counts every defect that breaks curvature, feature lines
-// or hatching (ALGORITHMS.md §1 "Mesh hygiene"), without changing the mesh.
+// or hatching (docs/algorithms.md §1 "Mesh hygiene"), without changing the mesh.
 //
 // Works on any indexed triangle mesh: open, multi-component, non-manifold,
 // degenerate. Out-of-range indices or non-finite coordinates are the only
