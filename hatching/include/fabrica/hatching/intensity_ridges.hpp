@@ -2,7 +2,7 @@
 // §9): the curves that attract shading strokes although they are bright.
 //
 // 1. Vertex gradient: G_i = angle-weighted mean of the face gradients around
-//    vertex i (weights: interior angle at i, after Max 1999), E_i = dominant
+//    vertex i (weights: interior angle at i, after Thürmer & Wüthrich 1998), E_i = dominant
 //    eigenvector of the weighted covariance Σ w ∇I_T ∇I_Tᵀ (taken in the
 //    vertex tangent plane, where the face gradients nearly lie), and
 //    ∇I(p_i) = (G_i · E_i) E_i — stable where face gradients oppose.
