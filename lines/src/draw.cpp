@@ -7,24 +7,47 @@
 
 namespace fabrica {
 
-namespace {
-void check_threshold(double t, const char* name) {
-  if (!(t >= 0.0 && std::isfinite(t)))
-    throw InputError(std::string("--") + name + "-threshold must be a non-negative number");
+std::vector<LineFamily> thresholded_families() {
+  return {LineFamily::suggestive, LineFamily::highlight,  LineFamily::ridge,
+          LineFamily::valley,     LineFamily::apparent,   LineFamily::pel,
+          LineFamily::laplacian,  LineFamily::demarcating};
 }
-}  // namespace
+
+const double* family_threshold(const LineOptions& o, LineFamily family) {
+  switch (family) {
+    case LineFamily::suggestive:
+      return &o.suggestive.threshold;
+    case LineFamily::highlight:
+      return &o.highlight.threshold;
+    case LineFamily::ridge:
+      return &o.ridge.threshold;
+    case LineFamily::valley:
+      return &o.valley.threshold;
+    case LineFamily::apparent:
+      return &o.apparent.threshold;
+    case LineFamily::pel:
+      return &o.pel.threshold;
+    case LineFamily::laplacian:
+      return &o.laplacian.threshold;
+    case LineFamily::demarcating:
+      return &o.demarcating.threshold;
+    default:
+      return nullptr;
+  }
+}
+
+double* family_threshold(LineOptions& o, LineFamily family) {
+  return const_cast<double*>(family_threshold(static_cast<const LineOptions&>(o), family));
+}
 
 void validate(const DrawLinesOptions& options) {
   const LineOptions& o = options.lines;
-  for (auto [t, n] : {std::pair{o.suggestive.threshold, "suggestive"},
-                      {o.highlight.threshold, "highlight"},
-                      {o.ridge.threshold, "ridge"},
-                      {o.valley.threshold, "valley"},
-                      {o.apparent.threshold, "apparent"},
-                      {o.pel.threshold, "pel"},
-                      {o.laplacian.threshold, "laplacian"},
-                      {o.demarcating.threshold, "demarcating"}})
-    check_threshold(t, n);
+  for (LineFamily f : thresholded_families()) {
+    const double t = *family_threshold(o, f);
+    if (!(t >= 0.0 && std::isfinite(t)))
+      throw InputError(std::string("--") + family_name(f) +
+                       "-threshold must be a non-negative number");
+  }
   if (o.feature_size < 0.0 || !std::isfinite(o.feature_size))
     throw InputError("--feature-size must be a positive length in mesh units");
   if (options.smooth < 0) throw InputError("--smooth must be >= 0 (iterations; 0 = off)");
@@ -86,15 +109,10 @@ nlohmann::json drawing_header(const LineDrawing& drawing, const Surface& surface
   header["nv"] = surface.vertex_count();
   header["nf"] = surface.face_count();
   header["feature_size"] = drawing.feature_size;
-  header["thresholds"] = {{"suggestive", opt.suggestive.threshold},
-                          {"highlight", opt.highlight.threshold},
-                          {"ridge", opt.ridge.threshold},
-                          {"valley", opt.valley.threshold},
-                          {"apparent", opt.apparent.threshold},
-                          {"pel", opt.pel.threshold},
-                          {"laplacian", opt.laplacian.threshold},
-                          {"demarcating", opt.demarcating.threshold},
-                          {"crease_angle_deg", opt.crease.angle_deg}};
+  nlohmann::json& thresholds = header["thresholds"] = nlohmann::json::object();
+  for (LineFamily f : thresholded_families())
+    thresholds[family_name(f)] = *family_threshold(opt, f);
+  thresholds["crease_angle_deg"] = opt.crease.angle_deg;
   header["types"] = types;
   header["segments"] = counts;
   header["visibility"] = options.visibility;

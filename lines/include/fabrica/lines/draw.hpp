@@ -44,6 +44,14 @@ struct DrawLinesOptions {
   VisibilityOptions visibility_options;
 };
 
+/// The families that have a dimensionless threshold (suggestive, highlight,
+/// ridge, valley, apparent, pel, laplacian, demarcating), in that order.
+std::vector<LineFamily> thresholded_families();
+/// The threshold of `family` in `options` (`--<family>-threshold`); nullptr
+/// for a family without one.
+double* family_threshold(LineOptions& options, LineFamily family);
+const double* family_threshold(const LineOptions& options, LineFamily family);
+
 /// Throws InputError with the CLI's one-line message when an option is out
 /// of range (negative or non-finite threshold, feature size, min length,
 /// negative smoothing).
