@@ -175,7 +175,7 @@ void bind_render(py::module_& m) {
   m.def(
       "render_scene",
       [](const std::string& path, std::optional<Camera> camera, const std::string& view,
-         const std::string& backend) {
+         std::optional<int> width, std::optional<int> height, const std::string& backend) {
         render::SceneSpec spec = render::read_scene_spec(path);
         const render::HeadlessOptions headless = render::headless_options(backend);
         render::Image image;
@@ -195,6 +195,8 @@ void bind_render(py::module_& m) {
             if (!v) throw InputError("view: unknown view \"" + name + "\"");
             c = render::view_camera(scene, *v);
           }
+          if (width) c.width = *width;  // as --size: after the view is framed
+          if (height) c.height = *height;
           validate_camera(c, "camera");
           render::RenderOptions options;
           options.transparent_background = spec.transparent;
@@ -203,9 +205,11 @@ void bind_render(py::module_& m) {
         return to_numpy(std::move(image));
       },
       py::arg("path"), py::arg("camera") = py::none(), py::arg("view") = "",
-      py::arg("backend") = "",
+      py::arg("width") = py::none(), py::arg("height") = py::none(), py::arg("backend") = "",
       "Renders a scene JSON (the `fabrica render scene.json` format) to an (h, w, 4) uint8 "
-      "array");
+      "array, as `fabrica render scene.json [--camera] [--view] [--size WxH]`: the camera "
+      "given, else the scene's, else its view (anterior by default); width/height change the "
+      "image size after the view is framed, as --size does.");
   m.def(
       "write_png",
       [](const py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>& a,

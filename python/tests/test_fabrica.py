@@ -223,6 +223,24 @@ def test_render_equals_cli_png(tmp_path, liver, fabrica_cli):
     assert (image[..., 3] > 0).any() and (image[..., :3] < 128).any()  # lines drawn
 
 
+@pytest.mark.skipif(not fabrica.has_render, reason="built without the renderer")
+def test_render_scene_equals_cli_png(tmp_path, fabrica_cli):
+    import os
+    from pathlib import Path
+
+    import matplotlib.image as mpimg
+
+    scene = Path(os.environ.get("FABRICA_SOURCE_DIR", Path(__file__).parents[2])) / "data" / "aneurysm-scene.json"
+    result = fabrica_cli("render", scene, "--view", "left", "--size", "300x200", "-q",
+                         "-o", tmp_path / "cli.png", check=False)
+    if result.returncode == 4:
+        pytest.skip("no headless OpenGL here: " + result.stderr.strip())
+    assert result.returncode == 0, result.stderr
+    image = fabrica.render_scene(str(scene), view="left", width=300, height=200)
+    cli = (mpimg.imread(str(tmp_path / "cli.png")) * 255).round().astype(np.uint8)
+    np.testing.assert_array_equal(image, cli)
+
+
 def test_camera_json_round_trip(tmp_path, liver):
     mesh = fabrica.read_mesh(str(liver))
     cam = fabrica.Camera.view(mesh, "superior", width=200, height=100)
