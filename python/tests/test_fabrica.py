@@ -275,3 +275,29 @@ def test_threads_draw_the_same_lines(liver):
         shared = list(pool.map(lambda c: drawer.draw(c).to_json(), cams))
         free = list(pool.map(lambda c: fabrica.lines(surface, c, types="contour,apparent").to_json(), cams))
     assert shared == serial and free == serial
+
+
+def test_stubs_and_docstrings_cover_the_module():
+    # The type stubs name exactly what the module has, class by class, and
+    # every public function and class has a docstring.
+    import ast
+    from pathlib import Path
+
+    stub = Path(fabrica.__file__).with_name("__init__.pyi")
+    tree = ast.parse(stub.read_text())
+    top = {n.name for n in tree.body if isinstance(n, (ast.FunctionDef, ast.ClassDef))}
+    top |= {n.target.id for n in tree.body if isinstance(n, ast.AnnAssign)}
+    public = {n for n in dir(fabrica) if not n.startswith("_")}
+    assert public - {"VIEWS"} <= top | {"annotations"}
+    assert top - {"Family", "Types", "MeshLike"} <= public
+    for cls in (n for n in tree.body if isinstance(n, ast.ClassDef)):
+        if cls.name.endswith("Error"):
+            continue
+        members = {f.name for f in cls.body if isinstance(f, ast.FunctionDef)}
+        members |= {f.target.id for f in cls.body if isinstance(f, ast.AnnAssign)}
+        real = {n for n in dir(getattr(fabrica, cls.name)) if not n.startswith("_")}
+        assert real == members - {"__init__", "__len__", "__getitem__", "__iter__"}, cls.name
+    for name in public:
+        obj = getattr(fabrica, name)
+        if callable(obj) and not name.endswith("Error") and name not in ("Line", "Lines"):
+            assert obj.__doc__, name
