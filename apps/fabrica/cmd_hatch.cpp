@@ -19,19 +19,17 @@
 #include "fabrica/core/camera.hpp"
 #include "fabrica/core/error.hpp"
 #include "fabrica/core/surface.hpp"
-#include "fabrica/hatching/hatching.hpp"
+#include "fabrica/hatching/draw.hpp"
 #include "fabrica/hatching/svg_writer.hpp"
-#include "fabrica/io/mesh_io.hpp"
+#include "fabrica/io/prepare.hpp"
 
-#if __has_include("fabrica/lines/extract.hpp")
-#include "fabrica/lines/chain.hpp"
-#include "fabrica/lines/extract.hpp"
-#include "fabrica/lines/visibility.hpp"
+#if __has_include("fabrica/lines/draw.hpp")
+#include "fabrica/lines/draw.hpp"
 #define FABRICA_HATCH_WITH_LINES 1
 #endif
-#if __has_include("fabrica/render/renderer.hpp")
+#if __has_include("fabrica/render/draw.hpp")
+#include "fabrica/render/draw.hpp"
 #include "fabrica/render/render_mesh.hpp"
-#include "fabrica/render/renderer.hpp"
 #define FABRICA_HATCH_WITH_RENDER 1
 #endif
 
@@ -59,81 +57,39 @@ struct HatchArgs {
   bool draw_ridges = false;
   double line_width = 1.5;
   bool transparent = false;
+  bool keep_orientation = false;
   std::string backend;
   int threads = 0;
   bool quiet = false;
 };
 
-Vec3 parse_vec3(const std::string& text, const std::string& what) {
-  Vec3 v;
-  char comma1 = 0, comma2 = 0;
-  std::istringstream in(text);
-  if (!(in >> v.x() >> comma1 >> v.y() >> comma2 >> v.z()) || comma1 != ',' || comma2 != ',' ||
-      !v.allFinite())
-    throw InputError(what + ": expected three numbers X,Y,Z (got \"" + text + "\")");
-  std::string rest;
-  if (in >> rest) throw InputError(what + ": unexpected \"" + rest + "\" after X,Y,Z");
-  return v;
-}
-
-/// --light eye | dir:X,Y,Z (world, towards the light) | view:X,Y,Z (camera
-/// frame: x right, y up, z towards the viewer) | point:X,Y,Z (world, mm).
-hatching::Light parse_light(const std::string& text, const Camera& camera) {
-  hatching::Light light;
-  const std::string t = lower(text);
-  if (t == "eye" || t == "headlight") return light;
-  const auto colon = t.find(':');
-  if (colon == std::string::npos)
-    throw InputError("--light: use eye, dir:X,Y,Z, view:X,Y,Z or point:X,Y,Z (got \"" + text +
-                     "\")");
-  const std::string kind = t.substr(0, colon);
-  const Vec3 v = parse_vec3(t.substr(colon + 1), "--light " + kind);
-  if (kind == "dir" || kind == "direction") {
-    light.kind = hatching::LightKind::direction;
-    light.vector = v;
-  } else if (kind == "view") {
-    light.kind = hatching::LightKind::direction;
-    light.vector = v.x() * camera.right() + v.y() * camera.true_up() - v.z() * camera.forward();
-  } else if (kind == "point") {
-    light.kind = hatching::LightKind::point;
-    light.vector = v;
-  } else {
-    throw InputError("--light: unknown kind \"" + kind + "\" (use eye, dir, view or point)");
-  }
-  if (light.kind == hatching::LightKind::direction && !(light.vector.norm() > 0.0))
-    throw InputError("--light: the direction must not be zero");
-  return light;
-}
-
 #ifdef FABRICA_HATCH_WITH_LINES
-/// The feature lines of --with-lines (chained, visibility not yet computed).
+/// The feature lines of --with-lines (chained; visible parts only with
+/// `visibility`, else every vertex marked visible for the renderer).
 LineSet feature_lines(const Surface& surface, const Camera& camera, const std::string& list,
-                      std::vector<LineFamily>& families) {
-  LineOptions options;
-  options.families.clear();
+                      std::vector<LineFamily>& families, bool visibility) {
+  DrawLinesOptions options;
+  options.lines.families.clear();
   std::istringstream in(list);
   std::string name;
   while (std::getline(in, name, ',')) {
     if (name.empty()) continue;
     const auto family = parse_family(lower(name));
     if (!family) throw InputError("--with-lines: unknown line family \"" + name + "\"");
-    options.families.push_back(*family);
+    options.lines.families.push_back(*family);
   }
-  families = options.families;
-  if (options.families.empty()) return {};
-  LineExtractor extractor(surface, options);
-  const std::vector<SegmentSoup> soups = extractor.extract(camera);
-  ChainOptions chain;
-  chain.camera = camera;
-  return chain_segments(soups, chain);
+  families = options.lines.families;
+  if (families.empty()) return {};
+  options.min_length_px = 0.0;
+  options.visibility = visibility;
+  return draw_lines(surface, camera, options).lines;
 }
 
 std::vector<hatching::SvgLayer> feature_line_layers(const Surface& surface, const Camera& camera,
                                                     const std::string& list, double width) {
   std::vector<LineFamily> families;
-  LineSet lines = feature_lines(surface, camera, list, families);
+  const LineSet lines = feature_lines(surface, camera, list, families, true);
   if (families.empty()) return {};
-  compute_visibility(lines, surface, camera);
   std::vector<hatching::SvgLayer> layers;
   for (const LineFamily family : families) {
     hatching::SvgLayer layer;
@@ -164,24 +120,13 @@ std::vector<hatching::SvgLayer> feature_line_layers(const Surface& surface, cons
 #endif
 
 #ifdef FABRICA_HATCH_WITH_RENDER
-/// --backend egl|osmesa (empty: FABRICA_GL_BACKEND, else automatic).
-render::HeadlessOptions headless_options(const std::string& backend) {
-  render::HeadlessOptions headless;
-  if (!backend.empty()) {
-    headless.backend = render::parse_backend(backend);
-    if (!headless.backend || *headless.backend == render::Backend::glfw)
-      throw InputError("--backend must be egl or osmesa (got \"" + backend + "\")");
-  }
-  return headless;
-}
-
 /// The PNG: the surface as white paper (flat, opaque, so it hides what is
 /// behind it), the strokes in black at the SVG's widths (image pixels), the
 /// ridges (red) and feature lines above them, through the renderer's
 /// line-quad pipeline. Returns the backend's name.
 std::string write_hatching_png(const HatchArgs& args, const Surface& surface, const Camera& camera,
                                const hatching::StrokeSet& strokes) {
-  const render::HeadlessOptions headless = headless_options(args.backend);
+  const render::HeadlessOptions headless = render::headless_options(args.backend);
   render::Structure structure;
   structure.name = "surface";
   structure.style.shading = render::Shading::flat;
@@ -213,7 +158,8 @@ std::string write_hatching_png(const HatchArgs& args, const Surface& surface, co
   structure.style.lines = plain(args.line_width, {0, 0, 0, 1});
 #ifdef FABRICA_HATCH_WITH_LINES
   if (!args.with_lines.empty())
-    structure.lines = feature_lines(surface, camera, args.with_lines, structure.style.families);
+    structure.lines =
+        feature_lines(surface, camera, args.with_lines, structure.style.families, false);
 #endif
   render::Scene scene;
   scene.structures.push_back(std::move(structure));
@@ -253,14 +199,20 @@ int run_hatch(const HatchArgs& args) {
                     ": PNG output of hatching needs the renderer (fabrica::render), which this "
                     "build lacks; write .svg (and rasterise it, e.g. with rsvg-convert)");
 #else
-  if (ext == ".png") headless_options(args.backend);  // a bad --backend fails before the work
+  if (ext == ".png")
+    render::headless_options(args.backend);  // a bad --backend fails before the work
 #endif
   if (!(args.line_width > 0.0) || !std::isfinite(args.line_width))
     throw InputError("--line-width: must be a positive number of pixels");
 
-  io::ReadOptions read_options;
-  if (!args.space.empty()) read_options.space = parse_space(args.space);
-  io::LoadedMesh loaded = io::read_mesh(args.mesh, read_options);
+  // The same preparation as `fabrica lines`: oriented outward (inward
+  // normals would turn the light's shading inside out).
+  PrepareOptions prepare;
+  if (!args.space.empty()) prepare.space = parse_space(args.space);
+  prepare.orient = !args.keep_orientation;
+  PreparedMesh loaded = prepare_mesh(args.mesh, prepare);
+  if (!args.quiet)
+    for (const auto& m : loaded.messages()) std::fprintf(stderr, "fabrica hatch: %s\n", m.c_str());
   const Space space = loaded.mesh.space;
 
   std::optional<std::pair<int, int>> size;
@@ -280,8 +232,9 @@ int run_hatch(const HatchArgs& args) {
   validate_camera(camera, args.camera_file.empty() ? "camera" : args.camera_file);
 
   Surface surface(std::move(loaded.mesh));
-  hatching::HatchingOptions options;
-  options.light = parse_light(args.light, camera);
+  DrawHatchingOptions drawing;
+  drawing.light = args.light;
+  hatching::HatchingOptions& options = drawing.hatching;
   options.intensity_threshold = args.threshold;
   options.grid_depth = args.grid_depth;
   options.seed_depth = args.seed_depth;
@@ -290,11 +243,8 @@ int run_hatch(const HatchArgs& args) {
   options.max_length_px = args.max_length;
   options.min_length_px = args.min_length;
   options.ridge_removal = !args.no_ridge_removal;
-  if (!(args.ridge_angle >= 0.0 && args.ridge_angle < 180.0))
-    throw InputError("--ridge-angle: must be in [0, 180) degrees (got " +
-                     std::to_string(args.ridge_angle) + ")");
   options.ridges.min_angle_deg = args.ridge_angle;
-  const hatching::StrokeSet strokes = hatching::hatch(surface, camera, options);
+  const hatching::StrokeSet strokes = draw_hatching(surface, camera, drawing);
 
 #ifndef FABRICA_HATCH_WITH_LINES
   if (!args.with_lines.empty())
@@ -397,6 +347,8 @@ void add_hatch_command(CLI::App& app, Action& action) {
                   "else EGL then OSMesa)");
   cmd->add_option("--threads", args->threads,
                   "Worker threads (0 = all); the output does not depend on it");
+  cmd->add_flag("--keep-orientation", args->keep_orientation,
+                "Do not re-orient the mesh outward before hatching");
   cmd->add_flag("-q,--quiet", args->quiet, "No summary line");
   cmd->callback([args, &action] { action = [args] { return run_hatch(*args); }; });
 }

@@ -17,13 +17,9 @@
 #include "fabrica/core/camera.hpp"
 #include "fabrica/core/error.hpp"
 #include "fabrica/core/surface.hpp"
-#include "fabrica/io/mesh_io.hpp"
-#include "fabrica/io/repair.hpp"
-#include "fabrica/lines/chain.hpp"
-#include "fabrica/lines/extract.hpp"
+#include "fabrica/io/prepare.hpp"
+#include "fabrica/lines/draw.hpp"
 #include "fabrica/lines/seg_io.hpp"
-#include "fabrica/lines/smooth.hpp"
-#include "fabrica/lines/visibility.hpp"
 #include "fabrica/lines/writers.hpp"
 
 namespace fabrica::cli {
@@ -52,11 +48,6 @@ Vec3 parse_vec3(const std::string& text, const std::string& what) {
   return v;
 }
 
-void check_threshold(const std::optional<double>& t, const char* name) {
-  if (t && !(*t >= 0.0 && std::isfinite(*t)))
-    throw InputError(std::string("--") + name + "-threshold must be a non-negative number");
-}
-
 /// A camera that sees no vertex of the mesh is an error the user must fix.
 void check_camera_sees_mesh(const Camera& camera, const TriangleMesh& mesh,
                             const std::string& what) {
@@ -71,6 +62,29 @@ void check_camera_sees_mesh(const Camera& camera, const TriangleMesh& mesh,
                    "looking away); use --view NAME or fix eye/center");
 }
 
+/// The drawing options the arguments name (validated: InputError).
+DrawLinesOptions drawing_options(const LinesArgs& a, const std::string& ext) {
+  DrawLinesOptions d;
+  LineOptions& opt = d.lines;
+  opt.feature_size = a.feature_size;
+  opt.contour.mesh_edges = a.mesh_edge_contours;
+  if (a.suggestive_t) opt.suggestive.threshold = *a.suggestive_t;
+  if (a.highlight_t) opt.highlight.threshold = *a.highlight_t;
+  if (a.ridge_t) opt.ridge.threshold = *a.ridge_t;
+  if (a.valley_t) opt.valley.threshold = *a.valley_t;
+  if (a.apparent_t) opt.apparent.threshold = *a.apparent_t;
+  if (a.pel_t) opt.pel.threshold = *a.pel_t;
+  if (a.laplacian_t) opt.laplacian.threshold = *a.laplacian_t;
+  if (a.demarcating_t) opt.demarcating.threshold = *a.demarcating_t;
+  if (a.crease_angle) opt.crease.angle_deg = *a.crease_angle;
+  if (a.no_fade) opt.suggestive.fade = opt.highlight.fade = 0.0;
+  d.min_length_px = a.min_length_px >= 0.0 ? a.min_length_px : (ext == ".seg" ? 0.0 : 3.0);
+  d.smooth = a.smooth;
+  d.visibility = !a.no_visibility;
+  validate(d);
+  return d;
+}
+
 int run_lines(const LinesArgs& a) {
   const std::filesystem::path out_path(a.output);
   const std::string ext = lower(out_path.extension().string());
@@ -80,35 +94,20 @@ int run_lines(const LinesArgs& a) {
     throw Error(ErrorKind::unavailable, "PDF output needs cairo, which this build lacks; use .svg");
   if (!a.camera_file.empty() && !a.view.empty())
     throw InputError("give either --camera FILE or --view NAME, not both");
-  for (auto [t, n] : {std::pair{&a.suggestive_t, "suggestive"},
-                      {&a.highlight_t, "highlight"},
-                      {&a.ridge_t, "ridge"},
-                      {&a.valley_t, "valley"},
-                      {&a.apparent_t, "apparent"},
-                      {&a.pel_t, "pel"},
-                      {&a.laplacian_t, "laplacian"},
-                      {&a.demarcating_t, "demarcating"}})
-    check_threshold(*t, n);
-  if (a.feature_size < 0.0 || !std::isfinite(a.feature_size))
-    throw InputError("--feature-size must be a positive length in mesh units");
-  if (a.smooth < 0) throw InputError("--smooth must be >= 0 (iterations; 0 = off)");
+  DrawLinesOptions options = drawing_options(a, ext);
 
-  io::ReadOptions ro;
-  if (!a.space.empty()) ro.space = parse_space(a.space);
-  auto loaded = io::read_mesh(a.mesh, ro);
-  TriangleMesh mesh = std::move(loaded.mesh);
   // Mesh preparation the lines need (on by default, reported): STL welding
-  // happened in read_mesh; orient consistently and outward (inward normals
+  // happens in the reader; orient consistently and outward (inward normals
   // make contours vanish and swap ridges with valleys); normals are always
   // computed from the geometry.
-  if (!a.keep_normals_orientation) {
-    const auto report = io::prepare_for_lines(mesh);
-    if (!a.quiet)
-      for (const auto& c : report.changes) std::fprintf(stderr, "fabrica lines: %s\n", c.c_str());
-  }
-  if (!a.quiet && loaded.info.welded_vertices > 0)
-    std::fprintf(stderr, "fabrica lines: welded %zu coincident STL vertices\n",
-                 loaded.info.welded_vertices);
+  PrepareOptions prepare;
+  if (!a.space.empty()) prepare.space = parse_space(a.space);
+  prepare.orient = !a.keep_normals_orientation;
+  PreparedMesh prepared = prepare_mesh(a.mesh, prepare);
+  if (!a.quiet)
+    for (const auto& m : prepared.messages())
+      std::fprintf(stderr, "fabrica lines: %s\n", m.c_str());
+  TriangleMesh mesh = std::move(prepared.mesh);
 
   Camera camera;
   std::string camera_what;
@@ -129,71 +128,27 @@ int run_lines(const LinesArgs& a) {
   check_camera_sees_mesh(camera, mesh, camera_what);
 
   Surface surface(std::move(mesh));
-  LineOptions opt;
-  opt.families = parse_family_list(a.types, "--types", LineOptions{}.families, false);
-  opt.feature_size = a.feature_size;
-  opt.contour.mesh_edges = a.mesh_edge_contours;
-  if (a.suggestive_t) opt.suggestive.threshold = *a.suggestive_t;
-  if (a.highlight_t) opt.highlight.threshold = *a.highlight_t;
-  if (a.ridge_t) opt.ridge.threshold = *a.ridge_t;
-  if (a.valley_t) opt.valley.threshold = *a.valley_t;
-  if (a.apparent_t) opt.apparent.threshold = *a.apparent_t;
-  if (a.pel_t) opt.pel.threshold = *a.pel_t;
-  if (a.laplacian_t) opt.laplacian.threshold = *a.laplacian_t;
-  if (a.demarcating_t) opt.demarcating.threshold = *a.demarcating_t;
-  if (a.crease_angle) opt.crease.angle_deg = *a.crease_angle;
-  if (a.no_fade) opt.suggestive.fade = opt.highlight.fade = 0.0;
+  options.lines.families = parse_family_list(a.types, "--types", LineOptions{}.families, false);
   if (!a.light.empty()) {
-    opt.pel.light_direction = opt.laplacian.light_direction = parse_vec3(a.light, "--light");
+    options.lines.pel.light_direction = options.lines.laplacian.light_direction =
+        parse_vec3(a.light, "--light");
   }
-  LineExtractor extractor(surface, opt);
-  const auto soups = extractor.extract(camera);
+  const LineDrawing drawing = draw_lines(surface, camera, options);
+  const LineSet& lines = drawing.lines;
 
-  ChainOptions chain;
-  chain.camera = camera;
-  chain.min_length_px = a.min_length_px >= 0.0 ? a.min_length_px : (ext == ".seg" ? 0.0 : 3.0);
-  LineSet lines = chain_segments(soups, chain);
-  if (a.smooth > 0) {  // on the surface, before visibility tests the positions
-    LineSmoothingOptions so;
-    so.iterations = a.smooth;
-    smooth_lines(lines, surface, so);  // polylines it cannot smooth stay as they are
-  }
-  if (!a.no_visibility) compute_visibility(lines, surface, camera);
-
-  std::size_t segments = 0;
-  nlohmann::json counts = nlohmann::json::object(), types = nlohmann::json::array();
-  for (const auto& s : soups) {
-    segments += s.segments.size();
-    counts[family_name(s.family)] = s.segments.size();
-    types.push_back(family_name(s.family));
-  }
+  const std::size_t segments = drawing.segment_count();
   if (segments == 0 && !a.quiet) {
     std::string names;
-    for (auto f : opt.families) names += std::string(names.empty() ? "" : ",") + family_name(f);
+    for (auto f : options.lines.families)
+      names += std::string(names.empty() ? "" : ",") + family_name(f);
     std::fprintf(stderr,
                  "fabrica lines: warning: no lines of type %s from this view; the output is "
                  "empty (try another --view, lower --<family>-threshold, or --types all)\n",
                  names.c_str());
   }
 
-  nlohmann::json header = camera_to_json(camera);
+  nlohmann::json header = drawing_header(drawing, surface, camera, options);
   header["mesh"] = std::filesystem::path(a.mesh).filename().string();
-  header["nv"] = surface.vertex_count();
-  header["nf"] = surface.face_count();
-  header["feature_size"] = extractor.feature_size();
-  header["thresholds"] = {{"suggestive", opt.suggestive.threshold},
-                          {"highlight", opt.highlight.threshold},
-                          {"ridge", opt.ridge.threshold},
-                          {"valley", opt.valley.threshold},
-                          {"apparent", opt.apparent.threshold},
-                          {"pel", opt.pel.threshold},
-                          {"laplacian", opt.laplacian.threshold},
-                          {"demarcating", opt.demarcating.threshold},
-                          {"crease_angle_deg", opt.crease.angle_deg}};
-  header["types"] = types;
-  header["segments"] = counts;
-  header["visibility"] = !a.no_visibility;
-  if (a.smooth > 0) header["smooth"] = a.smooth;
   header["source"] = "fabrica lines";
 
   LineStyle style;
@@ -209,9 +164,7 @@ int run_lines(const LinesArgs& a) {
   else
     write_lines_json(out_path, lines, header);
   if (!a.quiet) {
-    std::size_t visible = 0, total = 0;
-    for (const auto& p : lines.polylines)
-      for (const auto& v : p.vertices) visible += v.visible, ++total;
+    const auto [total, visible] = drawing.visible_vertices();
     std::fprintf(stderr,
                  "fabrica lines: %zu segments, %zu polylines (%zu of %zu vertices visible) -> %s\n",
                  segments, lines.polylines.size(), visible, total, a.output.c_str());

@@ -19,14 +19,8 @@
 #include "fabrica/core/camera.hpp"
 #include "fabrica/core/error.hpp"
 #include "fabrica/core/surface.hpp"
-#include "fabrica/io/mesh_io.hpp"
-#include "fabrica/io/repair.hpp"
-#include "fabrica/lines/chain.hpp"
-#include "fabrica/lines/extract.hpp"
-#include "fabrica/lines/smooth.hpp"
-#include "fabrica/lines/visibility.hpp"
 #include "fabrica/lines/writers.hpp"
-#include "fabrica/render/renderer.hpp"
+#include "fabrica/render/draw.hpp"
 
 namespace fabrica::cli {
 namespace {
@@ -39,12 +33,6 @@ struct RenderArgs {
   std::optional<int> smooth;
   bool hybrid = false, transparent = false, no_fade = false, per_fragment = false,
        sign_free = false, float_target = false, quiet = false;
-};
-
-struct Loaded {
-  render::StructureSpec spec;
-  std::unique_ptr<Surface> surface;
-  render::Structure structure;
 };
 
 int run_render(const RenderArgs& a) {
@@ -111,30 +99,8 @@ int run_render(const RenderArgs& a) {
   }
   if (a.transparent) spec.transparent = true;
 
-  // 2. Meshes -> Surfaces -> render meshes.
-  std::vector<Loaded> loaded;
-  BoundingBox box;
-  bool first = true;
-  Space space = Space::lps;
-  for (const auto& s : spec.structures) {
-    io::ReadOptions ro;
-    ro.space = s.space;
-    auto file = io::read_mesh(s.mesh, ro);
-    io::prepare_for_lines(file.mesh);
-    const BoundingBox b = bounding_box(file.mesh.positions);
-    if (first) {
-      box = b;
-      space = file.mesh.space;
-      first = false;
-    } else {
-      box.min = box.min.cwiseMin(b.min);
-      box.max = box.max.cwiseMax(b.max);
-    }
-    Loaded l;
-    l.spec = s;
-    l.surface = std::make_unique<Surface>(std::move(file.mesh));
-    loaded.push_back(std::move(l));
-  }
+  // 2. Meshes -> prepared Surfaces.
+  const render::SceneSurfaces scene = render::load_scene(spec);
 
   // 3. Camera: --camera, --view, the scene's camera or view, else anterior.
   Camera camera;
@@ -152,52 +118,14 @@ int run_render(const RenderArgs& a) {
     if (!view)
       throw InputError("--view: unknown view \"" + name +
                        "\" (anterior, posterior, left, right, superior, inferior)");
-    camera = anatomical_camera(*view, box, space);
+    camera = render::view_camera(scene, *view);
     camera_what = "--view " + name;
   }
   if (!a.size.empty()) std::tie(camera.width, camera.height) = parse_size(a.size);
   validate_camera(camera, camera_what);
 
-  // 4. Lines per structure (object space; apparent ridges on the GPU with --hybrid-ar).
-  render::Scene scene;
-  scene.background = spec.background;
-  for (auto& l : loaded) {
-    render::Structure& st = l.structure;
-    st.name = l.spec.name;
-    st.role = l.spec.role;
-    st.style = l.spec.style;
-    std::vector<LineFamily> families = st.style.families;
-    if (st.style.hybrid_apparent_ridges)
-      families.erase(std::remove(families.begin(), families.end(), LineFamily::apparent),
-                     families.end());
-    st.mesh = std::make_shared<render::RenderMesh>(
-        render::make_render_mesh(*l.surface, st.style.hybrid_apparent_ridges));
-    if (!families.empty()) {
-      LineOptions lo;
-      lo.families = families;
-      LineExtractor extractor(*l.surface, lo);
-      ChainOptions chain;
-      chain.camera = camera;
-      chain.min_length_px = 3.0;
-      st.lines = chain_segments(extractor.extract(camera), chain);
-      if (st.style.smooth > 0) {
-        LineSmoothingOptions so;
-        so.iterations = st.style.smooth;
-        smooth_lines(st.lines, *l.surface, so);
-      }
-    }
-    st.style.families = families;
-    scene.structures.push_back(st);
-  }
-
-  // 5. The picture.
-  render::HeadlessOptions ho;
-  if (!a.backend.empty()) {
-    ho.backend = render::parse_backend(a.backend);
-    if (!ho.backend || *ho.backend == render::Backend::glfw)
-      throw InputError("--backend must be egl or osmesa (got \"" + a.backend + "\")");
-  }
-  render::Renderer renderer(render::create_headless_context(ho));
+  // 4. Lines per structure and the picture (apparent ridges on the GPU with --hybrid-ar).
+  const render::HeadlessOptions ho = render::headless_options(a.backend);
   render::RenderOptions ro;
   ro.transparent_background = spec.transparent;
   if (a.tau) ro.hybrid.tau = *a.tau;
@@ -207,35 +135,15 @@ int run_render(const RenderArgs& a) {
   ro.hybrid.per_fragment = a.per_fragment;
   ro.hybrid.sign_free = a.sign_free;
   ro.hybrid.float_target = a.float_target;
-  const render::Image image = renderer.render(scene, camera, ro);
-  render::write_png(image, out_path);
+  const render::RenderedScene picture = render::render_scene(scene, camera, ro, ho);
+  render::write_png(picture.image, out_path);
 
-  // 6. Vector lines: focus lines hidden by opaque structures, context lines by every surface.
+  // 5. Vector lines: focus lines hidden by opaque structures, context lines by every surface.
   if (!a.svg.empty()) {
-    TriangleMesh opaque, all;
-    auto append = [](TriangleMesh& dst, const TriangleMesh& src) {
-      const auto base = static_cast<std::int32_t>(dst.positions.size());
-      dst.positions.insert(dst.positions.end(), src.positions.begin(), src.positions.end());
-      for (Face f : src.faces) dst.faces.push_back({f[0] + base, f[1] + base, f[2] + base});
-    };
-    for (const auto& l : loaded) {
-      append(all, l.surface->mesh());
-      if (l.structure.style.opacity >= 0.999) append(opaque, l.surface->mesh());
-    }
-    const DepthBuffer depth_all = render_depth(all, camera);
-    const DepthBuffer depth_opaque =
-        opaque.faces.empty() ? depth_all : render_depth(opaque, camera);
-    LineSet merged;
-    for (auto& l : loaded) {
-      LineSet ls = l.structure.lines;
-      compute_visibility(ls, *l.surface, camera, {},
-                         l.structure.style.opacity >= 0.999 ? &depth_opaque : &depth_all);
-      merged.polylines.insert(merged.polylines.end(), ls.polylines.begin(), ls.polylines.end());
-    }
     fabrica::LineStyle style;
     if (!a.hidden.empty() && lower(a.hidden) == "dashed")
       style.hidden = fabrica::HiddenLines::dashed;
-    write_svg(a.svg, merged, camera, style);
+    write_svg(a.svg, render::vector_lines(scene, picture.scene, camera), camera, style);
   }
   if (!a.save_scene.empty()) {
     render::SceneSpec saved = spec;
@@ -245,10 +153,10 @@ int run_render(const RenderArgs& a) {
   if (!a.save_camera.empty()) write_camera(camera, a.save_camera);
   if (!a.quiet) {
     std::size_t polylines = 0;
-    for (const auto& s : scene.structures) polylines += s.lines.polylines.size();
+    for (const auto& s : picture.scene.structures) polylines += s.lines.polylines.size();
     std::fprintf(stderr, "fabrica render: %zu structure(s), %zu polylines, %dx%d via %s -> %s\n",
-                 scene.structures.size(), polylines, camera.width, camera.height,
-                 render::to_string(renderer.context().backend()), a.output.c_str());
+                 picture.scene.structures.size(), polylines, camera.width, camera.height,
+                 render::to_string(picture.backend), a.output.c_str());
   }
   return 0;
 }

@@ -1,0 +1,123 @@
+#include "fabrica/lines/draw.hpp"
+
+#include <cmath>
+#include <string>
+
+#include "fabrica/core/error.hpp"
+
+namespace fabrica {
+
+std::vector<LineFamily> thresholded_families() {
+  return {LineFamily::suggestive, LineFamily::highlight,  LineFamily::ridge,
+          LineFamily::valley,     LineFamily::apparent,   LineFamily::pel,
+          LineFamily::laplacian,  LineFamily::demarcating};
+}
+
+const double* family_threshold(const LineOptions& o, LineFamily family) {
+  switch (family) {
+    case LineFamily::suggestive:
+      return &o.suggestive.threshold;
+    case LineFamily::highlight:
+      return &o.highlight.threshold;
+    case LineFamily::ridge:
+      return &o.ridge.threshold;
+    case LineFamily::valley:
+      return &o.valley.threshold;
+    case LineFamily::apparent:
+      return &o.apparent.threshold;
+    case LineFamily::pel:
+      return &o.pel.threshold;
+    case LineFamily::laplacian:
+      return &o.laplacian.threshold;
+    case LineFamily::demarcating:
+      return &o.demarcating.threshold;
+    default:
+      return nullptr;
+  }
+}
+
+double* family_threshold(LineOptions& o, LineFamily family) {
+  return const_cast<double*>(family_threshold(static_cast<const LineOptions&>(o), family));
+}
+
+void validate(const DrawLinesOptions& options) {
+  const LineOptions& o = options.lines;
+  for (LineFamily f : thresholded_families()) {
+    const double t = *family_threshold(o, f);
+    if (!(t >= 0.0 && std::isfinite(t)))
+      throw InputError(std::string("--") + family_name(f) +
+                       "-threshold must be a non-negative number");
+  }
+  if (o.feature_size < 0.0 || !std::isfinite(o.feature_size))
+    throw InputError("--feature-size must be a positive length in mesh units");
+  if (options.smooth < 0) throw InputError("--smooth must be >= 0 (iterations; 0 = off)");
+  if (!(options.min_length_px >= 0.0) || !std::isfinite(options.min_length_px))
+    throw InputError("--min-length must be a non-negative number of pixels");
+}
+
+std::size_t LineDrawing::segment_count() const {
+  std::size_t n = 0;
+  for (const auto& [family, count] : segments) n += count;
+  return n;
+}
+
+std::pair<std::size_t, std::size_t> LineDrawing::visible_vertices() const {
+  std::size_t visible = 0, total = 0;
+  for (const auto& p : lines.polylines)
+    for (const auto& v : p.vertices) visible += v.visible, ++total;
+  return {total, visible};
+}
+
+LineDrawer::LineDrawer(const Surface& surface, DrawLinesOptions options)
+    : surface_(&surface),
+      options_((validate(options), std::move(options))),
+      extractor_(surface, options_.lines) {}
+
+LineDrawing LineDrawer::draw(const Camera& camera, const DepthBuffer* depth) {
+  const std::vector<SegmentSoup> soups = extractor_.extract(camera);
+  LineDrawing drawing;
+  drawing.feature_size = extractor_.feature_size();
+  for (const auto& s : soups) drawing.segments.emplace_back(s.family, s.segments.size());
+  ChainOptions chain;
+  chain.camera = camera;
+  chain.min_length_px = options_.min_length_px;
+  drawing.lines = chain_segments(soups, chain);
+  if (options_.smooth > 0) {  // on the surface, before visibility tests the positions
+    LineSmoothingOptions so;
+    so.iterations = options_.smooth;
+    smooth_lines(drawing.lines, *surface_, so);  // polylines it cannot smooth stay as they are
+  }
+  if (options_.visibility)
+    compute_visibility(drawing.lines, *surface_, camera, options_.visibility_options, depth);
+  return drawing;
+}
+
+LineDrawing draw_lines(const Surface& surface, const Camera& camera,
+                       const DrawLinesOptions& options) {
+  return LineDrawer(surface, options).draw(camera);
+}
+
+nlohmann::json drawing_header(const LineDrawing& drawing, const Surface& surface,
+                              const Camera& camera, const DrawLinesOptions& options) {
+  const LineOptions& opt = options.lines;
+  nlohmann::json counts = nlohmann::json::object(), types = nlohmann::json::array();
+  for (const auto& [family, count] : drawing.segments) {
+    counts[family_name(family)] = count;
+    types.push_back(family_name(family));
+  }
+  nlohmann::json header = camera_to_json(camera);
+  header["nv"] = surface.vertex_count();
+  header["nf"] = surface.face_count();
+  header["feature_size"] = drawing.feature_size;
+  nlohmann::json& thresholds = header["thresholds"] = nlohmann::json::object();
+  for (LineFamily f : thresholded_families())
+    thresholds[family_name(f)] = *family_threshold(opt, f);
+  thresholds["crease_angle_deg"] = opt.crease.angle_deg;
+  header["types"] = types;
+  header["segments"] = counts;
+  header["visibility"] = options.visibility;
+  if (options.smooth > 0) header["smooth"] = options.smooth;
+  return header;
+}
+
+}  // namespace fabrica

@@ -1,0 +1,75 @@
+// One call for a rendered illustration (issue 16): a scene description
+// (focus and context structures with their styles) whose meshes are read and
+// prepared once, feature lines drawn per structure through fabrica::draw_lines,
+// and the picture made headless. `fabrica render`, the viewer's export, the
+// batch runner and the Python module render through this.
+//
+//   auto scene = fabrica::render::load_scene(fabrica::render::read_scene_spec("s.json"));
+//   const fabrica::Camera camera = fabrica::render::view_camera(scene,
+//   fabrica::AnatomicalView::anterior); const auto picture = fabrica::render::render_scene(scene,
+//   camera); fabrica::render::write_png(picture.image, "out.png");
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "fabrica/core/camera.hpp"
+#include "fabrica/core/mesh.hpp"
+#include "fabrica/core/surface.hpp"
+#include "fabrica/lines/line_set.hpp"
+#include "fabrica/render/context.hpp"
+#include "fabrica/render/image.hpp"
+#include "fabrica/render/renderer.hpp"
+#include "fabrica/render/scene.hpp"
+
+namespace fabrica::render {
+
+/// A scene description with its surfaces (one per spec.structures entry,
+/// same order) and their common bounding box and space (the first mesh's).
+struct SceneSurfaces {
+  SceneSpec spec;
+  std::vector<std::shared_ptr<const Surface>> surfaces;
+  BoundingBox box;
+  Space space = Space::lps;
+
+  /// Appends a structure whose surface is already in memory.
+  void add(StructureSpec structure, std::shared_ptr<const Surface> surface);
+};
+
+/// Reads every structure's mesh (its `space` override applies) and prepares
+/// it as fabrica::prepare_mesh does (oriented outward). InputError names the
+/// file.
+SceneSurfaces load_scene(SceneSpec spec);
+
+/// The anatomical view of the whole scene (its bounding box and space).
+Camera view_camera(const SceneSurfaces& scene, AnatomicalView view);
+
+/// The scene the renderer draws: a render mesh per structure and its
+/// chained feature lines for `camera` (object space, 3 px minimum length,
+/// the style's smoothing; hybrid apparent ridges left to the GPU).
+Scene build_scene(const SceneSurfaces& scene, const Camera& camera);
+
+/// --backend egl|osmesa (empty: FABRICA_GL_BACKEND, else automatic);
+/// InputError with the CLI's message for another name.
+HeadlessOptions headless_options(const std::string& backend);
+
+struct RenderedScene {
+  Image image;      ///< RGBA, camera.width × camera.height
+  Scene scene;      ///< what was drawn (with the lines)
+  Backend backend;  ///< the GL backend that drew it
+};
+
+/// build_scene + Renderer::render on `renderer`.
+RenderedScene render_scene(Renderer& renderer, const SceneSurfaces& scene, const Camera& camera,
+                           const RenderOptions& options = {});
+/// The same on a new headless context (Error(unavailable) when none).
+RenderedScene render_scene(const SceneSurfaces& scene, const Camera& camera,
+                           const RenderOptions& options = {}, const HeadlessOptions& headless = {});
+
+/// The drawn scene's lines for vector output, with visibility computed on
+/// the CPU: a focus (opaque) structure's lines are hidden by the opaque
+/// structures, a ghosted one's by every surface.
+LineSet vector_lines(const SceneSurfaces& scene, const Scene& drawn, const Camera& camera);
+
+}  // namespace fabrica::render

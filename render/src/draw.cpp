@@ -1,0 +1,123 @@
+#include "fabrica/render/draw.hpp"
+
+#include <algorithm>
+#include <utility>
+
+#include "fabrica/core/error.hpp"
+#include "fabrica/io/prepare.hpp"
+#include "fabrica/lines/draw.hpp"
+#include "fabrica/lines/visibility.hpp"
+
+namespace fabrica::render {
+
+void SceneSurfaces::add(StructureSpec structure, std::shared_ptr<const Surface> surface) {
+  const BoundingBox b = bounding_box(surface->positions());
+  if (surfaces.empty()) {
+    box = b;
+    space = surface->mesh().space;
+  } else {
+    box.min = box.min.cwiseMin(b.min);
+    box.max = box.max.cwiseMax(b.max);
+  }
+  spec.structures.push_back(std::move(structure));
+  surfaces.push_back(std::move(surface));
+}
+
+SceneSurfaces load_scene(SceneSpec spec) {
+  SceneSurfaces scene;
+  std::vector<StructureSpec> structures = std::move(spec.structures);
+  scene.spec = std::move(spec);
+  scene.spec.structures.clear();
+  for (StructureSpec& s : structures) {
+    PrepareOptions options;
+    options.space = s.space;
+    PreparedMesh prepared = prepare_mesh(s.mesh, options);
+    auto surface = std::make_shared<const Surface>(std::move(prepared.mesh));
+    scene.add(std::move(s), std::move(surface));
+  }
+  return scene;
+}
+
+Camera view_camera(const SceneSurfaces& scene, AnatomicalView view) {
+  return anatomical_camera(view, scene.box, scene.space);
+}
+
+Scene build_scene(const SceneSurfaces& scene, const Camera& camera) {
+  Scene out;
+  out.background = scene.spec.background;
+  for (std::size_t i = 0; i < scene.surfaces.size(); ++i) {
+    const StructureSpec& spec = scene.spec.structures[i];
+    const Surface& surface = *scene.surfaces[i];
+    Structure st;
+    st.name = spec.name;
+    st.role = spec.role;
+    st.style = spec.style;
+    std::vector<LineFamily> families = st.style.families;
+    if (st.style.hybrid_apparent_ridges)
+      families.erase(std::remove(families.begin(), families.end(), LineFamily::apparent),
+                     families.end());
+    st.mesh =
+        std::make_shared<RenderMesh>(make_render_mesh(surface, st.style.hybrid_apparent_ridges));
+    if (!families.empty()) {
+      DrawLinesOptions options;
+      options.lines.families = families;
+      options.min_length_px = 3.0;
+      options.smooth = st.style.smooth;
+      options.visibility = false;  // the renderer tests depth on the GPU
+      st.lines = draw_lines(surface, camera, options).lines;
+    }
+    st.style.families = families;
+    out.structures.push_back(std::move(st));
+  }
+  return out;
+}
+
+HeadlessOptions headless_options(const std::string& backend) {
+  HeadlessOptions headless;
+  if (!backend.empty()) {
+    headless.backend = parse_backend(backend);
+    if (!headless.backend || *headless.backend == Backend::glfw)
+      throw InputError("--backend must be egl or osmesa (got \"" + backend + "\")");
+  }
+  return headless;
+}
+
+RenderedScene render_scene(Renderer& renderer, const SceneSurfaces& scene, const Camera& camera,
+                           const RenderOptions& options) {
+  RenderedScene out;
+  out.scene = build_scene(scene, camera);
+  out.image = renderer.render(out.scene, camera, options);
+  out.backend = renderer.context().backend();
+  return out;
+}
+
+RenderedScene render_scene(const SceneSurfaces& scene, const Camera& camera,
+                           const RenderOptions& options, const HeadlessOptions& headless) {
+  Renderer renderer(create_headless_context(headless));
+  return render_scene(renderer, scene, camera, options);
+}
+
+LineSet vector_lines(const SceneSurfaces& scene, const Scene& drawn, const Camera& camera) {
+  TriangleMesh opaque, all;
+  auto append = [](TriangleMesh& dst, const TriangleMesh& src) {
+    const auto base = static_cast<std::int32_t>(dst.positions.size());
+    dst.positions.insert(dst.positions.end(), src.positions.begin(), src.positions.end());
+    for (Face f : src.faces) dst.faces.push_back({f[0] + base, f[1] + base, f[2] + base});
+  };
+  for (std::size_t i = 0; i < scene.surfaces.size(); ++i) {
+    append(all, scene.surfaces[i]->mesh());
+    if (drawn.structures[i].style.opacity >= 0.999) append(opaque, scene.surfaces[i]->mesh());
+  }
+  const DepthBuffer depth_all = render_depth(all, camera);
+  const DepthBuffer depth_opaque = opaque.faces.empty() ? depth_all : render_depth(opaque, camera);
+  LineSet merged;
+  for (std::size_t i = 0; i < scene.surfaces.size(); ++i) {
+    LineSet ls = drawn.structures[i].lines;
+    compute_visibility(ls, *scene.surfaces[i], camera, {},
+                       drawn.structures[i].style.opacity >= 0.999 ? &depth_opaque : &depth_all);
+    merged.polylines.insert(merged.polylines.end(), ls.polylines.begin(), ls.polylines.end());
+  }
+  return merged;
+}
+
+}  // namespace fabrica::render
