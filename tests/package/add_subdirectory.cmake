@@ -1,12 +1,8 @@
 # package.AddSubdirectory (cmake -P): a tiny project that pulls fabrica in
 # with add_subdirectory(<fabrica source> fabrica_build) builds and runs.
 #   -DSOURCE= -DWORK= -DMESH= -DGENERATOR= [-DLAUNCHER=ccache]
-foreach(var SOURCE WORK MESH GENERATOR)
-  if(NOT DEFINED ${var})
-    message(FATAL_ERROR "add_subdirectory.cmake: -D${var}=... missing")
-  endif()
-endforeach()
 include(${CMAKE_CURRENT_LIST_DIR}/package_common.cmake)
+fabrica_require(add_subdirectory.cmake SOURCE WORK MESH GENERATOR)
 file(REMOVE_RECURSE "${WORK}")
 # Only the program and the libraries it links are built. WORK sits beside
 # the main build folder, so the libraries compile with the same relative

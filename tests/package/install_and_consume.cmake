@@ -3,12 +3,8 @@
 # (CMAKE_PREFIX_PATH = the prefix, no source-tree paths), runs both examples
 # on a bundled mesh and checks their outputs.
 #   -DBUILD_DIR= -DEXAMPLES= -DWORK= -DMESH= -DGENERATOR= [-DLAUNCHER=ccache]
-foreach(var BUILD_DIR EXAMPLES WORK MESH GENERATOR)
-  if(NOT DEFINED ${var})
-    message(FATAL_ERROR "install_and_consume.cmake: -D${var}=... missing")
-  endif()
-endforeach()
 include(${CMAKE_CURRENT_LIST_DIR}/package_common.cmake)
+fabrica_require(install_and_consume.cmake BUILD_DIR EXAMPLES WORK MESH GENERATOR)
 
 file(REMOVE_RECURSE "${WORK}")
 set(prefix "${WORK}/prefix")

@@ -1,5 +1,14 @@
 # Helpers of the package.* tests (cmake -P scripts).
 
+# fabrica_require(SCRIPT VAR...): every -DVAR=... was given.
+function(fabrica_require script)
+  foreach(var IN LISTS ARGN)
+    if(NOT DEFINED ${var})
+      message(FATAL_ERROR "${script}: -D${var}=... missing")
+    endif()
+  endforeach()
+endfunction()
+
 # fabrica_run(COMMAND ARGS...): runs it, fails the test on a non-zero exit.
 function(fabrica_run)
   execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
