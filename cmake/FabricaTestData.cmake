@@ -2,10 +2,10 @@
 # read are bundled in the repository (tests/data/fabrica-test-data.tar.xz, its
 # files listed in tests/data/MANIFEST.txt, their sources and licenses in
 # tests/data/SOURCES.md). They are unpacked at configure time into
-# ${CMAKE_BINARY_DIR}/test-data (data/ and reference/), again only when the
+# ${PROJECT_BINARY_DIR}/test-data (data/ and reference/), again only when the
 # archive changes. Nothing outside the repository is read.
-set(FABRICA_TEST_DATA_ARCHIVE "${CMAKE_CURRENT_SOURCE_DIR}/tests/data/fabrica-test-data.tar.xz")
-set(FABRICA_TEST_DATA_DIR "${CMAKE_BINARY_DIR}/test-data")
+set(FABRICA_TEST_DATA_ARCHIVE "${PROJECT_SOURCE_DIR}/tests/data/fabrica-test-data.tar.xz")
+set(FABRICA_TEST_DATA_DIR "${PROJECT_BINARY_DIR}/test-data")
 set_property(DIRECTORY APPEND PROPERTY CMAKE_CONFIGURE_DEPENDS "${FABRICA_TEST_DATA_ARCHIVE}")
 file(SHA256 "${FABRICA_TEST_DATA_ARCHIVE}" _fabrica_data_hash)
 set(_fabrica_data_stamp "${FABRICA_TEST_DATA_DIR}/.unpacked-${_fabrica_data_hash}")

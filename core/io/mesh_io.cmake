@@ -1,14 +1,12 @@
 # Mesh file reading and writing (OBJ, PLY, STL, OFF, legacy VTK, GIfTI, MNI
 # .obj, FreeSurfer parsed here; VTP read through VTK, which stays private to
-# fabrica_io). GIfTI needs pugixml and zlib.
-find_package(ZLIB REQUIRED)
+# fabrica_io, when FABRICA_HAVE_VTK). GIfTI needs pugixml and zlib.
 target_sources(fabrica_io PRIVATE
   ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io.cpp
   ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_obj.cpp
   ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_off.cpp
   ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_ply.cpp
   ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_stl.cpp
-  ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_vtk.cpp
   ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_vtk_legacy.cpp
   ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_gifti.cpp
   ${CMAKE_CURRENT_SOURCE_DIR}/src/inflate.cpp
@@ -16,5 +14,8 @@ target_sources(fabrica_io PRIVATE
   ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_freesurfer.cpp
 )
 target_link_libraries(fabrica_io PRIVATE ZLIB::ZLIB pugixml::pugixml)
-target_link_libraries(fabrica_io PRIVATE VTK::IOXML VTK::CommonDataModel VTK::CommonCore)
-vtk_module_autoinit(TARGETS fabrica_io MODULES VTK::IOXML VTK::CommonDataModel VTK::CommonCore)
+if(FABRICA_HAVE_VTK)
+  target_sources(fabrica_io PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_vtk.cpp)
+  target_link_libraries(fabrica_io PRIVATE VTK::IOXML VTK::CommonDataModel VTK::CommonCore)
+  vtk_module_autoinit(TARGETS fabrica_io MODULES VTK::IOXML VTK::CommonDataModel VTK::CommonCore)
+endif()

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstdio>
 
+#include "fabrica/core/error.hpp"
 #include "fabrica/io/mesh_io.hpp"
 #include "fabrica/io/repair.hpp"
 #include "fabrica/io/validate.hpp"
@@ -43,7 +44,14 @@ class RealMesh : public ::testing::TestWithParam<Expected> {};
 
 TEST_P(RealMesh, CountsMatchTheIndependentChecker) {
   const Expected& e = GetParam();
-  const auto loaded = io::read_mesh(test::bundled_data() / "meshes" / e.path);
+  io::LoadedMesh loaded;
+  try {
+    loaded = io::read_mesh(test::bundled_data() / "meshes" / e.path);
+  } catch (const Error& err) {
+    // A build without VTK reads no .vtp (tests/optional checks that error).
+    if (err.kind() != ErrorKind::unavailable) throw;
+    GTEST_SKIP() << err.what();
+  }
   const auto r = io::validate_mesh(loaded.mesh);
   EXPECT_EQ(r.vertices, e.vertices);
   EXPECT_EQ(r.faces, e.faces);
