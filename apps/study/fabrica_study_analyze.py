@@ -91,20 +91,23 @@ def angular_error(d):
 def mixed_model(g):
     """error ~ technique, random intercept per participant, model as a variance component."""
     import statsmodels.formula.api as smf
-    out = {"formula": "error_deg ~ C(technique)",
-           "groups": "participant", "variance_components": ["model"]}
+    out = {"formula": "error_deg ~ C(technique)", "groups": "participant",
+           "variance_components": ["model"] if g["model"].nunique() > 1 else []}
     if g["participant"].nunique() < 2 or g["technique"].nunique() < 2:
         out["skipped"] = "needs at least two participants and two techniques"
         return out
     try:
         import warnings
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
             vc = {"model": "0 + C(model)"} if g["model"].nunique() > 1 else None
             m = smf.mixedlm("error_deg ~ C(technique)", g, groups=g["participant"],
                             vc_formula=vc, re_formula="1")
-            fit = m.fit(reml=True, method=["lbfgs", "powell"])
+            # BFGS first: L-BFGS returns a wrong intercept when the participant
+            # variance sits on the boundary (0), as with few participants.
+            fit = m.fit(reml=True, method=["bfgs", "powell"])
         out["converged"] = bool(fit.converged)
+        out["warnings"] = sorted({str(w.message).splitlines()[0] for w in caught})
         out["fixed_effects"] = {
             name: {"estimate": float(fit.fe_params[name]), "se": float(fit.bse_fe[name]),
                    "p": float(fit.pvalues[name])}

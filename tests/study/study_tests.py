@@ -264,6 +264,10 @@ def case_e2e():
         g = report["gauge"]["techniques"][t]
         check(g["ci95"][0] <= g["mean_error_deg"] <= g["ci95"][1], "gauge CI does not hold the mean")
         check(t in report["2afc"]["bradley_terry"], "no Bradley-Terry score")
+    # Balanced design: the mixed model's intercept is the first technique's mean.
+    fe = report["gauge"]["mixed_model"]["fixed_effects"]
+    check(abs(fe["Intercept"]["estimate"] - report["gauge"]["techniques"]["contours"]["mean_error_deg"]) < 0.5,
+          f"mixed model intercept {fe['Intercept']} is not the mean of contours")
     check(report["2afc"]["order_best_first"][0] == "contours", "2afc: contours always chosen, not first")
     check(report["ranking"]["schulze_order"] == ["ridges", "shaded", "contours"] or
           len(report["ranking"]["schulze_order"]) == 3, "ranking order")
