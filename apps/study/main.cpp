@@ -4,6 +4,7 @@
 //   run STUDY.json --participant ID --out DIR [--auto RESPONSES.jsonl] [--resume]
 //       [--stimuli DIR] [--screenshots DIR]
 //   analyze DIR -o REPORT_DIR                   (python3 analysis script)
+//   export-web STUDY.json -o DIR [--participants N|ID,ID,...]  (static HTML/JS)
 // Exit codes as `fabrica` (docs/cli.md): 0 ok, 1 internal, 2 bad input,
 // 3 output not writable, 4 facility unavailable (no display, no python3).
 #include <unistd.h>
@@ -18,6 +19,7 @@
 #include "run.hpp"
 #include "stimuli.hpp"
 #include "study.hpp"
+#include "web.hpp"
 
 #ifndef FABRICA_STUDY_ANALYZE_SCRIPT
 #define FABRICA_STUDY_ANALYZE_SCRIPT ""
@@ -126,6 +128,22 @@ int main(int argc, char** argv) {
   an->add_option("dir", dir, "Results folder of `run --out`")->required();
   an->add_option("-o,--output", output, "Report folder")->required();
   an->callback([&] { action = [&] { return analyze(dir, output); }; });
+
+  std::string participants = "24";
+  auto* web = app.add_subcommand("export-web", "Write a static HTML/JS version of the study");
+  web->add_option("study", study, "Study definition (JSON)")->required();
+  web->add_option("-o,--output", output, "Output folder (index.html, study.js, plans.js, stimuli/)")
+      ->required();
+  web->add_option("--participants", participants,
+                  "Number of participants (P01..PN, default 24) or a comma-separated list of ids");
+  web->add_flag("-q,--quiet", quiet, "No progress messages");
+  web->callback([&] {
+    action = [&] {
+      fabrica::study::export_web(study, output, fabrica::study::participant_list(participants),
+                                 quiet);
+      return 0;
+    };
+  });
 
   if (argc < 2) {
     std::fputs(app.help().c_str(), stderr);

@@ -316,6 +316,50 @@ def case_stimuli():
     print("stimuli: ok")
 
 
+# ---------------------------------------------------------------- web export
+def case_web():
+    d = fresh("web")
+    study = write_study(os.path.join(d, "study.json"))
+    web = os.path.join(d, "web")
+    r = study_bin("export-web", study, "-o", web, "--participants", "P1,P2", "-q", env=run_env())
+    check(r.returncode == 0, f"export-web: {r.stderr}")
+    for f in ("index.html", "study.js", "plans.js"):
+        check(os.path.exists(os.path.join(web, f)), f"export-web wrote no {f}")
+    plans_js = open(os.path.join(web, "plans.js")).read()
+    plans = json.loads(plans_js[plans_js.index("=") + 1:].rstrip().rstrip(";"))
+    plan = json.loads(plan_of(study, "P1", os.path.join(d, "plan-P1.json")))
+    check(plans["P1"] == plan, "the web plan differs from `fabrica-study plan`")
+    for t in plan["trials"]:
+        for sid in t.get("stimuli", [t.get("stimulus")]):
+            check(os.path.exists(os.path.join(web, "stimuli", sid + ".png")), f"web stimulus {sid} missing")
+    answers = os.path.join(d, "P1.jsonl")
+    write_jsonl(answers, answers_for(plan, np.random.default_rng(3)))
+    # The desktop program and the web page answer the same: the same rows.
+    out = os.path.join(d, "desktop")
+    r = study_bin("run", study, "--participant", "P1", "--out", out, "--auto", answers, "-q", env=run_env())
+    check(r.returncode == 0, f"run: {r.stderr}")
+    web_csv = os.path.join(d, "web-P1.csv")
+    r = subprocess.run([A.node, os.path.join(os.path.dirname(__file__), "web_participant.js"), web, "P1", answers,
+                        web_csv, "4"], capture_output=True, text=True)
+    check(r.returncode == 0, f"node: {r.stderr}")
+    desk = read_rows(os.path.join(out, "participants", "P1", "responses.csv"))
+    webr = read_rows(web_csv)
+    check(open(web_csv).readline() == open(os.path.join(out, "participants", "P1", "responses.csv")).readline(),
+          "web and desktop CSV headers differ")
+    check(len(desk) == len(webr), f"{len(webr)} web rows, {len(desk)} desktop rows")
+    for a, b in zip(desk, webr):
+        for c in a:
+            if c not in ("session", "rt_ms", "wall_time"):
+                check(a[c] == b[c], f"trial {a['trial']}: column {c}: desktop {a[c]!r}, web {b[c]!r}")
+        check(b["session"] == ("1" if int(b["trial"]) <= 4 else "2"), "web resume is not session 2")
+    res = os.path.join(d, "results", "participants", "P1")
+    os.makedirs(res)
+    shutil.copy(web_csv, os.path.join(res, "responses.csv"))
+    r = study_bin("analyze", os.path.join(d, "results"), "-o", os.path.join(d, "report"))
+    check(r.returncode == 0, f"analyze of the web CSV: {r.stderr}")
+    print("web: ok")
+
+
 # ---------------------------------------------------------------- analysis recovery
 COLUMNS = ["participant", "session", "trial", "block", "task", "practice", "attention", "model", "view",
            "technique", "stimulus", "technique_a", "technique_b", "stimulus_a", "stimulus_b", "techniques",
@@ -400,7 +444,8 @@ def case_analysis():
 def main():
     global A
     ap = argparse.ArgumentParser()
-    ap.add_argument("case", choices=["plan", "e2e", "stimuli", "analysis"])
+    ap.add_argument("case", choices=["plan", "e2e", "stimuli", "analysis", "web"])
+    ap.add_argument("--node", default="node")
     ap.add_argument("--study", required=True)
     ap.add_argument("--fabrica", required=True)
     ap.add_argument("--meshes", required=True)
