@@ -96,17 +96,32 @@ std::string stimulus_id(const std::string& technique, const std::string& model,
 }
 
 ModelGeometry load_model(const Model& model) {
-  std::vector<std::filesystem::path> meshes;
+  std::vector<std::pair<std::filesystem::path, bool>> meshes;  // path, carries gauges
   if (model.scene) {
-    for (const auto& s : render::read_scene_spec(model.path).structures) meshes.push_back(s.mesh);
+    // The gauge sits on what the scene shows as solid: its focus structures
+    // (ghosted context structures are see-through).
+    const auto spec = render::read_scene_spec(model.path);
+    const bool any_focus = std::any_of(spec.structures.begin(), spec.structures.end(),
+                                       [](const auto& s) { return s.role == render::Role::focus; });
+    for (const auto& s : spec.structures)
+      meshes.push_back({s.mesh, !any_focus || s.role == render::Role::focus});
   } else {
-    meshes.push_back(model.path);
+    meshes.push_back({model.path, true});
   }
   ModelGeometry g;
   for (std::size_t i = 0; i < meshes.size(); ++i) {
-    auto file = io::read_mesh(meshes[i]);
+    auto file = io::read_mesh(meshes[i].first);
     io::prepare_for_lines(file.mesh);
-    if (i == 0) g.mesh.space = file.mesh.space;
+    // The box of every structure (as `fabrica render --view` fits it).
+    const BoundingBox b = bounding_box(file.mesh.positions);
+    if (i == 0) {
+      g.mesh.space = file.mesh.space;
+      g.box = b;
+    } else {
+      g.box.min = g.box.min.cwiseMin(b.min);
+      g.box.max = g.box.max.cwiseMax(b.max);
+    }
+    if (!meshes[i].second) continue;
     const auto base = static_cast<std::int32_t>(g.mesh.positions.size());
     g.mesh.positions.insert(g.mesh.positions.end(), file.mesh.positions.begin(),
                             file.mesh.positions.end());
@@ -122,8 +137,8 @@ Camera stimulus_camera(const Study& study, const Model&, const View& view,
   if (!view.camera.empty()) {
     camera = read_camera(view.camera);
   } else {
-    camera = anatomical_camera(*parse_anatomical_view(view.name),
-                               bounding_box(geometry.mesh.positions), geometry.mesh.space);
+    camera =
+        anatomical_camera(*parse_anatomical_view(view.name), geometry.box, geometry.mesh.space);
   }
   camera.width = study.width;
   camera.height = study.height;

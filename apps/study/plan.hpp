@@ -56,10 +56,13 @@ int latin_square_rows(int k);
 int participant_row(const std::string& participant, int rows);
 
 /// A model as loaded for the study: the mesh prepared as `fabrica lines`
-/// and `render` prepare it (oriented outward), scene structures merged.
+/// and `render` prepare it (oriented outward); for a scene, its focus
+/// structures merged (all structures when it has no focus): gauges sit on
+/// what is drawn solid. A preset view is fitted to `box`, every structure.
 struct ModelGeometry {
   TriangleMesh mesh;
   std::vector<Vec3> normals;  ///< unit vertex normals
+  BoundingBox box;            ///< of every structure
 };
 ModelGeometry load_model(const Model& model);
 

@@ -335,6 +335,11 @@ Study parse_study(const nlohmann::json& j, const std::filesystem::path& file) {
   s.views = parse_list<View>(j, "views", w, [&](const nlohmann::json& v, const Where& vw) {
     return parse_view(v, vw, base);
   });
+  for (std::size_t m = 0; m < s.models.size(); ++m)
+    for (const auto& t : s.techniques)
+      if (s.models[m].scene && t.command != "render")
+        w.at("models").at(m).fail("a scene is drawn by render techniques only; technique \"" +
+                                  t.name + "\" uses " + t.command + " (give the mesh instead)");
   if (j.contains("size")) {
     const auto& size = j["size"];
     if (!size.is_array() || size.size() != 2 || !size[0].is_number_integer() ||

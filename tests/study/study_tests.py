@@ -131,6 +131,23 @@ def case_plan():
     r = study_bin("plan", study, "--participant", "../etc", "-o", os.path.join(d, "x.json"))
     check(r.returncode == 2 and "participant" in r.stderr, f"bad participant id accepted: {r.stderr}")
     check(not os.path.exists(os.path.join(d, "x.json")), "a failed plan left a file")
+    # A scene model and a camera-file view (render techniques only).
+    data = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "data")
+    with open(os.path.join(d, "cam.json"), "w") as f:
+        json.dump({"eye": [0, -80, 0], "center": [0, 0, 0], "up": [0, 0, 1], "fov_deg": 40}, f)
+    render_only = [{"name": "shaded", "command": "render"}, {"name": "toon", "command": "render", "style": "toon"}]
+    scene_study = write_study(os.path.join(d, "scene.json"), techniques=render_only,
+                              blocks=[{"task": "gauge", "points_per_stimulus": 2}])
+    s = json.load(open(scene_study))
+    s["models"] = [{"scene": os.path.join(data, "aneurysm-scene.json"), "name": "aneurysm"}]
+    s["views"] = ["anterior", {"camera": os.path.join(d, "cam.json"), "name": "front"}]
+    json.dump(s, open(scene_study, "w"))
+    p = json.loads(plan_of(scene_study, "P1", os.path.join(d, "scene-plan.json")))
+    check({t["view"] for t in p["trials"]} == {"anterior", "front"}, "camera-file view not planned")
+    s["techniques"].append({"name": "lines", "command": "lines"})
+    json.dump(s, open(scene_study, "w"))
+    r = study_bin("plan", scene_study, "--participant", "P1", "-o", os.path.join(d, "x.json"))
+    check(r.returncode == 2 and "models[0]" in r.stderr, f"a scene drawn by lines was accepted: {r.stderr}")
     print("plan: ok")
 
 
