@@ -246,6 +246,7 @@ struct Planner {
   Rng rng;
   std::vector<std::string> technique_order;  // the participant's Latin-square order
   std::map<std::pair<std::size_t, std::size_t>, std::vector<GaugePoint>> gauge_points;
+  nlohmann::json cameras = nlohmann::json::object();  // MODEL.VIEW -> camera, for gauge trials
   nlohmann::json trials = nlohmann::json::array();
 
   std::vector<std::string> ordered(const Block& b) const {
@@ -268,8 +269,9 @@ struct Planner {
     Rng point_rng(splitmix64(state));
     const ModelGeometry g = load_model(model);
     try {
-      return gauge_points[{m, v}] =
-                 sample_gauge_points(g, stimulus_camera(study, model, view, g), n, point_rng);
+      const Camera camera = stimulus_camera(study, model, view, g);
+      cameras[model.name + "." + view.name] = camera_to_json(camera);
+      return gauge_points[{m, v}] = sample_gauge_points(g, camera, n, point_rng);
     } catch (const InputError& e) {
       throw InputError(study.file.string() + ": model " + model.name + ", view " + view.name +
                        ": " + e.what());
@@ -424,7 +426,7 @@ nlohmann::json make_plan(const Study& study, const std::string& participant) {
     throw InputError("--participant \"" + participant +
                      "\": use 1 to 64 of A-Z a-z 0-9 _ - (e.g. P01)");
   const std::uint64_t seed = participant_seed(study.seed, participant);
-  Planner p{study, Rng(seed), {}, {}, nlohmann::json::array()};
+  Planner p{study, Rng(seed), {}, {}, nlohmann::json::object(), nlohmann::json::array()};
   const int k = static_cast<int>(study.techniques.size());
   const int row = participant_row(participant, latin_square_rows(k));
   for (int i : latin_square_row(k, row)) p.technique_order.push_back(study.techniques[i].name);
@@ -479,6 +481,7 @@ nlohmann::json make_plan(const Study& study, const std::string& participant) {
           {"technique_order", p.technique_order},
           {"size", {study.width, study.height}},
           {"goodbye", study.goodbye},
+          {"cameras", p.cameras},
           {"trials", p.trials}};
 }
 

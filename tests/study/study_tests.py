@@ -131,6 +131,49 @@ def case_plan():
     r = study_bin("plan", study, "--participant", "../etc", "-o", os.path.join(d, "x.json"))
     check(r.returncode == 2 and "participant" in r.stderr, f"bad participant id accepted: {r.stderr}")
     check(not os.path.exists(os.path.join(d, "x.json")), "a failed plan left a file")
+    # Ground truth: on a sphere the true normal at a pixel is known exactly
+    # (ray through the pixel centre, nearest intersection, (p - c) / r).
+    sphere = os.path.join(d, "sphere.obj")
+    with open(sphere, "w") as f:
+        nu, nv, R = 96, 48, 20.0
+        for i in range(nv + 1):
+            th = math.pi * i / nv
+            for j in range(nu):
+                ph = 2 * math.pi * j / nu
+                f.write(f"v {R*math.sin(th)*math.cos(ph)} {R*math.sin(th)*math.sin(ph)} {R*math.cos(th)}\n")
+        for i in range(nv):
+            for j in range(nu):
+                a, b = i * nu + j + 1, i * nu + (j + 1) % nu + 1
+                c, e = a + nu, b + nu
+                f.write(f"f {a} {c} {e}\nf {a} {e} {b}\n")
+    sph = write_study(os.path.join(d, "sphere.json"), techniques=[{"name": "shaded", "command": "render"}],
+                      blocks=[{"task": "gauge", "points_per_stimulus": 12}])
+    s = json.load(open(sph))
+    s["models"] = [{"mesh": sphere}]
+    s["views"] = ["anterior", "left"]
+    json.dump(s, open(sph, "w"))
+    p = json.loads(plan_of(sph, "P1", os.path.join(d, "sphere-plan.json")))
+    worst = 0.0
+    for t in p["trials"]:
+        cam = p["cameras"][f"sphere.{t['view']}"]
+        eye, ctr, up = (np.array(cam[k], float) for k in ("eye", "center", "up"))
+        fwd = (ctr - eye) / np.linalg.norm(ctr - eye)
+        right = np.cross(fwd, up)
+        right /= np.linalg.norm(right)
+        tup = np.cross(right, fwd)
+        h = math.tan(math.radians(cam["fov_deg"]) / 2)
+        x = (2 * t["pixel"][0] / cam["width"] - 1) * cam["width"] / cam["height"]
+        y = 1 - 2 * t["pixel"][1] / cam["height"]
+        ray = fwd + x * h * right + y * h * tup
+        ray /= np.linalg.norm(ray)
+        bq = ray @ eye
+        tt = -bq - math.sqrt(bq * bq - (eye @ eye - R * R))  # sphere centred at the origin
+        n = (eye + tt * ray) / R
+        nv_ = np.array([n @ right, n @ tup, -(n @ fwd)])
+        worst = max(worst, math.degrees(math.acos(min(1.0, nv_ @ np.array(t["true_normal"])))))
+    check(len(p["trials"]) == 24 and worst < 1.0, f"sphere: true normals off by up to {worst:.2f} deg")
+    print(f"sphere: true normals within {worst:.3f} deg of the exact ones")
+
     # A scene model and a camera-file view (render techniques only).
     data = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "data")
     with open(os.path.join(d, "cam.json"), "w") as f:
