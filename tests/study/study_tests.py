@@ -306,6 +306,9 @@ def case_e2e():
     rows = read_rows(log)
     check([int(x["trial"]) for x in rows] == list(range(1, N + 1)), f"after kill -9: trials {[x['trial'] for x in rows]}")
     plan_before = open(os.path.join(out, "participants", "P3", "plan.json"), "rb").read()
+    # Should a row ever be torn (power cut inside the write), resuming cuts it off.
+    with open(log, "a") as f:
+        f.write("P3,1,6,1,gau")
     r = study_bin("run", study, "--participant", "P3", "--out", out, "--auto",
                   os.path.join(d, "P3.jsonl"), "--resume", "-q", env=run_env(), timeout=300)
     check(r.returncode == 0, f"resume: {r.stderr}")
