@@ -415,6 +415,19 @@ def case_web():
             if c not in ("session", "rt_ms", "wall_time"):
                 check(a[c] == b[c], f"trial {a['trial']}: column {c}: desktop {a[c]!r}, web {b[c]!r}")
         check(b["session"] == ("1" if int(b["trial"]) <= 4 else "2"), "web resume is not session 2")
+    # The page itself (DOM code, fake DOM): clicks and drags give the same rows.
+    page_csv = os.path.join(d, "page-P1.csv")
+    r = subprocess.run([A.node, os.path.join(os.path.dirname(__file__), "web_page.js"), web, "P1", answers,
+                        page_csv], capture_output=True, text=True)
+    check(r.returncode == 0, f"node web_page.js: {r.stderr}")
+    pager = read_rows(page_csv)
+    check(len(pager) == len(desk), f"{len(pager)} rows from the page, {len(desk)} from the desktop")
+    for a, b in zip(desk, pager):
+        for c in a:
+            if c in ("normal_x", "normal_y", "normal_z") and a[c]:
+                check(abs(float(a[c]) - float(b[c])) < 2e-6, f"trial {a['trial']}: {c}: {a[c]} vs {b[c]}")
+            elif c not in ("session", "rt_ms", "wall_time", "response"):
+                check(a[c] == b[c], f"page trial {a['trial']}: column {c}: desktop {a[c]!r}, page {b[c]!r}")
     res = os.path.join(d, "results", "participants", "P1")
     os.makedirs(res)
     shutil.copy(web_csv, os.path.join(res, "responses.csv"))
