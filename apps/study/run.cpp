@@ -415,6 +415,44 @@ class Session {
   Answer state_;
 };
 
+/// The GLFW window with its GL 3.0 context and Dear ImGui, torn down in
+/// reverse order however the session ends (glfwInit done by the caller).
+class Window {
+ public:
+  Window(int w, int h, const std::string& title, bool vsync) {
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 0);
+    glfwWindowHint(GLFW_RESIZABLE, GLFW_FALSE);
+    window_ = glfwCreateWindow(w, h, title.c_str(), nullptr, nullptr);
+    if (!window_) {
+      glfwTerminate();
+      throw Error(ErrorKind::unavailable,
+                  "cannot create an OpenGL 3.0 window (no display or GL driver)");
+    }
+    glfwMakeContextCurrent(window_);
+    glfwSwapInterval(vsync ? 1 : 0);
+    ImGui::CreateContext();
+    ImGui::GetIO().IniFilename = nullptr;
+    ImGui::StyleColorsLight();
+    ImGui::GetIO().FontGlobalScale = 1.3f;
+    ImGui_ImplGlfw_InitForOpenGL(window_, true);
+    ImGui_ImplOpenGL3_Init("#version 130");
+  }
+  ~Window() {
+    ImGui_ImplOpenGL3_Shutdown();
+    ImGui_ImplGlfw_Shutdown();
+    ImGui::DestroyContext();
+    glfwDestroyWindow(window_);
+    glfwTerminate();
+  }
+  Window(const Window&) = delete;
+  Window& operator=(const Window&) = delete;
+  GLFWwindow* get() const { return window_; }
+
+ private:
+  GLFWwindow* window_ = nullptr;
+};
+
 void screenshot(const std::filesystem::path& path, int w, int h) {
   render::Image img(w, h);
   std::vector<std::uint8_t> raw(static_cast<std::size_t>(w) * h * 4);
@@ -462,82 +500,51 @@ int run_session(const RunOptions& o) {
     if (t.contains("stimuli"))
       for (const auto& s : t["stimuli"]) needed.insert(s.get<std::string>());
   }
+  // The display first: without one, nothing is drawn and no log is started.
+  if (!glfwInit())
+    throw Error(ErrorKind::unavailable,
+                "cannot open a window (no display?): run on a desktop or under xvfb-run -a");
   auto stimuli = prepare_stimuli(study, needed, o.out, o.stimuli, o.quiet);
+  std::size_t most = 1;
+  for (const auto& t : plan["trials"])
+    if (t.contains("stimuli")) most = std::max(most, t["stimuli"].size());
+  const int win_w = std::clamp(static_cast<int>(most) * (study.width + 16) + 48, 720, 1800);
+  const int win_h = std::clamp(study.height + 230, 480, 1200);
+  Window window(win_w, win_h, "fabrica-study: " + study.name, o.auto_responses.empty());
+
   ResponseLog log(log_path, o.resume);
   if (log.answered().size() >= plan["trials"].size()) {
     std::fprintf(stderr, "fabrica-study: %s has answered all %zu trials; nothing to do\n",
                  o.participant.c_str(), plan["trials"].size());
     return 0;
   }
-
-  if (!glfwInit())
-    throw Error(ErrorKind::unavailable,
-                "cannot open a window (no display?): run on a desktop or under xvfb-run -a");
-  std::size_t most = 1;
-  for (const auto& t : plan["trials"])
-    if (t.contains("stimuli")) most = std::max(most, t["stimuli"].size());
-  const int win_w = std::clamp(static_cast<int>(most) * (study.width + 16) + 48, 720, 1800);
-  const int win_h = std::clamp(study.height + 230, 480, 1200);
-  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
-  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 0);
-  glfwWindowHint(GLFW_RESIZABLE, GLFW_FALSE);
-  GLFWwindow* window =
-      glfwCreateWindow(win_w, win_h, ("fabrica-study: " + study.name).c_str(), nullptr, nullptr);
-  if (!window) {
-    glfwTerminate();
-    throw Error(ErrorKind::unavailable,
-                "cannot create an OpenGL 3.0 window (no display or GL driver)");
-  }
-  glfwMakeContextCurrent(window);
-  glfwSwapInterval(o.auto_responses.empty() ? 1 : 0);
-  ImGui::CreateContext();
-  ImGui::GetIO().IniFilename = nullptr;
-  ImGui::StyleColorsLight();
-  ImGui::GetIO().FontGlobalScale = 1.3f;
-  ImGui_ImplGlfw_InitForOpenGL(window, true);
-  ImGui_ImplOpenGL3_Init("#version 130");
-
   Session session(o, plan, log, std::move(stimuli), std::move(answers));
   std::set<std::string> captured;
   int shot = 0;
-  try {
-    while (!session.done() && !glfwWindowShouldClose(window)) {
-      if (o.auto_responses.empty())
-        glfwWaitEventsTimeout(0.1);
-      else
-        glfwPollEvents();
-      ImGui_ImplOpenGL3_NewFrame();
-      ImGui_ImplGlfw_NewFrame();
-      ImGui::NewFrame();
-      int fw = 0, fh = 0;
-      glfwGetFramebufferSize(window, &fw, &fh);
-      const std::string kind = session.frame(static_cast<float>(fw), static_cast<float>(fh));
-      ImGui::Render();
-      glViewport(0, 0, fw, fh);
-      glClearColor(1, 1, 1, 1);
-      glClear(GL_COLOR_BUFFER_BIT);
-      ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
-      if (!o.screenshots.empty() && captured.insert(kind).second) {
-        std::filesystem::create_directories(o.screenshots, ec);
-        char name[64];
-        std::snprintf(name, sizeof name, "%02d-%s.png", ++shot, kind.c_str());
-        screenshot(o.screenshots / name, fw, fh);
-      }
-      glfwSwapBuffers(window);
+  while (!session.done() && !glfwWindowShouldClose(window.get())) {
+    if (o.auto_responses.empty())
+      glfwWaitEventsTimeout(0.1);
+    else
+      glfwPollEvents();
+    ImGui_ImplOpenGL3_NewFrame();
+    ImGui_ImplGlfw_NewFrame();
+    ImGui::NewFrame();
+    int fw = 0, fh = 0;
+    glfwGetFramebufferSize(window.get(), &fw, &fh);
+    const std::string kind = session.frame(static_cast<float>(fw), static_cast<float>(fh));
+    ImGui::Render();
+    glViewport(0, 0, fw, fh);
+    glClearColor(1, 1, 1, 1);
+    glClear(GL_COLOR_BUFFER_BIT);
+    ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+    if (!o.screenshots.empty() && captured.insert(kind).second) {
+      std::filesystem::create_directories(o.screenshots, ec);
+      char name[64];
+      std::snprintf(name, sizeof name, "%02d-%s.png", ++shot, kind.c_str());
+      screenshot(o.screenshots / name, fw, fh);
     }
-  } catch (...) {
-    ImGui_ImplOpenGL3_Shutdown();
-    ImGui_ImplGlfw_Shutdown();
-    ImGui::DestroyContext();
-    glfwDestroyWindow(window);
-    glfwTerminate();
-    throw;
+    glfwSwapBuffers(window.get());
   }
-  ImGui_ImplOpenGL3_Shutdown();
-  ImGui_ImplGlfw_Shutdown();
-  ImGui::DestroyContext();
-  glfwDestroyWindow(window);
-  glfwTerminate();
   if (!o.quiet)
     std::fprintf(
         stderr,

@@ -281,6 +281,12 @@ def case_e2e():
           "an existing log was modified")
     r = study_bin("run", study, "--participant", "bad id!", "--out", out, env=run_env())
     check(r.returncode == 2, "an invalid participant id was accepted")
+    # No display: exit 4, and no log is started (a later run needs no --resume).
+    nodisplay = {k: v for k, v in run_env().items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    r = study_bin("run", study, "--participant", "P9", "--out", out, env=nodisplay)
+    check(r.returncode == 4 and "xvfb-run" in r.stderr, f"no display: exit {r.returncode}: {r.stderr}")
+    check(not os.path.exists(os.path.join(out, "participants", "P9", "responses.csv")),
+          "a run without a display started a log")
 
     # kill -9 after N responses: the auto file answers only N trials, then the
     # window waits for a human; kill it there.
