@@ -174,6 +174,17 @@ def case_plan():
     check(len(p["trials"]) == 24 and worst < 1.0, f"sphere: true normals off by up to {worst:.2f} deg")
     print(f"sphere: true normals within {worst:.3f} deg of the exact ones")
 
+    # The documented sample study is valid (model paths pointed at the test data).
+    root = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
+    sample = json.load(open(os.path.join(root, "examples", "study", "sample-study.json")))
+    sample["models"] = [{"mesh": os.path.join(root, "data", "aneurysm.off"), "name": "aneurysm"},
+                        {"mesh": os.path.join(A.meshes, "meshes/anatomy/liver/sofa_liver-smooth.obj"),
+                         "name": "liver"}]
+    json.dump(sample, open(os.path.join(d, "sample.json"), "w"))
+    p = json.loads(plan_of(os.path.join(d, "sample.json"), "P01", os.path.join(d, "sample-plan.json")))
+    check({t["task"] for t in p["trials"]} == {"gauge", "2afc", "likert", "ranking"}, "sample study tasks")
+    check(len(p["technique_order"]) == 5, "the sample study compares five techniques")
+
     # A scene model and a camera-file view (render techniques only).
     data = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "data")
     with open(os.path.join(d, "cam.json"), "w") as f:
