@@ -134,12 +134,17 @@ std::map<std::string, std::filesystem::path> prepare_stimuli(const Study& study,
   if (!from_dir.empty()) {
     if (!std::filesystem::is_directory(from_dir))
       throw InputError("--stimuli " + from_dir.string() + ": not a folder");
+    // The output folder of `fabrica-study stimuli -o DIR` (or of a run) holds them in stimuli/.
+    std::filesystem::path dir = from_dir;
+    if (!ids.empty() && !std::filesystem::exists(dir / (*ids.begin() + ".png")) &&
+        std::filesystem::is_directory(dir / "stimuli"))
+      dir /= "stimuli";
     for (const auto& id : ids) {
-      const auto png = from_dir / (id + ".png");
+      const auto png = dir / (id + ".png");
       if (!std::filesystem::is_regular_file(png))
         throw InputError(
             "--stimuli " + from_dir.string() + ": " + id +
-            ".png is missing (export it with `fabrica-study stimuli STUDY.json -o DIR`)");
+            ".png is missing (draw them with `fabrica-study stimuli STUDY.json -o DIR`)");
       check_size(png, study);
       out[id] = png;
     }

@@ -25,8 +25,8 @@ std::vector<std::string> stimulus_command(const Technique& t, const Model& m,
 /// Makes sure every stimulus in `ids` is a PNG in `out_dir`/stimuli (drawn
 /// when missing or when its recorded command changed; cameras written to
 /// `out_dir`/cameras). Returns id -> PNG path. With `from_dir` non-empty no
-/// drawing happens: every PNG must be there (InputError naming the first
-/// missing one) at the study's size.
+/// drawing happens: every PNG must be in `from_dir` or its stimuli/
+/// subfolder (InputError naming the first missing one), at the study's size.
 std::map<std::string, std::filesystem::path> prepare_stimuli(const Study& study,
                                                              const std::set<std::string>& ids,
                                                              const std::filesystem::path& out_dir,

@@ -390,6 +390,10 @@ def case_stimuli():
                   os.path.join(d, "a.jsonl"), "-q", env={**run_env(), "FABRICA_BIN": "/nonexistent"})
     check(r.returncode == 0, f"run --stimuli: {r.stderr}")
     check(not os.path.exists(os.path.join(out, "stimuli")), "run --stimuli drew stimuli")
+    # The output folder of `fabrica-study stimuli` is accepted as it is (stimuli/ inside).
+    r = study_bin("run", study, "--participant", "P3", "--out", out, "--stimuli", live, "--auto",
+                  os.path.join(d, "a.jsonl"), "-q", env={**run_env(), "FABRICA_BIN": "/nonexistent"})
+    check(r.returncode == 0, f"run --stimuli STIMULI_OUTPUT: {r.stderr}")
     os.remove(os.path.join(exported, "contours.liver.anterior.png"))
     r = study_bin("run", study, "--participant", "P2", "--out", out, "--stimuli", exported, "-q")
     check(r.returncode == 2 and "contours.liver.anterior.png" in r.stderr, f"missing stimulus: {r.stderr}")
