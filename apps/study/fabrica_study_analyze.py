@@ -10,7 +10,8 @@ SVG). Written for study authors to read and extend: one function per task.
 
   gauge    angular error (degrees) between the response and the true view-space
            normal; per technique and per technique x model: mean, median and
-           95% bootstrap CIs (percentile, 2000 resamples of trials, fixed seed);
+           95% bootstrap CIs (percentile, 2000 resamples of trials, fixed seed;
+           also resampling whole participants, ci95_by_participant);
            a linear mixed model error ~ technique with a random intercept per
            participant and a variance component for the model (statsmodels
            MixedLM).
@@ -70,11 +71,26 @@ def bootstrap_ci(values, stat, rng):
     return [float(np.percentile(stats, 2.5)), float(np.percentile(stats, 97.5))]
 
 
-def summary(errors, rng):
+def cluster_ci(errors, participants, rng):
+    """95% CI of the mean resampling whole participants (their trials are not independent)."""
+    ids, inverse = np.unique(np.asarray(participants), return_inverse=True)
+    if len(ids) < 3:
+        return None
+    sums = np.bincount(inverse, weights=errors)
+    counts = np.bincount(inverse).astype(float)
+    idx = rng.integers(0, len(ids), size=(N_BOOT, len(ids)))
+    means = sums[idx].sum(axis=1) / counts[idx].sum(axis=1)
+    return [float(np.percentile(means, 2.5)), float(np.percentile(means, 97.5))]
+
+
+def summary(d, rng):
+    errors = d["error_deg"].to_numpy()
     return {
         "n": int(len(errors)),
+        "participants": int(d["participant"].nunique()),
         "mean_error_deg": float(np.mean(errors)),
         "ci95": bootstrap_ci(errors, np.mean, rng),
+        "ci95_by_participant": cluster_ci(errors, d["participant"], rng),
         "median_error_deg": float(np.median(errors)),
         "median_ci95": bootstrap_ci(errors, np.median, rng),
     }
@@ -129,9 +145,9 @@ def analyze_gauge(data):
     rng = np.random.default_rng(SEED)
     report = {"techniques": {}, "models": {}}
     for t, d in sorted(g.groupby("technique"), key=lambda kv: kv[0]):
-        report["techniques"][t] = summary(d["error_deg"].to_numpy(), rng)
+        report["techniques"][t] = summary(d, rng)
     for (t, m), d in sorted(g.groupby(["technique", "model"]), key=lambda kv: kv[0]):
-        report["models"].setdefault(m, {})[t] = summary(d["error_deg"].to_numpy(), rng)
+        report["models"].setdefault(m, {})[t] = summary(d, rng)
     report["order_best_first"] = sorted(report["techniques"],
                                         key=lambda t: report["techniques"][t]["mean_error_deg"])
     report["mixed_model"] = mixed_model(g)

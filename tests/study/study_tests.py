@@ -520,6 +520,12 @@ def case_analysis():
     for t, v in truth.items():
         s = g["techniques"][t]
         check(s["ci95"][0] <= v <= s["ci95"][1], f"gauge {t}: true mean {v:.2f} outside CI {s['ci95']}")
+        # Participant bootstrap: no participant effect here, so about as wide as the
+        # trial bootstrap, around the mean (truth within 1.5 half-widths, ~99.7%).
+        c, w = s["ci95_by_participant"], s["ci95"][1] - s["ci95"][0]
+        check(c[0] < s["mean_error_deg"] < c[1] and 0.5 * w < c[1] - c[0] < 2 * w and
+              abs(v - s["mean_error_deg"]) < 1.5 * (c[1] - c[0]) / 2,
+              f"gauge {t}: participant-bootstrap CI {c} (trial CI {s['ci95']}, true {v:.2f})")
     check(g["order_best_first"] == ["contours", "shaded", "ridges"], f"gauge order {g['order_best_first']}")
     check("liver" in g["models"] and "contours" in g["models"]["liver"], "no per-model gauge summary")
     mm = g["mixed_model"]
