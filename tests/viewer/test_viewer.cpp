@@ -56,14 +56,16 @@ Outcome run(const std::string& command, const fs::path& dir) {
   return r;
 }
 
-/// The viewer on a fresh X server, window `size`, running `script`.
+/// The viewer on a fresh X server, window `size`, running `script`. The X
+/// authority file lives in the test's folder: xvfb-run's own temporary
+/// folder sometimes fails to be removed (exit 5) while other servers run.
 Outcome run_viewer(const fs::path& dir, const std::string& script, const std::string& size,
                    const std::string& extra = "") {
   const fs::path path = dir / "script.txt";
   std::ofstream(path) << script;
-  return run(std::string(XVFB_RUN) + " -a -s '-screen 0 1600x1200x24' " +
-                 shell_quote(FABRICA_VIEWER_EXE) + " --size " + size + " --script " +
-                 shell_quote(path.string()) + " " + extra,
+  return run(std::string(XVFB_RUN) + " -a -f " + shell_quote((dir / "Xauthority").string()) +
+                 " -s '-screen 0 1600x1200x24' " + shell_quote(FABRICA_VIEWER_EXE) + " --size " +
+                 size + " --script " + shell_quote(path.string()) + " " + extra,
              dir);
 }
 
