@@ -1,5 +1,7 @@
 #include "script.hpp"
 
+#include "ui.hpp"
+
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -163,6 +165,17 @@ int run_script(Viewer& v, const std::filesystem::path& path) {
         }
         loaded();
         render::write_png(v.screenshot(width, height, transparent), w[1]);
+      } else if (cmd == "screenshot-window") {
+        expect_args(w, 1, 1, "screenshot-window PATH");
+        loaded();
+        v.capture_window(w[1]);
+      } else if (cmd == "panel") {
+        expect_args(w, 2, 2, "panel NAME open|closed");
+        if (w[2] != "open" && w[2] != "closed") throw InputError("usage: panel NAME open|closed");
+        loaded();
+        v.find(w[1]);
+        set_panel_open(w[1], w[2] == "open");
+        v.frame();
       } else if (cmd == "export-svg") {
         expect_args(w, 1, 1, "export-svg PATH");
         loaded();
@@ -191,7 +204,8 @@ int run_script(Viewer& v, const std::filesystem::path& path) {
       } else {
         throw InputError("unknown command \"" + cmd +
                          "\" (open, focus, context, hide, show, set, view, camera, fit, orbit, "
-                         "wait, screenshot, export-svg, save-scene, save-camera, click, measure, "
+                         "wait, screenshot, screenshot-window, panel, export-svg, save-scene, "
+                         "save-camera, click, measure, "
                          "quit)");
       }
     } catch (const Error& e) {

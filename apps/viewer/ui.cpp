@@ -9,6 +9,9 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
 
 #include "fabrica/core/error.hpp"
 #include "fabrica/lines/extract.hpp"
@@ -28,6 +31,11 @@ struct UiState {
   int shot_w = 2048, shot_h = 1280;
   bool shot_transparent = false;
 };
+
+std::map<std::string, bool>& pending_open() {
+  static std::map<std::string, bool> pending;
+  return pending;
+}
 
 UiState& ui() {
   static UiState state;
@@ -82,7 +90,8 @@ void menu(Viewer& v) {
     ImGui::Separator();
     ImGui::MenuItem("Structures panel", "S", &ui().show_structures);
     ImGui::MenuItem("HUD", "H", &ui().show_hud);
-    ImGui::ColorEdit3("Background", &v.background().r, ImGuiColorEditFlags_NoInputs);
+    if (ImGui::ColorEdit3("Background", &v.background().r, ImGuiColorEditFlags_NoInputs))
+      v.style_changed();
     if (ImGui::Checkbox("Transparent export", &v.transparent())) v.style_changed();
     ImGui::EndMenu();
   }
@@ -91,14 +100,19 @@ void menu(Viewer& v) {
     if (ImGui::BeginMenu("Hybrid apparent ridges")) {
       auto& h = v.hybrid();
       float lambda = static_cast<float>(h.lambda), threshold = static_cast<float>(h.threshold);
-      if (ImGui::SliderFloat("lambda", &lambda, 0.0f, 4.0f)) h.lambda = lambda;
-      if (ImGui::SliderFloat("threshold", &threshold, 0.0f, 1.0f)) h.threshold = threshold;
+      bool changed = false;
+      if (ImGui::SliderFloat("lambda", &lambda, 0.0f, 4.0f)) h.lambda = lambda, changed = true;
+      if (ImGui::SliderFloat("threshold", &threshold, 0.0f, 1.0f))
+        h.threshold = threshold, changed = true;
       float tau = static_cast<float>(h.tau.value_or(0.0));
       bool custom = h.tau.has_value();
-      if (ImGui::Checkbox("custom tau", &custom))
+      if (ImGui::Checkbox("custom tau", &custom)) {
         h.tau = custom ? std::optional<double>(tau) : std::nullopt;
-      if (custom && ImGui::SliderFloat("tau", &tau, -10.0f, 10.0f)) h.tau = tau;
-      ImGui::Checkbox("fade", &h.fade);
+        changed = true;
+      }
+      if (custom && ImGui::SliderFloat("tau", &tau, -10.0f, 10.0f)) h.tau = tau, changed = true;
+      changed |= ImGui::Checkbox("fade", &h.fade);
+      if (changed) v.style_changed();
       ImGui::EndMenu();
     }
     ImGui::EndMenu();
@@ -130,6 +144,13 @@ void structure_panel(Viewer& v) {
     ImGui::SameLine();
     const std::string title =
         s.name + (s.role == render::Role::focus ? "  [focus]" : "") + "###node";
+    // `panel NAME open|closed` (script): the row and its Lines section.
+    std::optional<bool> set_open;
+    if (const auto p = pending_open().find(s.name); p != pending_open().end()) {
+      set_open = p->second;
+      pending_open().erase(p);
+      ImGui::SetNextItemOpen(*set_open);
+    }
     if (ImGui::TreeNode(title.c_str())) {
       int role = s.role == render::Role::focus ? 0 : 1;
       const char* roles[] = {"focus", "context"};
@@ -152,6 +173,7 @@ void structure_panel(Viewer& v) {
         st.shading = static_cast<render::Shading>(shading);
         changed = true;
       }
+      if (set_open) ImGui::SetNextItemOpen(*set_open);
       if (ImGui::TreeNode("Lines")) {
         for (LineFamily f : all_families()) {
           bool on = std::find(st.families.begin(), st.families.end(), f) != st.families.end();
@@ -360,6 +382,10 @@ void shortcuts(Viewer& v) {
 }
 
 }  // namespace
+
+void set_panel_open(const std::string& structure, bool open) {
+  pending_open()[structure] = open;
+}
 
 void draw_ui(Viewer& v) {
   shortcuts(v);

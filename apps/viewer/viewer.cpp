@@ -391,10 +391,17 @@ void Viewer::frame() {
     if (!lines->error.empty() && (errors_.empty() || errors_.back() != lines->error))
       report_error(lines->error);
     const auto t1 = Clock::now();
-    try {
-      upload(renderer_->render(build_scene(lines.get()), camera_, render_options(transparent_)));
-    } catch (const Error& e) {
-      report_error(e.what());
+    // Nothing changed since the last picture (same lines, camera and
+    // styles): the window's texture still shows it.
+    const std::pair<std::uint64_t, std::uint64_t> key{lines->version, camera_revision_};
+    if (redraw_ || key != drawn_ || texture_ == 0) {
+      try {
+        upload(renderer_->render(build_scene(lines.get()), camera_, render_options(transparent_)));
+      } catch (const Error& e) {
+        report_error(e.what());
+      }
+      drawn_ = key;
+      redraw_ = false;
     }
     stats_.ms_gpu_submit = ms_since(t1);
     stats_.ms_lines = lines->ms;
@@ -417,11 +424,28 @@ void Viewer::frame() {
   g.ClearColor(background_.r, background_.g, background_.b, 1.0f);
   g.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
   ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+  if (!capture_.empty()) {
+    // The window as shown, panels included (documentation pictures).
+    render::Image shot(fw, fh), row_up(fw, fh);
+    g.PixelStorei(GL_PACK_ALIGNMENT, 1);
+    g.ReadPixels(0, 0, fw, fh, GL_RGBA, GL_UNSIGNED_BYTE, row_up.rgba.data());
+    for (int y = 0; y < fh; ++y)
+      std::copy_n(row_up.pixel(0, fh - 1 - y), static_cast<std::size_t>(fw) * 4, shot.pixel(0, y));
+    for (std::size_t i = 3; i < shot.rgba.size(); i += 4) shot.rgba[i] = 255;
+    const std::filesystem::path path = capture_;
+    capture_.clear();
+    render::write_png(shot, path);
+  }
   window_->swap_buffers();
   stats_.ms_gpu_submit += ms_since(t2);
   stats_.ms_frame = ms_since(t0);
   ++stats_.frame;
   write_frame_log();
+}
+
+void Viewer::capture_window(const std::filesystem::path& path) {
+  capture_ = path;
+  frame();
 }
 
 void Viewer::write_frame_log() {

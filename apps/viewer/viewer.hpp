@@ -83,7 +83,10 @@ class Viewer {
   /// to structure i; throws InputError for an unknown key or a bad value.
   void set_keys(std::size_t i, const nlohmann::json& keys);
   /// Call after editing a structure's style: lines and meshes follow.
-  void style_changed() { lines_dirty_ = true; }
+  void style_changed() {
+    lines_dirty_ = true;
+    redraw_ = true;
+  }
 
   // --- camera
   Camera& camera() { return camera_; }
@@ -98,6 +101,8 @@ class Viewer {
   // --- outputs
   render::Image screenshot(int width, int height, bool transparent);
   void export_svg(const std::filesystem::path& path);
+  /// Draws a frame and writes the window as shown (panels included) as PNG.
+  void capture_window(const std::filesystem::path& path);
   void save_scene(const std::filesystem::path& path);
   /// The structure under pixel (x, y) of the window's view (GPU id buffer,
   /// then the exact point by a ray against that structure's triangles).
@@ -159,6 +164,9 @@ class Viewer {
   unsigned int texture_ = 0;
   int texture_w_ = 0, texture_h_ = 0;
   bool close_requested_ = false;
+  bool redraw_ = true;
+  std::pair<std::uint64_t, std::uint64_t> drawn_{0, 0};
+  std::filesystem::path capture_;
   // mouse state for the arcball
   bool dragging_ = false;
   int drag_button_ = -1;
