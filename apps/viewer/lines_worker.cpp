@@ -60,6 +60,9 @@ void LinesWorker::run() {
       try {
         result->lines[item.id] = structure_lines(*item.source->extractor, *item.source->surface,
                                                  item.style, item.thresholds, job->camera);
+        if (item.hatching)
+          result->hatching[item.id] =
+              structure_hatching(*item.source->surface, job->camera, item.hatching_width);
       } catch (const std::exception& e) {
         result->error = e.what();
       }

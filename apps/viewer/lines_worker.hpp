@@ -40,6 +40,8 @@ struct LinesJob {
     std::shared_ptr<LineSource> source;
     render::StructureStyle style;
     LineOptions thresholds;
+    bool hatching = false;
+    double hatching_width = 1.0;
   };
   std::vector<Item> items;
 };
@@ -47,9 +49,10 @@ struct LinesJob {
 struct LinesResult {
   std::uint64_t version = 0;
   Camera camera;
-  std::map<int, LineSet> lines;  ///< by structure id
-  double ms = 0.0;               ///< wall time of the extraction
-  std::string error;             ///< empty unless a structure's lines failed
+  std::map<int, LineSet> lines;                   ///< by structure id
+  std::map<int, render::PolylineLayer> hatching;  ///< by structure id, where asked for
+  double ms = 0.0;                                ///< wall time of the extraction
+  std::string error;                              ///< empty unless a structure's lines failed
 };
 
 class LinesWorker {

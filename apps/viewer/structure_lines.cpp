@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "fabrica/hatching/hatching.hpp"
 #include "fabrica/lines/chain.hpp"
 #include "fabrica/lines/smooth.hpp"
 
@@ -32,6 +33,26 @@ LineSet structure_lines(LineExtractor& extractor, const Surface& surface,
     smooth_lines(lines, surface, smoothing);
   }
   return lines;
+}
+
+render::PolylineLayer structure_hatching(const Surface& surface, const Camera& camera,
+                                         double width) {
+  hatching::HatchingOptions options;
+  options.stroke_width_px = width;
+  const hatching::StrokeSet strokes = hatching::hatch(surface, camera, options);
+  render::PolylineLayer layer;
+  layer.name = "hatching";
+  layer.style.width = width;
+  layer.style.contour_width_factor = 1.0;
+  layer.style.taper = 0.0;
+  layer.style.fade_by_strength = false;
+  for (const hatching::Stroke& stroke : strokes.strokes) {
+    std::vector<Vec3> points;
+    points.reserve(stroke.vertices.size());
+    for (const hatching::StrokeVertex& v : stroke.vertices) points.push_back(v.position);
+    layer.polylines.push_back(std::move(points));
+  }
+  return layer;
 }
 
 }  // namespace fabrica::viewer

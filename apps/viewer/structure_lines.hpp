@@ -27,4 +27,10 @@ LineSet structure_lines(LineExtractor& extractor, const Surface& surface,
                         const render::StructureStyle& style, const LineOptions& thresholds,
                         const Camera& camera);
 
+/// Shading strokes of one structure for one camera (fabrica::hatching,
+/// "Suggestive Hatching"), as a layer drawn under its lines; as
+/// `fabrica hatch`, strokes are `width` reference pixels wide, untapered.
+render::PolylineLayer structure_hatching(const Surface& surface, const Camera& camera,
+                                         double width);
+
 }  // namespace fabrica::viewer

@@ -210,11 +210,22 @@ void structure_panel(Viewer& v) {
         changed |= ImGui::Checkbox("hybrid GPU apparent ridges", &st.hybrid_apparent_ridges);
         ImGui::TreePop();
       }
+      if (ImGui::TreeNode("Hatching")) {
+        changed |= ImGui::Checkbox("shading strokes", &s.hatching);
+        float width = static_cast<float>(s.hatching_width);
+        if (ImGui::SliderFloat("stroke width", &width, 0.5f, 4.0f)) {
+          s.hatching_width = width;
+          changed = true;
+        }
+        ImGui::TreePop();
+      }
       if (ImGui::Button("Reset to defaults")) {
         const render::Color c = st.color;
         st = render::default_style(s.role);
         st.color = c;
         s.thresholds = LineOptions{};
+        s.hatching = false;
+        s.hatching_width = 1.0;
         changed = true;
       }
       ImGui::TreePop();

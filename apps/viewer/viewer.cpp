@@ -197,8 +197,24 @@ void Viewer::focus(std::size_t i) {
   structures_[i].visible = true;
 }
 
-void Viewer::set_keys(std::size_t i, const nlohmann::json& keys) {
+void Viewer::set_keys(std::size_t i, const nlohmann::json& all_keys) {
   ViewerStructure& s = structures_.at(i);
+  // The viewer's own keys (not in scene JSON): hatching, hatching_width.
+  nlohmann::json keys = all_keys;
+  if (keys.contains("hatching")) {
+    if (!keys["hatching"].is_boolean()) throw InputError("set: hatching must be true or false");
+    s.hatching = keys["hatching"].get<bool>();
+    keys.erase("hatching");
+  }
+  if (keys.contains("hatching_width")) {
+    const auto& w = keys["hatching_width"];
+    if (!w.is_number() || !(w.get<double>() > 0.0 && w.get<double>() <= 20.0))
+      throw InputError("set: hatching_width must be a number in (0, 20] (pixels)");
+    s.hatching_width = w.get<double>();
+    keys.erase("hatching_width");
+  }
+  lines_dirty_ = true;
+  if (keys.empty()) return;
   // The structure as a one-structure scene, the keys applied, read back by
   // the scene reader: the same names, ranges and messages as scene JSON.
   render::SceneSpec one;
@@ -215,7 +231,8 @@ void Viewer::set_keys(std::size_t i, const nlohmann::json& keys) {
     if (!j["structures"][0].contains(key) && key != "smooth")
       throw InputError("set: unknown key \"" + key +
                        "\" (role, shading, color, opacity, ambient, toon_levels, lines, "
-                       "line_color, line_width, taper, fade, hidden, hybrid, smooth)");
+                       "line_color, line_width, taper, fade, hidden, hybrid, smooth, hatching, "
+                       "hatching_width)");
     j["structures"][0][key] = value;
   }
   const bool role_changes = keys.contains("role");
@@ -305,7 +322,7 @@ std::uint64_t Viewer::post_lines(const Camera& camera, bool force) {
   job.camera = camera;
   for (const auto& s : structures_) {
     if (!s.visible) continue;
-    job.items.push_back({s.id, s.lines, s.style, s.thresholds});
+    job.items.push_back({s.id, s.lines, s.style, s.thresholds, s.hatching, s.hatching_width});
   }
   lines_worker_.post(std::move(job));
   lines_dirty_ = false;
@@ -334,6 +351,8 @@ render::Scene Viewer::build_scene(const LinesResult* lines) {
     if (lines != nullptr) {
       const auto it = lines->lines.find(s.id);
       if (it != lines->lines.end()) st.lines = it->second;
+      const auto h = lines->hatching.find(s.id);
+      if (h != lines->hatching.end()) st.polyline_layers.push_back(h->second);
     }
     scene.structures.push_back(std::move(st));
   }

@@ -31,6 +31,8 @@ struct ViewerStructure {
   render::Role role = render::Role::context;
   render::StructureStyle style;
   LineOptions thresholds;  ///< line thresholds (the scene JSON has no keys for them)
+  bool hatching = false;   ///< shading strokes under the lines (not in scene JSON)
+  double hatching_width = 1.0;
   std::shared_ptr<const Surface> surface;
   std::shared_ptr<const render::RenderMesh> mesh;            ///< without curvature
   std::shared_ptr<const render::RenderMesh> mesh_curvature;  ///< made when hybrid is on
