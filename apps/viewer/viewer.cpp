@@ -682,13 +682,24 @@ void Viewer::handle_input() {
 
 void Viewer::click_at(int x, int y) {
   const auto p = pick(x, y);
-  if (!p) return;
+  if (!p) {
+    if (!options_.interactive) std::printf("click %d %d: nothing\n", x, y);
+    return;
+  }
+  const std::string& name = structures_[static_cast<std::size_t>(p->structure)].name;
+  if (!options_.interactive)  // script mode reports what the HUD shows
+    std::printf("click %d %d: %s at %.3f %.3f %.3f mm, k1 %.5f k2 %.5f H %.5f /mm\n", x, y,
+                name.c_str(), p->point.x(), p->point.y(), p->point.z(), p->k1, p->k2,
+                0.5 * (p->k1 + p->k2));
   if (measure_mode_) {
     if (measure_.size() >= 2) measure_.clear();
     measure_.push_back(*p);
+    if (measure_.size() == 2 && !options_.interactive)
+      std::printf("distance %.3f mm\n", (measure_[0].point - measure_[1].point).norm());
   } else {
     focus(static_cast<std::size_t>(p->structure));
   }
+  std::fflush(stdout);
 }
 
 }  // namespace fabrica::viewer
