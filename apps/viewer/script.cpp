@@ -120,14 +120,18 @@ int run_script(Viewer& v, const std::filesystem::path& path) {
         v.set_keys(v.find(w[1]), parse_keys(w, 2));
         v.frame();
       } else if (cmd == "view") {
-        expect_args(w, 1, 1, "view anterior|posterior|left|right|superior|inferior");
+        expect_args(w, 1, 2, "view anterior|posterior|left|right|superior|inferior [animate]");
+        if (w.size() == 3 && w[2] != "animate")
+          throw InputError("view: the second word can only be \"animate\"");
         const auto view = parse_anatomical_view(w[1]);
         if (!view)
           throw InputError("view: unknown view \"" + w[1] +
                            "\" (anterior, posterior, left, right, superior, inferior)");
         loaded();
-        v.view(*view);
-        v.frame();
+        v.view(*view, w.size() == 3);
+        do {
+          v.frame();
+        } while (v.transitioning() && !v.should_close());
       } else if (cmd == "camera") {
         expect_args(w, 1, 1, "camera FILE");
         Camera c = read_camera(w[1]);

@@ -84,9 +84,10 @@ void menu(Viewer& v) {
     int key = 1;
     for (AnatomicalView view : kViews) {
       const std::string shortcut = std::to_string(key++);
-      if (ImGui::MenuItem(to_string(view), shortcut.c_str())) guarded(v, [&] { v.view(view); });
+      if (ImGui::MenuItem(to_string(view), shortcut.c_str()))
+        guarded(v, [&] { v.view(view, true); });
     }
-    if (ImGui::MenuItem("Fit to selection", "F")) guarded(v, [&] { v.fit_to_selection(); });
+    if (ImGui::MenuItem("Fit to selection", "F")) guarded(v, [&] { v.fit_to_selection(true); });
     ImGui::Separator();
     ImGui::MenuItem("Structures panel", "S", &ui().show_structures);
     ImGui::MenuItem("HUD", "H", &ui().show_hud);
@@ -381,8 +382,8 @@ void shortcuts(Viewer& v) {
   if (ctrl && ImGui::IsKeyPressed(GLFW_KEY_Q)) v.request_close();
   if (ctrl) return;
   for (int k = 0; k < 6; ++k)
-    if (ImGui::IsKeyPressed(GLFW_KEY_1 + k)) guarded(v, [&] { v.view(kViews[k]); });
-  if (ImGui::IsKeyPressed(GLFW_KEY_F)) guarded(v, [&] { v.fit_to_selection(); });
+    if (ImGui::IsKeyPressed(GLFW_KEY_1 + k)) guarded(v, [&] { v.view(kViews[k], true); });
+  if (ImGui::IsKeyPressed(GLFW_KEY_F)) guarded(v, [&] { v.fit_to_selection(true); });
   if (ImGui::IsKeyPressed(GLFW_KEY_H)) ui().show_hud = !ui().show_hud;
   if (ImGui::IsKeyPressed(GLFW_KEY_S)) ui().show_structures = !ui().show_structures;
   if (ImGui::IsKeyPressed(GLFW_KEY_M)) {

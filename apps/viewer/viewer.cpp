@@ -289,21 +289,60 @@ void Viewer::set_camera(const Camera& camera) {
   camera_changed();
 }
 
-void Viewer::view(AnatomicalView v) {
-  camera_ = anatomical_camera(v, scene_box(false), scene_space(), camera_.width, camera_.height);
+void Viewer::view(AnatomicalView v, bool animate) {
+  const Camera target =
+      anatomical_camera(v, scene_box(false), scene_space(), camera_.width, camera_.height);
+  if (animate && camera_set_) return start_transition(target);
+  camera_ = target;
   camera_set_ = true;
   camera_changed();
 }
 
-void Viewer::fit_to_selection() {
+void Viewer::start_transition(const Camera& target) {
+  from_ = camera_;
+  to_ = target;
+  transition_start_ = Clock::now();
+}
+
+void Viewer::step_transition() {
+  if (!to_) return;
+  const double t = std::min(1.0, ms_since(transition_start_) / 400.0);
+  const double s = t * t * (3.0 - 2.0 * t);  // smoothstep
+  auto basis = [](const Camera& c) {
+    Eigen::Matrix3d m;
+    m.col(0) = c.right();
+    m.col(1) = c.true_up();
+    m.col(2) = -c.forward();
+    return Eigen::Quaterniond(m);
+  };
+  const Eigen::Quaterniond q = basis(*from_).slerp(s, basis(*to_));
+  const double d0 = (from_->eye - from_->center).norm(), d1 = (to_->eye - to_->center).norm();
+  const Eigen::Matrix3d r = q.toRotationMatrix();
+  camera_.center = (1.0 - s) * from_->center + s * to_->center;
+  camera_.eye = camera_.center + ((1.0 - s) * d0 + s * d1) * r.col(2);
+  camera_.up = r.col(1);
+  camera_changed();
+  if (t >= 1.0) {
+    const int w = camera_.width, h = camera_.height;
+    camera_ = *to_;
+    camera_.width = w;
+    camera_.height = h;
+    from_.reset();
+    to_.reset();
+  }
+}
+
+void Viewer::fit_to_selection(bool animate) {
   const BoundingBox box = scene_box(true);
   const Vec3 c = 0.5 * (box.min + box.max);
   const double r = 0.5 * (box.max - box.min).norm();
   const double half = std::min(camera_.fov_deg, camera_.fov_deg * camera_.aspect()) * M_PI / 360.0;
   const double distance = 1.05 * r / std::sin(half);
-  const Vec3 dir = camera_.forward();
-  camera_.center = c;
-  camera_.eye = c - distance * dir;
+  Camera target = camera_;
+  target.center = c;
+  target.eye = c - distance * camera_.forward();
+  if (animate) return start_transition(target);
+  camera_ = target;
   camera_changed();
 }
 
@@ -389,6 +428,7 @@ void Viewer::frame() {
   ImGui_ImplGlfw_NewFrame();
   ImGui::NewFrame();
   if (options_.interactive) handle_input();
+  step_transition();
 
   int fw = 0, fh = 0;
   window_->framebuffer_size(fw, fh);
@@ -633,6 +673,8 @@ void Viewer::handle_input() {
                      glfwGetMouseButton(w, GLFW_MOUSE_BUTTON_MIDDLE) == GLFW_PRESS;
   if (!dragging_ && !io.WantCaptureMouse && (left || right) && camera_set_) {
     dragging_ = true;
+    from_.reset();  // a drag ends an animated transition where it is
+    to_.reset();
     drag_button_ = left && !io.KeyShift ? 0 : 1;
     drag_x_ = mx;
     drag_y_ = my;

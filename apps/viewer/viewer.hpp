@@ -93,11 +93,15 @@ class Viewer {
   // --- camera
   Camera& camera() { return camera_; }
   void set_camera(const Camera& camera);
-  void view(AnatomicalView view);
+  /// `animate`: the camera turns and moves there over 0.4 s (interactive
+  /// use; scripts jump, so their frames are reproducible).
+  void view(AnatomicalView view, bool animate = false);
   /// Keeps the direction, moves the eye so the focus (or everything) fills the view.
-  void fit_to_selection();
+  void fit_to_selection(bool animate = false);
   /// Turns the eye about the view's up axis through the centre.
   void orbit(double degrees);
+  /// True while an animated camera transition runs.
+  bool transitioning() const { return to_.has_value(); }
   void camera_changed() { ++camera_revision_; }
 
   // --- outputs
@@ -169,6 +173,11 @@ class Viewer {
   bool redraw_ = true;
   std::pair<std::uint64_t, std::uint64_t> drawn_{0, 0};
   std::filesystem::path capture_;
+  // camera transition (animated views)
+  std::optional<Camera> from_, to_;
+  std::chrono::steady_clock::time_point transition_start_;
+  void start_transition(const Camera& target);
+  void step_transition();
   // mouse state for the arcball
   bool dragging_ = false;
   int drag_button_ = -1;

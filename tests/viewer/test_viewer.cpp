@@ -299,9 +299,13 @@ TEST(Viewer, BadFileLeavesTheSessionRunning) {
   const fs::path dir = work_dir();
   std::ofstream(dir / "broken.stl") << "solid nothing\nendsolid\n";
   const fs::path mesh = test::bundled_data() / "meshes" / "classic" / "c3d_igea.ply";
-  const std::string script = "open " + quote((dir / "broken.stl").string()) + "\nwait\nopen " +
-                             quote(mesh.string()) + "\nwait\nscreenshot " +
-                             quote((dir / "after.png").string()) + " 200x150\n";
+  // Then an animated view change ends exactly where the jump goes.
+  const std::string script =
+      "open " + quote((dir / "broken.stl").string()) + "\nwait\nopen " + quote(mesh.string()) +
+      "\nwait\nscreenshot " + quote((dir / "after.png").string()) +
+      " 200x150\nview left animate\nscreenshot " + quote((dir / "animated.png").string()) +
+      " 200x150\nview anterior\nview left\nscreenshot " + quote((dir / "jumped.png").string()) +
+      " 200x150\n";
   const Outcome r = run_viewer(dir, script, "320x240");
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.err.find("broken.stl"), std::string::npos) << r.err;
@@ -311,6 +315,10 @@ TEST(Viewer, BadFileLeavesTheSessionRunning) {
     for (int x = 0; x < after.width; ++x)
       if (after.pixel(x, y)[0] < 250) ++drawn;
   EXPECT_GT(drawn, 1000u);
+  const auto diff = render::compare_images(render::read_png(dir / "animated.png"),
+                                           render::read_png(dir / "jumped.png"), 0);
+  EXPECT_EQ(diff.max_abs, 0);
+  EXPECT_GT(render::compare_images(after, render::read_png(dir / "jumped.png"), 0).max_abs, 0);
 }
 
 // Script errors stop with exit 2 and the line number.
