@@ -183,6 +183,10 @@ std::size_t Viewer::find(const std::string& name) const {
 void Viewer::set_role(std::size_t i, render::Role role) {
   ViewerStructure& s = structures_.at(i);
   if (s.role == role) return;
+  if (options_.interactive) {  // the window fades to the new role's opacity
+    fade_from_[s.id] = s.style.opacity;
+    fade_start_ = Clock::now();
+  }
   const render::Color color = s.style.color;
   s.role = role;
   s.style = render::default_style(role);
@@ -369,7 +373,8 @@ std::uint64_t Viewer::post_lines(const Camera& camera, bool force) {
   return lines_version_;
 }
 
-render::Scene Viewer::build_scene(const LinesResult* lines) {
+render::Scene Viewer::build_scene(const LinesResult* lines, bool fading) {
+  const double t = fade_from_.empty() ? 1.0 : std::min(1.0, ms_since(fade_start_) / 300.0);
   render::Scene scene;
   scene.background = background_;
   for (auto& s : structures_) {
@@ -379,6 +384,8 @@ render::Scene Viewer::build_scene(const LinesResult* lines) {
     st.role = s.role;
     st.style = s.style;
     st.style.families = object_space_families(s.style);
+    if (const auto f = fade_from_.find(s.id); fading && f != fade_from_.end())
+      st.style.opacity = f->second + t * (s.style.opacity - f->second);
     if (s.style.hybrid_apparent_ridges) {
       if (!s.mesh_curvature)
         s.mesh_curvature =
@@ -395,6 +402,7 @@ render::Scene Viewer::build_scene(const LinesResult* lines) {
     }
     scene.structures.push_back(std::move(st));
   }
+  if (fading && t >= 1.0) fade_from_.clear();
   return scene;
 }
 
@@ -453,9 +461,10 @@ void Viewer::frame() {
     // Nothing changed since the last picture (same lines, camera and
     // styles): the window's texture still shows it.
     const std::pair<std::uint64_t, std::uint64_t> key{lines->version, camera_revision_};
-    if (redraw_ || key != drawn_ || texture_ == 0) {
+    if (redraw_ || key != drawn_ || texture_ == 0 || !fade_from_.empty()) {
       try {
-        upload(renderer_->render(build_scene(lines.get()), camera_, render_options(transparent_)));
+        upload(renderer_->render(build_scene(lines.get(), true), camera_,
+                                 render_options(transparent_)));
       } catch (const Error& e) {
         report_error(e.what());
       }

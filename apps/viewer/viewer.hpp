@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -140,7 +141,9 @@ class Viewer {
   void adopt_loaded();
   /// Posts a lines job for `camera` when anything changed; returns its version.
   std::uint64_t post_lines(const Camera& camera, bool force);
-  render::Scene build_scene(const LinesResult* lines);
+  /// `fading`: opacities on their way after a role change (the window only;
+  /// exports always draw the styles as they are).
+  render::Scene build_scene(const LinesResult* lines, bool fading = false);
   render::RenderOptions render_options(bool transparent) const;
   void upload(const render::Image& image);
   void write_frame_log();
@@ -177,6 +180,9 @@ class Viewer {
   std::optional<Camera> from_, to_;
   std::chrono::steady_clock::time_point transition_start_;
   void start_transition(const Camera& target);
+  // focus transition: opacity each structure starts from, by id
+  std::map<int, double> fade_from_;
+  std::chrono::steady_clock::time_point fade_start_;
   void step_transition();
   // mouse state for the arcball
   bool dragging_ = false;
