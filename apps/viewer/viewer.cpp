@@ -461,10 +461,20 @@ void Viewer::frame() {
     // Nothing changed since the last picture (same lines, camera and
     // styles): the window's texture still shows it.
     const std::pair<std::uint64_t, std::uint64_t> key{lines->version, camera_revision_};
-    if (redraw_ || key != drawn_ || texture_ == 0 || !fade_from_.empty()) {
+    // While the camera moves the window may draw fewer pixels (View menu).
+    const bool moving = camera_revision_ != last_frame_revision_ || dragging_ || to_.has_value();
+    const bool scaled = options_.interactive && moving && moving_scale_ < 0.999f;
+    last_frame_revision_ = camera_revision_;
+    if (redraw_ || key != drawn_ || texture_ == 0 || !fade_from_.empty() ||
+        scaled != drawn_scaled_) {
+      Camera c = camera_;
+      if (scaled) {
+        c.width = std::max(16, static_cast<int>(camera_.width * moving_scale_));
+        c.height = std::max(16, static_cast<int>(camera_.height * moving_scale_));
+      }
+      drawn_scaled_ = scaled;
       try {
-        upload(renderer_->render(build_scene(lines.get(), true), camera_,
-                                 render_options(transparent_)));
+        upload(renderer_->render(build_scene(lines.get(), true), c, render_options(transparent_)));
       } catch (const Error& e) {
         report_error(e.what());
       }
@@ -482,7 +492,7 @@ void Viewer::frame() {
   if (texture_ != 0 && any)
     ImGui::GetBackgroundDrawList()->AddImage(
         reinterpret_cast<ImTextureID>(static_cast<std::uintptr_t>(texture_)), ImVec2(0, 0),
-        ImVec2(static_cast<float>(texture_w_), static_cast<float>(texture_h_)));
+        ImVec2(static_cast<float>(camera_.width), static_cast<float>(camera_.height)));
   draw_ui(*this);
   ImGui::Render();
   const auto t2 = Clock::now();

@@ -132,6 +132,9 @@ class Viewer {
   bool& measure_mode() { return measure_mode_; }
   std::optional<SurfacePick>& hover() { return hover_; }
   render::WindowContext& window() { return *window_; }
+  /// Fraction of the window's resolution drawn while the camera moves
+  /// (1 = full; the still picture is always full resolution).
+  float& moving_scale() { return moving_scale_; }
 
  private:
   BoundingBox scene_box(bool focus_only) const;
@@ -175,6 +178,9 @@ class Viewer {
   bool close_requested_ = false;
   bool redraw_ = true;
   std::pair<std::uint64_t, std::uint64_t> drawn_{0, 0};
+  float moving_scale_ = 0.5f;
+  std::uint64_t last_frame_revision_ = 0;
+  bool drawn_scaled_ = false;
   std::filesystem::path capture_;
   // camera transition (animated views)
   std::optional<Camera> from_, to_;
