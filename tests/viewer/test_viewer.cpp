@@ -305,7 +305,9 @@ TEST(Viewer, BadFileLeavesTheSessionRunning) {
       "\nwait\nscreenshot " + quote((dir / "after.png").string()) +
       " 200x150\nview left animate\nscreenshot " + quote((dir / "animated.png").string()) +
       " 200x150\nview anterior\nview left\nscreenshot " + quote((dir / "jumped.png").string()) +
-      " 200x150\n";
+      " 200x150\nset c3d_igea hybrid=true lines=contour,apparent\nscreenshot " +
+      quote((dir / "hybrid.png").string()) + " 200x150\nsave-scene " +
+      quote((dir / "hybrid.json").string()) + "\n";
   const Outcome r = run_viewer(dir, script, "320x240");
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.err.find("broken.stl"), std::string::npos) << r.err;
@@ -319,6 +321,16 @@ TEST(Viewer, BadFileLeavesTheSessionRunning) {
                                            render::read_png(dir / "jumped.png"), 0);
   EXPECT_EQ(diff.max_abs, 0);
   EXPECT_GT(render::compare_images(after, render::read_png(dir / "jumped.png"), 0).max_abs, 0);
+
+  // The hybrid GPU apparent ridges, too, are drawn as `fabrica render` draws them.
+  const Outcome cli =
+      run(shell_quote(FABRICA_EXE) + " render " + shell_quote((dir / "hybrid.json").string()) +
+              " --size 200x150 -q -o " + shell_quote((dir / "cli.png").string()),
+          dir);
+  ASSERT_EQ(cli.code, 0) << cli.err;
+  const render::Image hybrid = render::read_png(dir / "hybrid.png");
+  EXPECT_EQ(render::compare_images(hybrid, render::read_png(dir / "cli.png"), 0).max_abs, 0);
+  EXPECT_GT(render::compare_images(hybrid, render::read_png(dir / "jumped.png"), 0).max_abs, 0);
 }
 
 // Script errors stop with exit 2 and the line number.
