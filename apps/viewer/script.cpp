@@ -181,7 +181,7 @@ int run_script(Viewer& v, const std::filesystem::path& path) {
         set_panel_open(w[1], w[2] == "open");
         v.frame();
       } else if (cmd == "export-svg") {
-        expect_args(w, 1, 1, "export-svg PATH");
+        expect_args(w, 1, 1, "export-svg PATH.svg|PATH.pdf");
         loaded();
         v.export_svg(w[1]);
       } else if (cmd == "save-scene") {

@@ -75,7 +75,7 @@ void menu(Viewer& v) {
     if (ImGui::MenuItem("Save camera...")) open_dialog(Dialog::save_camera, "camera.json");
     if (ImGui::MenuItem("Load camera...")) open_dialog(Dialog::load_camera, "camera.json");
     if (ImGui::MenuItem("Screenshot...", "Ctrl+P")) open_dialog(Dialog::screenshot, "view.png");
-    if (ImGui::MenuItem("Export SVG...")) open_dialog(Dialog::export_svg, "lines.svg");
+    if (ImGui::MenuItem("Export SVG/PDF...")) open_dialog(Dialog::export_svg, "lines.svg");
     ImGui::Separator();
     if (ImGui::MenuItem("Quit", "Ctrl+Q")) v.request_close();
     ImGui::EndMenu();

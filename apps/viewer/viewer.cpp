@@ -8,6 +8,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
@@ -579,7 +580,15 @@ void Viewer::export_svg(const std::filesystem::path& path) {
                        s.style.opacity >= 0.999 ? &depth_opaque : &depth_all);
     merged.polylines.insert(merged.polylines.end(), ls.polylines.begin(), ls.polylines.end());
   }
-  write_svg(path, merged, camera_, fabrica::LineStyle{});
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (ext == ".pdf")
+    write_pdf(path, merged, camera_, fabrica::LineStyle{});
+  else if (ext == ".svg")
+    write_svg(path, merged, camera_, fabrica::LineStyle{});
+  else
+    throw InputError(path.string() + ": the lines are written as .svg or .pdf");
 }
 
 void Viewer::save_scene(const std::filesystem::path& path) {

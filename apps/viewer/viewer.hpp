@@ -107,6 +107,7 @@ class Viewer {
 
   // --- outputs
   render::Image screenshot(int width, int height, bool transparent);
+  /// The lines of the current view, hidden lines removed, as SVG or PDF (by extension).
   void export_svg(const std::filesystem::path& path);
   /// Draws a frame and writes the window as shown (panels included) as PNG.
   void capture_window(const std::filesystem::path& path);

@@ -142,6 +142,9 @@ TEST(Viewer, LabelVolumeFocusAndContext) {
       "export-svg " +
       quote((dir / "lines.svg").string()) +
       "\n"
+      "export-svg " +
+      quote((dir / "lines.pdf").string()) +
+      "\n"
       "quit\n";
   const Outcome r = run_viewer(dir, script, "640x400",
                                "--frame-log " + shell_quote((dir / "frames.csv").string()));
@@ -215,6 +218,7 @@ TEST(Viewer, LabelVolumeFocusAndContext) {
   EXPECT_EQ(diff.max_abs, 0) << "mean " << diff.mean_abs << ", fraction " << diff.fraction_over;
 
   EXPECT_NE(read_text(dir / "lines.svg").find("<path"), std::string::npos);
+  EXPECT_EQ(read_text(dir / "lines.pdf").rfind("%PDF", 0), 0u);
 
   // Frame log: a header, then one row per frame, numbered 1, 2, 3, ...;
   // the orbit alone draws 6 frames; lines never more than one frame old.
