@@ -350,3 +350,31 @@ TEST(Viewer, ScriptErrorsNameTheLine) {
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("script.txt:2: no structure named"), std::string::npos) << r.err;
 }
+
+// A label volume without names takes them (and colours) from a label table
+// beside it: NAME.txt with `VALUE NAME R G B` lines.
+TEST(Viewer, LabelTableBesideTheVolumeNamesTheStructures) {
+  const fs::path dir = work_dir();
+  const int n = 12;
+  std::string voxels(static_cast<std::size_t>(n * n * n), '\0');
+  for (int k = 3; k < 9; ++k)
+    for (int j = 3; j < 9; ++j)
+      for (int i = 3; i < 9; ++i) voxels[static_cast<std::size_t>(i + n * (j + n * k))] = 3;
+  std::ofstream(dir / "block.nrrd", std::ios::binary)
+      << "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 12 12 12\nencoding: raw\n"
+         "space: left-posterior-superior\nspace directions: (2,0,0) (0,2,0) (0,0,2)\n"
+         "space origin: (0,0,0)\n\n"
+      << voxels;
+  std::ofstream(dir / "block.txt") << "# value name r g b\n3 cube 255 0 0\n";
+  const Outcome r =
+      run_viewer(dir,
+                 "open " + quote((dir / "block.nrrd").string()) + "\nfocus cube\nsave-scene " +
+                     quote((dir / "scene.json").string()) + "\n",
+                 "320x240");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto scene = nlohmann::json::parse(read_text(dir / "scene.json"));
+  ASSERT_EQ(scene["structures"].size(), 1u);
+  EXPECT_EQ(scene["structures"][0]["name"], "cube");
+  EXPECT_EQ(scene["structures"][0]["role"], "focus");
+  EXPECT_EQ(scene["structures"][0]["color"], nlohmann::json::parse("[1.0, 0.0, 0.0, 1.0]"));
+}
