@@ -1,0 +1,85 @@
+// LinesWorker: recomputes the feature lines of the current view on a worker
+// thread. The main thread posts a job (a camera, a version number and the
+// visible structures with their styles) every time the view or a line
+// setting changes; the worker always takes the newest job (older ones are
+// dropped) and publishes the lines with the version they belong to, so the
+// frame loop can bound how old the lines it draws are (Viewer waits for
+// version >= current - 1: never more than one frame old).
+#pragma once
+
+#include <condition_variable>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "fabrica/core/camera.hpp"
+#include "fabrica/core/surface.hpp"
+#include "fabrica/lines/extract.hpp"
+#include "fabrica/lines/line_set.hpp"
+#include "fabrica/render/scene.hpp"
+
+namespace fabrica::viewer {
+
+/// A structure's geometry as the worker needs it. The extractor (with the
+/// view-independent precomputation, built once per mesh by the loader) is
+/// used by the worker thread only.
+struct LineSource {
+  std::shared_ptr<const Surface> surface;
+  std::unique_ptr<LineExtractor> extractor;
+};
+
+struct LinesJob {
+  std::uint64_t version = 0;
+  Camera camera;
+  struct Item {
+    int id = 0;
+    std::shared_ptr<LineSource> source;
+    render::StructureStyle style;
+    LineOptions thresholds;
+    bool hatching = false;
+    double hatching_width = 1.0;
+  };
+  std::vector<Item> items;
+};
+
+struct LinesResult {
+  std::uint64_t version = 0;
+  Camera camera;
+  std::map<int, LineSet> lines;                   ///< by structure id
+  std::map<int, render::PolylineLayer> hatching;  ///< by structure id, where asked for
+  double ms = 0.0;                                ///< wall time of the extraction
+  std::string error;                              ///< empty unless a structure's lines failed
+};
+
+class LinesWorker {
+ public:
+  LinesWorker();
+  ~LinesWorker();
+  LinesWorker(const LinesWorker&) = delete;
+  LinesWorker& operator=(const LinesWorker&) = delete;
+
+  /// Replaces any job not yet started.
+  void post(LinesJob job);
+  /// The newest finished result (null before the first).
+  std::shared_ptr<const LinesResult> latest() const;
+  /// Blocks until a result with version >= `version` is published.
+  std::shared_ptr<const LinesResult> wait_for(std::uint64_t version);
+  /// True while a job is queued or running.
+  bool busy() const;
+
+ private:
+  void run();
+
+  mutable std::mutex mutex_;
+  std::condition_variable wake_, done_;
+  std::unique_ptr<LinesJob> pending_;
+  std::shared_ptr<const LinesResult> latest_;
+  bool running_ = false, stop_ = false;
+  std::thread thread_;
+};
+
+}  // namespace fabrica::viewer

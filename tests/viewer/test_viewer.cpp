@@ -1,0 +1,380 @@
+// fabrica-viewer end to end: each test writes a script, runs the real
+// program in its window under `xvfb-run -a`, and checks what it produced
+// (pixels, the saved scene, the frame log, exit codes and messages).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "fabrica/core/camera.hpp"
+#include "fabrica/io/label_volume.hpp"
+#include "fabrica/render/image.hpp"
+#include "test_support.hpp"
+
+namespace fs = std::filesystem;
+using namespace fabrica;
+
+namespace {
+
+struct Outcome {
+  int code = -1;
+  std::string err;
+};
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+/// A word of a shell command line.
+std::string shell_quote(const std::string& s) {
+  return "'" + s + "'";
+}
+
+/// A path in a viewer script.
+std::string quote(const std::string& s) {
+  return "\"" + s + "\"";
+}
+
+/// Runs a shell command line with stderr captured.
+Outcome run(const std::string& command, const fs::path& dir) {
+  const fs::path err = dir / "stderr.txt";
+  const std::string line = command + " </dev/null >" + shell_quote((dir / "stdout.txt").string()) +
+                           " 2>" + shell_quote(err.string());
+  const int status = std::system(line.c_str());
+  Outcome r;
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128;
+  r.err = read_text(err);
+  return r;
+}
+
+/// The viewer on a fresh X server, window `size`, running `script`. The X
+/// authority file lives in the test's folder: xvfb-run's own temporary
+/// folder sometimes fails to be removed (exit 5) while other servers run.
+Outcome run_viewer(const fs::path& dir, const std::string& script, const std::string& size,
+                   const std::string& extra = "") {
+  const fs::path path = dir / "script.txt";
+  std::ofstream(path) << script;
+  return run(std::string(XVFB_RUN) + " -a -f " + shell_quote((dir / "Xauthority").string()) +
+                 " -s '-screen 0 1600x1200x24' " + shell_quote(FABRICA_VIEWER_EXE) + " --size " +
+                 size + " --script " + shell_quote(path.string()) + " " + extra,
+             dir);
+}
+
+fs::path volume() {
+  return test::bundled_data() / "meshes" / "volumes" / "totalseg_example_seg.nii.gz";
+}
+
+/// Pixels onto which the interior voxels of `label` project (interior: all
+/// six neighbours carry the label, so the pixel lies inside the surface's
+/// silhouette).
+std::vector<std::pair<int, int>> label_pixels(int label, const Camera& camera) {
+  const io::LabelVolume v = io::read_label_volume(volume());
+  const auto& g = v.geometry;
+  const auto& map = v.layers.at(0);
+  auto at = [&](int i, int j, int k) {
+    return map[static_cast<std::size_t>(i) +
+               static_cast<std::size_t>(g.dims[0]) *
+                   (static_cast<std::size_t>(j) + static_cast<std::size_t>(g.dims[1]) * k)];
+  };
+  std::vector<std::pair<int, int>> out;
+  for (int k = 1; k + 1 < g.dims[2]; ++k)
+    for (int j = 1; j + 1 < g.dims[1]; ++j)
+      for (int i = 1; i + 1 < g.dims[0]; ++i) {
+        if (at(i, j, k) != label || at(i - 1, j, k) != label || at(i + 1, j, k) != label ||
+            at(i, j - 1, k) != label || at(i, j + 1, k) != label || at(i, j, k - 1) != label ||
+            at(i, j, k + 1) != label)
+          continue;
+        const auto p = project(camera, g.index_to_patient(Vec3(i, j, k)));
+        const int x = static_cast<int>(p.pixel.x()), y = static_cast<int>(p.pixel.y());
+        if (x >= 0 && y >= 0 && x < camera.width && y < camera.height) out.emplace_back(x, y);
+      }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+fs::path work_dir() {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  const fs::path dir = test::temp_dir(std::string("viewer-") + info->name());
+  fs::create_directories(dir);
+  return dir;
+}
+
+}  // namespace
+
+// Focus one label of the bundled label volume, anterior view: the focus is
+// drawn where the volume puts it and opaque, the context ghosted; the saved
+// scene through `fabrica render` gives the same pixels; the frame log has one
+// row per frame and the lines are never more than one frame old.
+TEST(Viewer, LabelVolumeFocusAndContext) {
+  const fs::path dir = work_dir();
+  const std::string script =
+      "# label volume, focus the liver (label 5), anterior view\n"
+      "open " +
+      quote(volume().string()) +
+      "\n"
+      "wait\n"
+      "focus liver\n"
+      "view anterior\n"
+      "orbit 20 6\n"
+      "view anterior\n"
+      "wait\n"
+      "screenshot " +
+      quote((dir / "view.png").string()) +
+      " 400x300\n"
+      "screenshot " +
+      quote((dir / "alpha.png").string()) +
+      " 400x300 transparent\n"
+      "save-scene " +
+      quote((dir / "scene.json").string()) +
+      "\n"
+      "export-svg " +
+      quote((dir / "lines.svg").string()) +
+      "\n"
+      "export-svg " +
+      quote((dir / "lines.pdf").string()) +
+      "\n"
+      "quit\n";
+  const Outcome r = run_viewer(dir, script, "640x400",
+                               "--frame-log " + shell_quote((dir / "frames.csv").string()));
+  ASSERT_EQ(r.code, 0) << r.err;
+
+  // The scene: liver is the one focus, the camera is the window's.
+  const auto scene = nlohmann::json::parse(read_text(dir / "scene.json"));
+  int focus = 0;
+  for (const auto& s : scene["structures"]) {
+    if (s["role"] == "focus") {
+      ++focus;
+      EXPECT_EQ(s["name"], "liver");
+    }
+  }
+  EXPECT_EQ(focus, 1);
+  EXPECT_GT(scene["structures"].size(), 20u);
+  Camera camera = camera_from_json(scene["camera"]);
+  camera.width = 400;
+  camera.height = 300;
+
+  // Focus where the volume says, and opaque: the pixels of the liver's
+  // interior voxels are fully covered in the transparent export.
+  const render::Image alpha = render::read_png(dir / "alpha.png");
+  const auto liver = label_pixels(5, camera);
+  ASSERT_GT(liver.size(), 500u);
+  std::vector<bool> in_liver(400 * 300, false);
+  std::size_t opaque = 0;
+  for (auto [x, y] : liver) {
+    if (alpha.pixel(x, y)[3] == 255) ++opaque;
+    for (int dy = -3; dy <= 3; ++dy)
+      for (int dx = -3; dx <= 3; ++dx)
+        if (x + dx >= 0 && x + dx < 400 && y + dy >= 0 && y + dy < 300)
+          in_liver[static_cast<std::size_t>((y + dy) * 400 + x + dx)] = true;
+  }
+  EXPECT_GT(static_cast<double>(opaque) / liver.size(), 0.97);
+  // The context (covered pixels away from the liver) is ghosted: partly
+  // transparent for the most part.
+  std::size_t context = 0, context_opaque = 0;
+  for (int y = 0; y < 300; ++y)
+    for (int x = 0; x < 400; ++x) {
+      const int a = alpha.pixel(x, y)[3];
+      if (a == 0 || in_liver[static_cast<std::size_t>(y * 400 + x)]) continue;
+      ++context;
+      if (a == 255) ++context_opaque;
+    }
+  std::printf("liver interior pixels %zu, opaque %zu; context pixels %zu, opaque %zu\n",
+              liver.size(), opaque, context, context_opaque);
+  ASSERT_GT(context, 5000u);
+  EXPECT_LT(static_cast<double>(context_opaque) / context, 0.05)
+      << context_opaque << " of " << context << " context pixels opaque";
+
+  // In the visible image the liver is shaded in its own colour, not white.
+  const render::Image view = render::read_png(dir / "view.png");
+  double lightness = 0.0;
+  for (auto [x, y] : liver) {
+    const auto* p = view.pixel(x, y);
+    lightness += (p[0] + p[1] + p[2]) / 3.0;
+  }
+  std::printf("mean lightness over the liver %.1f\n", lightness / liver.size());
+  EXPECT_LT(lightness / liver.size(), 235.0);
+
+  // One renderer: `fabrica render` on the saved scene, same size, same pixels.
+  const Outcome cli =
+      run(shell_quote(FABRICA_EXE) + " render " + shell_quote((dir / "scene.json").string()) +
+              " --size 400x300 -q -o " + shell_quote((dir / "cli.png").string()),
+          dir);
+  ASSERT_EQ(cli.code, 0) << cli.err;
+  const render::Image from_cli = render::read_png(dir / "cli.png");
+  const auto diff = render::compare_images(view, from_cli, 0);
+  EXPECT_TRUE(diff.same_size);
+  EXPECT_EQ(diff.max_abs, 0) << "mean " << diff.mean_abs << ", fraction " << diff.fraction_over;
+
+  EXPECT_NE(read_text(dir / "lines.svg").find("<path"), std::string::npos);
+  EXPECT_EQ(read_text(dir / "lines.pdf").rfind("%PDF", 0), 0u);
+
+  // Frame log: a header, then one row per frame, numbered 1, 2, 3, ...;
+  // the orbit alone draws 6 frames; lines never more than one frame old.
+  std::ifstream log(dir / "frames.csv");
+  std::string line;
+  std::getline(log, line);
+  EXPECT_EQ(line, "frame,ms_frame,ms_gpu_submit,ms_lines,lines_age_frames");
+  std::uint64_t expected = 1;
+  while (std::getline(log, line)) {
+    std::stringstream row(line);
+    std::string cell;
+    std::vector<std::string> cells;
+    while (std::getline(row, cell, ',')) cells.push_back(cell);
+    ASSERT_EQ(cells.size(), 5u) << line;
+    EXPECT_EQ(std::stoull(cells[0]), expected++);
+    EXPECT_LE(std::stoi(cells[4]), 1) << line;
+    for (std::size_t c = 1; c < 4; ++c) EXPECT_GE(std::stod(cells[c]), 0.0) << line;
+  }
+  EXPECT_GE(expected, 8u);
+  const std::string frames_said = "frames: " + std::to_string(expected - 1);
+  EXPECT_NE(r.err.find(frames_said), std::string::npos) << r.err;
+}
+
+// Click-to-focus through the GPU id buffer: a click on the liver's pixel
+// makes the liver the focus.
+TEST(Viewer, ClickPicksTheStructureUnderTheCursor) {
+  const fs::path dir = work_dir();
+  // The window's anterior camera first, to know where the liver is.
+  const std::string first = "open " + quote(volume().string()) +
+                            "\nwait\nview anterior\nsave-camera " +
+                            quote((dir / "camera.json").string()) + "\n";
+  const Outcome r1 = run_viewer(dir, first, "480x360");
+  ASSERT_EQ(r1.code, 0) << r1.err;
+  const Camera camera = read_camera(dir / "camera.json");
+  ASSERT_EQ(camera.width, 480);
+  const auto liver = label_pixels(5, camera);
+  ASSERT_FALSE(liver.empty());
+  double sx = 0, sy = 0;
+  for (auto [x, y] : liver) sx += x, sy += y;
+  // The interior pixel nearest the centroid.
+  auto target = liver.front();
+  double best = 1e30;
+  for (auto [x, y] : liver) {
+    const double d = std::hypot(x - sx / liver.size(), y - sy / liver.size());
+    if (d < best) best = d, target = {x, y};
+  }
+  const std::string second = "open " + quote(volume().string()) +
+                             "\nwait\nfocus spleen\nview anterior\nwait\nclick " +
+                             std::to_string(target.first) + " " + std::to_string(target.second) +
+                             "\nsave-scene " + quote((dir / "scene.json").string()) + "\n";
+  const Outcome r2 = run_viewer(dir, second, "480x360");
+  ASSERT_EQ(r2.code, 0) << r2.err;
+  const auto scene = nlohmann::json::parse(read_text(dir / "scene.json"));
+  for (const auto& s : scene["structures"])
+    EXPECT_EQ(s["role"] == "focus", s["name"] == "liver") << s["name"];
+  const std::string out = read_text(dir / "stdout.txt");
+  EXPECT_NE(out.find(": liver at "), std::string::npos) << out;
+
+  // Measure mode: two clicks on the liver, their distance in mm.
+  const auto far = liver.back();
+  const std::string third =
+      "open " + quote(volume().string()) + "\nwait\nview anterior\nmeasure on\nclick " +
+      std::to_string(target.first) + " " + std::to_string(target.second) + "\nclick " +
+      std::to_string(far.first) + " " + std::to_string(far.second) + "\n";
+  const Outcome r3 = run_viewer(dir, third, "480x360");
+  ASSERT_EQ(r3.code, 0) << r3.err;
+  const std::string measured = read_text(dir / "stdout.txt");
+  const auto at = measured.find("distance ");
+  ASSERT_NE(at, std::string::npos) << measured;
+  const double mm = std::stod(measured.substr(at + 9));
+  // Pixels apart times the mm per pixel at the liver's depth, roughly.
+  const double px = std::hypot(far.first - target.first, far.second - target.second);
+  const double mm_per_px = 2.0 * (camera.center - camera.eye).norm() *
+                           std::tan(camera.fov_deg * M_PI / 360.0) / camera.height;
+  EXPECT_GT(mm, 0.5 * px * mm_per_px) << measured;
+  EXPECT_LT(mm, 2.0 * px * mm_per_px) << measured;
+}
+
+// A file that cannot be read: the error is shown (panel and stderr, the
+// CLI's one-line message) and the session goes on.
+TEST(Viewer, BadFileLeavesTheSessionRunning) {
+  const fs::path dir = work_dir();
+  std::ofstream(dir / "broken.stl") << "solid nothing\nendsolid\n";
+  const fs::path mesh = test::bundled_data() / "meshes" / "classic" / "c3d_igea.ply";
+  // Then an animated view change ends exactly where the jump goes.
+  const std::string script =
+      "open " + quote((dir / "broken.stl").string()) + "\nwait\nopen " + quote(mesh.string()) +
+      "\nwait\nscreenshot " + quote((dir / "after.png").string()) +
+      " 200x150\nview left animate\nscreenshot " + quote((dir / "animated.png").string()) +
+      " 200x150\nview anterior\nview left\nscreenshot " + quote((dir / "jumped.png").string()) +
+      " 200x150\nset c3d_igea hybrid=true lines=contour,apparent\nscreenshot " +
+      quote((dir / "hybrid.png").string()) + " 200x150\nsave-scene " +
+      quote((dir / "hybrid.json").string()) + "\n";
+  const Outcome r = run_viewer(dir, script, "320x240");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("broken.stl"), std::string::npos) << r.err;
+  const render::Image after = render::read_png(dir / "after.png");
+  std::size_t drawn = 0;
+  for (int y = 0; y < after.height; ++y)
+    for (int x = 0; x < after.width; ++x)
+      if (after.pixel(x, y)[0] < 250) ++drawn;
+  EXPECT_GT(drawn, 1000u);
+  const auto diff = render::compare_images(render::read_png(dir / "animated.png"),
+                                           render::read_png(dir / "jumped.png"), 0);
+  EXPECT_EQ(diff.max_abs, 0);
+  EXPECT_GT(render::compare_images(after, render::read_png(dir / "jumped.png"), 0).max_abs, 0);
+
+  // The hybrid GPU apparent ridges, too, are drawn as `fabrica render` draws them.
+  const Outcome cli =
+      run(shell_quote(FABRICA_EXE) + " render " + shell_quote((dir / "hybrid.json").string()) +
+              " --size 200x150 -q -o " + shell_quote((dir / "cli.png").string()),
+          dir);
+  ASSERT_EQ(cli.code, 0) << cli.err;
+  const render::Image hybrid = render::read_png(dir / "hybrid.png");
+  EXPECT_EQ(render::compare_images(hybrid, render::read_png(dir / "cli.png"), 0).max_abs, 0);
+  EXPECT_GT(render::compare_images(hybrid, render::read_png(dir / "jumped.png"), 0).max_abs, 0);
+}
+
+// Script errors stop with exit 2 and the line number.
+TEST(Viewer, ScriptErrorsNameTheLine) {
+  const fs::path dir = work_dir();
+  Outcome r = run_viewer(dir, "# comment\n\nfly-to mars\n", "320x240");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("script.txt:3: unknown command \"fly-to\""), std::string::npos) << r.err;
+  r = run_viewer(dir, "orbit ten 5\n", "320x240");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("script.txt:1:"), std::string::npos) << r.err;
+  r = run_viewer(dir, "open " + quote(volume().string()) + "\nfocus nothing_here\n", "320x240");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("script.txt:2: no structure named"), std::string::npos) << r.err;
+}
+
+// A label volume without names takes them (and colours) from a label table
+// beside it: NAME.txt with `VALUE NAME R G B` lines.
+TEST(Viewer, LabelTableBesideTheVolumeNamesTheStructures) {
+  const fs::path dir = work_dir();
+  const int n = 12;
+  std::string voxels(static_cast<std::size_t>(n * n * n), '\0');
+  for (int k = 3; k < 9; ++k)
+    for (int j = 3; j < 9; ++j)
+      for (int i = 3; i < 9; ++i) voxels[static_cast<std::size_t>(i + n * (j + n * k))] = 3;
+  std::ofstream(dir / "block.nrrd", std::ios::binary)
+      << "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 12 12 12\nencoding: raw\n"
+         "space: left-posterior-superior\nspace directions: (2,0,0) (0,2,0) (0,0,2)\n"
+         "space origin: (0,0,0)\n\n"
+      << voxels;
+  std::ofstream(dir / "block.txt") << "# value name r g b\n3 cube 255 0 0\n";
+  const Outcome r =
+      run_viewer(dir,
+                 "open " + quote((dir / "block.nrrd").string()) + "\nfocus cube\nsave-scene " +
+                     quote((dir / "scene.json").string()) + "\n",
+                 "320x240");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto scene = nlohmann::json::parse(read_text(dir / "scene.json"));
+  ASSERT_EQ(scene["structures"].size(), 1u);
+  EXPECT_EQ(scene["structures"][0]["name"], "cube");
+  EXPECT_EQ(scene["structures"][0]["role"], "focus");
+  EXPECT_EQ(scene["structures"][0]["color"], nlohmann::json::parse("[1.0, 0.0, 0.0, 1.0]"));
+}
