@@ -270,12 +270,10 @@ int run_hatch(const HatchArgs& args) {
     camera = read_camera(args.camera_file);
     if (size) std::tie(camera.width, camera.height) = *size;
   } else {
-    const auto view = parse_anatomical_view(args.view.empty() ? "anterior" : args.view);
-    if (!view)
-      throw InputError("--view: unknown view \"" + args.view +
-                       "\" (anterior, posterior, left, right, superior, inferior)");
+    const AnatomicalView view = parse_view(args.view.empty() ? "anterior" : args.view);
     const auto [w, h] = size.value_or(std::pair<int, int>{800, 800});
-    camera = anatomical_camera(*view, bounding_box(loaded.mesh.positions), space, w, h);
+    camera = anatomical_camera(view, bounding_box(loaded.mesh.positions), space, w, h);
+    warn_if_space_assumed(loaded.mesh.space_source, args.mesh, "hatch", args.quiet);
   }
   validate_camera(camera, args.camera_file.empty() ? "camera" : args.camera_file);
 

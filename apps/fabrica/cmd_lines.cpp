@@ -101,8 +101,10 @@ int run_lines(const LinesArgs& a) {
   // happened in read_mesh; orient consistently and outward (inward normals
   // make contours vanish and swap ridges with valleys); normals are always
   // computed from the geometry.
-  if (!a.keep_normals_orientation) {
-    const auto report = io::prepare_for_lines(mesh);
+  {
+    io::PrepareOptions po;
+    po.keep_orientation = a.keep_normals_orientation;
+    const auto report = io::prepare_for_lines(mesh, po);
     if (!a.quiet)
       for (const auto& c : report.changes) std::fprintf(stderr, "fabrica lines: %s\n", c.c_str());
   }
@@ -117,11 +119,9 @@ int run_lines(const LinesArgs& a) {
     camera_what = a.camera_file;
   } else {
     const std::string vname = a.view.empty() ? "anterior" : lower(a.view);
-    const auto view = parse_anatomical_view(vname);
-    if (!view)
-      throw InputError("--view: unknown view \"" + a.view +
-                       "\" (anterior, posterior, left, right, superior, inferior)");
-    camera = anatomical_camera(*view, bounding_box(mesh.positions), mesh.space);
+    const AnatomicalView view = parse_view(vname);
+    warn_if_space_assumed(mesh.space_source, a.mesh, "lines", a.quiet);
+    camera = anatomical_camera(view, bounding_box(mesh.positions), mesh.space);
     camera_what = "--view " + vname;
   }
   if (!a.size.empty()) std::tie(camera.width, camera.height) = parse_size(a.size);
