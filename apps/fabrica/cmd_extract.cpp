@@ -52,6 +52,12 @@ struct ExtractCommandOptions {
   bool quiet = false;
 };
 
+#ifdef FABRICA_EXTRACT_SCENE
+/// Opacity of the context structures in DIR/scene.json (default_style's 0.25
+/// suits a few; a segmentation has dozens that overlap).
+constexpr double kContextOpacity = 0.15;
+#endif
+
 /// --min-island: "N" or "Nvox" voxels, "Nmm3" cubic millimetres (converted
 /// with the volume's voxel size, rounded up).
 std::size_t parse_min_island(const std::string& text, const io::VolumeGeometry& g) {
@@ -234,6 +240,8 @@ int run_extract(const ExtractCommandOptions& o) {
     st.mesh = file.filename();
     st.role = is_focus[index] ? render::Role::focus : render::Role::context;
     st.style = render::default_style(st.role);
+    // A label map has many structures: lighter ghosts keep the layers readable.
+    if (st.role == render::Role::context) st.style.opacity = kContextOpacity;
     if (const auto c = render::anatomical_color(s.name)) {
       st.style.color = *c;
     } else if (s.color) {

@@ -163,7 +163,7 @@ Frame default_frame(const SceneSpec& spec, std::optional<Frame> frame) {
 Camera fit_camera(AnatomicalView view, const BoundingBox& box, Space space, int width, int height,
                   double fill) {
   Camera c = anatomical_camera(view, box, space, width, height);
-  if (!(fill > 0.0 && fill <= 1.0)) fill = 0.9;
+  if (!(fill > 0.0 && fill <= 1.0)) fill = 0.6;
   // Projected half-extent of the box (fraction of the picture's half size);
   // the perspective projection is not linear in the distance, so a few
   // rounds of "move the eye so the fraction becomes `fill`" converge.

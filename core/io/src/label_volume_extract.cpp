@@ -409,12 +409,12 @@ std::vector<ExtractedSurface> extract_surfaces(const LabelVolume& volume,
     negative = negative || (!layer.empty() && layer.begin()->first < 0);
   }
   if (options.labels.empty() && options.max_labels > 0 && distinct > options.max_labels)
-    throw InputError(what + " holds " + std::to_string(distinct) + " distinct values" +
-                     (negative ? ", some negative," : "") +
-                     " - an intensity image (CT, MR), not a label map of at most " +
+    throw InputError(what + " holds " + std::to_string(distinct) + " distinct nonzero values" +
+                     (negative ? " (some negative)" : "") +
+                     ": an intensity image (CT, MR), not a label map of at most " +
                      std::to_string(options.max_labels) +
-                     " labels: give --iso VALUE for an isosurface (e.g. --iso 300 for bone "
-                     "in CT), or --labels to extract chosen values anyway");
+                     " labels; give --iso VALUE for an isosurface (e.g. --iso 300 for bone in CT), "
+                     "or --labels to extract chosen values anyway");
   std::vector<Target> targets;
   for (std::size_t l = 0; l < stats.size(); ++l)
     for (const auto& [value, s] : stats[l])

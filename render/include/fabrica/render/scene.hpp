@@ -122,9 +122,10 @@ Frame default_frame(const SceneSpec& spec, std::optional<Frame> frame = std::nul
 /// A camera looking from the anatomical side `view` at the centre of `box`,
 /// at the distance where the box's projected corners fill `fill` of the
 /// picture (of its width or height, whichever is reached first): a tight
-/// fit, unlike anatomical_camera's bounding sphere. Used to frame the focus.
+/// fit, unlike anatomical_camera's bounding sphere. Used to frame the focus;
+/// the default 0.6 leaves room for the context around it.
 Camera fit_camera(AnatomicalView view, const BoundingBox& box, Space space, int width = 1024,
-                  int height = 1024, double fill = 0.9);
+                  int height = 1024, double fill = 0.6);
 
 /// The colour of a named structure in fabrica's anatomical palette
 /// (docs/segmentation.md: arteries red, veins blue, bone ivory, ...): the
