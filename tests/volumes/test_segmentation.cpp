@@ -352,3 +352,90 @@ TEST(Suggest, ClosestNames) {
   EXPECT_EQ(closest_name("xyz", {"anterior", "posterior"}), "");
   EXPECT_EQ(did_you_mean("ridges", {"ridge", "valley"}), " (did you mean 'ridge'?)");
 }
+
+// ------------------------------------------------------- CLI manners ----
+
+TEST(SegmentationCli, InfoReportsAnInwardOpenTubeAndLinesTurnsIt) {
+  const auto dir = test::temp_dir("seg-open");
+  // The aorta with its two ends cut off (faces beyond planes across its long
+  // axis dropped) and every face flipped: an inward open tube.
+  TriangleMesh tube =
+      io::read_mesh(test::bundled_data() / "meshes/anatomy/vessels/vmtk_aorta-surface.stl")
+          .mesh;  // the file's faces point inward already
+  const BoundingBox box = bounding_box(tube.positions);
+  const double lo = box.min.z() + 0.15 * (box.max.z() - box.min.z());
+  const double hi = box.max.z() - 0.15 * (box.max.z() - box.min.z());
+  std::vector<Face> kept;
+  for (const Face& f : tube.faces)
+    if (std::all_of(f.begin(), f.end(), [&](std::int32_t v) {
+          return tube.positions[v].z() > lo && tube.positions[v].z() < hi;
+        }))
+      kept.push_back(f);
+  tube.faces = kept;
+  io::write_mesh(tube, dir / "tube.obj");
+
+  CliRun r = run_fabrica("info " + quoted(dir / "tube.obj"), dir / "info.txt");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("open piece points inward"), std::string::npos) << r.output;
+  r = run_fabrica("info " + quoted(dir / "tube.obj") + " --repair", dir / "repair.txt");
+  EXPECT_NE(r.output.find("1 open piece turned outward"), std::string::npos) << r.output;
+  // lines: prepared (turned, reported) by default, kept with --keep-orientation.
+  r = run_fabrica("lines " + quoted(dir / "tube.obj") + " -o " + quoted(dir / "a.svg"),
+                  dir / "lines.txt");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("open piece turned outward"), std::string::npos) << r.output;
+  r = run_fabrica(
+      "lines " + quoted(dir / "tube.obj") + " --keep-orientation -o " + quoted(dir / "b.svg"),
+      dir / "keep.txt");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output.find("flipped"), std::string::npos) << r.output;
+}
+
+TEST(SegmentationCli, InfoSmoothTakesTheStaircaseOff) {
+  const auto dir = test::temp_dir("seg-info-smooth");
+  const CliRun extracted = extract_sample(dir / "raw", "--labels 52 --smooth 0 -q", dir / "x.txt");
+  ASSERT_EQ(extracted.exit_code, 0) << extracted.output;
+  const CliRun r = run_fabrica(
+      "info " + quoted(dir / "raw" / "aorta.stl") + " --smooth 60 -o " + quoted(dir / "smooth.stl"),
+      dir / "info.txt");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("smoothed (windowed sinc, 60 iterations"), std::string::npos) << r.output;
+  const TriangleMesh raw = io::read_mesh(dir / "raw" / "aorta.stl").mesh;
+  const TriangleMesh smooth = io::read_mesh(dir / "smooth.stl").mesh;
+  EXPECT_EQ(smooth.face_count(), raw.face_count());
+  EXPECT_LT(ridge_valley_density(smooth, 0.1), 0.5 * ridge_valley_density(raw, 0.1));
+  const double v_raw = piece_volumes(raw).at(0), v_smooth = piece_volumes(smooth).at(0);
+  EXPECT_NEAR(v_smooth, v_raw, 0.05 * v_raw);
+}
+
+TEST(SegmentationCli, DidYouMeanForViewsAndFamilies) {
+  const auto dir = test::temp_dir("seg-typos");
+  const fs::path mesh = test::bundled_data() / "meshes/anatomy/vessels/vmtk_aorta-surface.stl";
+  CliRun r = run_fabrica("lines " + quoted(mesh) + " --view anteriour -o " + quoted(dir / "a.svg"),
+                         dir / "view.txt");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("did you mean 'anterior'"), std::string::npos) << r.output;
+  r = run_fabrica("render " + quoted(mesh) + " --view postrior -o " + quoted(dir / "a.png"),
+                  dir / "render.txt");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("did you mean 'posterior'"), std::string::npos) << r.output;
+  r = run_fabrica(
+      "lines " + quoted(mesh) + " --types contour,sugestive -o " + quoted(dir / "b.svg"),
+      dir / "family.txt");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("did you mean 'suggestive'"), std::string::npos) << r.output;
+  // An OFF file has no space tag: LPS is assumed, and said.
+  r = run_fabrica(
+      "lines " + quoted(test::bundled_data() / "meshes/anatomy/vessels/sofa_aneurysm3D_1.off") +
+          " -o " + quoted(dir / "c.svg"),
+      dir / "space.txt");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("has no coordinate-space tag: assumed LPS"), std::string::npos)
+      << r.output;
+  r = run_fabrica("extract " + quoted(volumes() / "totalseg_example_seg.nii.gz") + " -o " +
+                      quoted(dir / "x") + " --focus aort",
+                  dir / "focus.txt");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("did you mean 'aorta'"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "x"));
+}
