@@ -266,6 +266,7 @@ int run_hatch(const HatchArgs& args) {
   std::optional<std::pair<int, int>> size;
   if (!args.size.empty()) size = parse_size(args.size);
   Camera camera;
+  SpaceSource assumed_space = SpaceSource::file_tag;  // warned about once the work is done
   if (!args.camera_file.empty()) {
     camera = read_camera(args.camera_file);
     if (size) std::tie(camera.width, camera.height) = *size;
@@ -273,7 +274,7 @@ int run_hatch(const HatchArgs& args) {
     const AnatomicalView view = parse_view(args.view.empty() ? "anterior" : args.view);
     const auto [w, h] = size.value_or(std::pair<int, int>{800, 800});
     camera = anatomical_camera(view, bounding_box(loaded.mesh.positions), space, w, h);
-    warn_if_space_assumed(loaded.mesh.space_source, args.mesh, "hatch", args.quiet);
+    assumed_space = loaded.mesh.space_source;
   }
   validate_camera(camera, args.camera_file.empty() ? "camera" : args.camera_file);
 
@@ -335,6 +336,7 @@ int run_hatch(const HatchArgs& args) {
                     strokes.stats.ends[static_cast<std::size_t>(k)]);
     std::printf("\n");
   }
+  warn_if_space_assumed(assumed_space, args.mesh, "hatch", args.quiet);
   return 0;
 }
 

@@ -114,13 +114,14 @@ int run_lines(const LinesArgs& a) {
 
   Camera camera;
   std::string camera_what;
+  SpaceSource assumed_space = SpaceSource::file_tag;  // warned about once the work is done
   if (!a.camera_file.empty()) {
     camera = read_camera(a.camera_file);
     camera_what = a.camera_file;
   } else {
     const std::string vname = a.view.empty() ? "anterior" : lower(a.view);
     const AnatomicalView view = parse_view(vname);
-    warn_if_space_assumed(mesh.space_source, a.mesh, "lines", a.quiet);
+    assumed_space = mesh.space_source;
     camera = anatomical_camera(view, bounding_box(mesh.positions), mesh.space);
     camera_what = "--view " + vname;
   }
@@ -216,6 +217,7 @@ int run_lines(const LinesArgs& a) {
                  "fabrica lines: %zu segments, %zu polylines (%zu of %zu vertices visible) -> %s\n",
                  segments, lines.polylines.size(), visible, total, a.output.c_str());
   }
+  warn_if_space_assumed(assumed_space, a.mesh, "lines", a.quiet);
   return 0;
 }
 

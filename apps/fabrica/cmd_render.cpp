@@ -125,7 +125,8 @@ int run_render(const RenderArgs& a) {
   std::vector<Loaded> loaded;
   BoundingBox box, focus_box;
   bool first = true, first_focus = true;
-  std::vector<std::string> assumed;  // meshes without a space tag
+  std::vector<std::string> assumed;  // meshes without a space tag (warned about at the end)
+  bool view_from_space = false;
   Space space = Space::lps;
   for (const auto& s : spec.structures) {
     io::ReadOptions ro;
@@ -171,8 +172,7 @@ int run_render(const RenderArgs& a) {
                  ? render::fit_camera(view, focus_box, space)
                  : anatomical_camera(view, box, space);
     camera_what = "--view " + name;
-    for (const auto& path : assumed)
-      warn_if_space_assumed(SpaceSource::default_assumed, path, "render", a.quiet);
+    view_from_space = true;
   }
   if (!a.size.empty()) std::tie(camera.width, camera.height) = parse_size(a.size);
   validate_camera(camera, camera_what);
@@ -269,6 +269,9 @@ int run_render(const RenderArgs& a) {
                  scene.structures.size(), polylines, camera.width, camera.height,
                  render::to_string(renderer.context().backend()), a.output.c_str());
   }
+  for (const auto& path : assumed)
+    if (view_from_space)
+      warn_if_space_assumed(SpaceSource::default_assumed, path, "render", a.quiet);
   return 0;
 }
 

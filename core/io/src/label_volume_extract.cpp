@@ -101,6 +101,20 @@ vtkSmartPointer<vtkPolyData> smooth_and_decimate(vtkSmartPointer<vtkPolyData> su
   return surface;
 }
 
+/// A smoothed label enclosing less than this fraction of its voxels' volume
+/// has collapsed (a label of one or a few voxels).
+constexpr double kCollapsedFraction = 0.02;
+
+double enclosed_volume(const TriangleMesh& mesh) {
+  if (mesh.faces.empty()) return 0.0;
+  const Vec3 c = bounding_box(mesh.positions).center();
+  double volume6 = 0.0;
+  for (const Face& f : mesh.faces)
+    volume6 +=
+        (mesh.positions[f[0]] - c).dot((mesh.positions[f[1]] - c).cross(mesh.positions[f[2]] - c));
+  return volume6 / 6.0;
+}
+
 /// Maps the filter output (points in spacing-scaled index space) to LPS mm,
 /// drops degenerate triangles and unused points, orients faces outward.
 TriangleMesh to_patient_mesh(vtkPolyData* surface, const VolumeGeometry& g) {
@@ -135,17 +149,8 @@ TriangleMesh to_patient_mesh(vtkPolyData* surface, const VolumeGeometry& g) {
   // Outward: the enclosed (signed) volume must be positive. The mapping flips
   // orientation when det(direction) < 0; the sum over all components keeps
   // cavities (inner walls of hollow labels) facing into the cavity.
-  if (!mesh.faces.empty()) {
-    const Vec3 c = bounding_box(mesh.positions).center();
-    double volume6 = 0.0;
-    for (const Face& f : mesh.faces) {
-      const Vec3 a = mesh.positions[f[0]] - c, b = mesh.positions[f[1]] - c,
-                 d = mesh.positions[f[2]] - c;
-      volume6 += a.dot(b.cross(d));
-    }
-    if (volume6 < 0.0)
-      for (Face& f : mesh.faces) std::swap(f[1], f[2]);
-  }
+  if (enclosed_volume(mesh) < 0.0)
+    for (Face& f : mesh.faces) std::swap(f[1], f[2]);
   return mesh;
 }
 
@@ -237,9 +242,15 @@ TriangleMesh extract_label(const LabelVolume& volume, const LabelStats& s,
   contour->ComputeGradientsOff();
   contour->ComputeScalarsOff();
   contour->Update();
-  vtkSmartPointer<vtkPolyData> surface = contour->GetOutput();
-  surface = smooth_and_decimate(surface, iterations, options.smoothing_passband, options.decimate);
-  return to_patient_mesh(surface, g);
+  vtkSmartPointer<vtkPolyData> contoured = contour->GetOutput();
+  TriangleMesh mesh = to_patient_mesh(
+      smooth_and_decimate(contoured, iterations, options.smoothing_passband, options.decimate), g);
+  // Smoothing shrinks a piece of a few voxels towards a point; such a label
+  // keeps its unsmoothed contour (a blob, not a speck of nothing).
+  const double voxel = g.spacing.prod();
+  if (iterations > 0 && enclosed_volume(mesh) < kCollapsedFraction * voxel * s.count)
+    mesh = to_patient_mesh(smooth_and_decimate(contoured, 0, 1.0, options.decimate), g);
+  return mesh;
 }
 
 TriangleMesh extract_iso(const LabelVolume& volume, double iso, const ExtractOptions& options,
