@@ -439,3 +439,19 @@ TEST(SegmentationCli, DidYouMeanForViewsAndFamilies) {
   EXPECT_NE(r.output.find("did you mean 'aorta'"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(dir / "x"));
 }
+
+TEST(SegmentationCli, ProgressOnATerminalOnly) {
+  if (std::system("command -v script > /dev/null 2>&1") != 0) GTEST_SKIP() << "no script(1)";
+  const auto dir = test::temp_dir("seg-progress");
+  const std::string extract = std::string("\"") + FABRICA_EXE + "\" extract " +
+                              quoted(volumes() / "totalseg_example_seg.nii.gz") + " -o ";
+  // script(1) gives the command a terminal.
+  const auto tty = test::run_logged("script -qc '" + extract + quoted(dir / "a") + "' /dev/null",
+                                    dir / "tty.txt");
+  EXPECT_EQ(tty.exit_code, 0) << tty.output;
+  EXPECT_NE(tty.output.find("41/41 labels"), std::string::npos) << tty.output;
+  const CliRun plain =
+      run_fabrica(extract.substr(extract.find("extract")) + quoted(dir / "b"), dir / "plain.txt");
+  EXPECT_EQ(plain.exit_code, 0) << plain.output;
+  EXPECT_EQ(plain.output.find("/41 labels"), std::string::npos) << plain.output;
+}
