@@ -1,5 +1,7 @@
 #include "cli_common.hpp"
 
+#include <CLI/CLI.hpp>
+
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
@@ -82,6 +84,33 @@ void warn_if_space_assumed(SpaceSource source, const std::string& path, const st
                "fabrica %s: warning: %s has no coordinate-space tag: assumed LPS (DICOM, ITK); "
                "give --space ras for RAS meshes (3D Slicer, vmtk), or the views are mirrored\n",
                command.c_str(), path.c_str());
+}
+
+std::string parse_error_hint(CLI::App& app, int argc, char** argv) {
+  if (argc < 2) return {};
+  std::vector<std::string> commands;
+  for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; }))
+    commands.push_back(sub->get_name());
+  const std::string first = argv[1];
+  if (first.empty() || first[0] == '-') return {};
+  if (std::find(commands.begin(), commands.end(), first) == commands.end()) {
+    const std::string hint = did_you_mean(first, commands);
+    return hint.empty() ? std::string() : "unknown command '" + first + "'" + hint;
+  }
+  std::vector<std::string> options{"--help"};
+  for (const CLI::Option* opt : app.get_subcommand(first)->get_options()) {
+    for (const auto& n : opt->get_lnames()) options.push_back("--" + n);
+    for (const auto& n : opt->get_snames()) options.push_back("-" + n);
+  }
+  for (int i = 2; i < argc; ++i) {
+    std::string token = argv[i];
+    if (token.rfind("--", 0) != 0) continue;
+    token = token.substr(0, token.find('='));
+    if (std::find(options.begin(), options.end(), token) != options.end()) continue;
+    const std::string hint = did_you_mean(token, options);
+    return hint.empty() ? std::string() : "unknown option '" + token + "'" + hint;
+  }
+  return {};
 }
 
 }  // namespace fabrica::cli

@@ -10,6 +10,10 @@
 #include "fabrica/core/mesh.hpp"
 #include "fabrica/lines/line_set.hpp"
 
+namespace CLI {
+class App;
+}
+
 namespace fabrica::cli {
 
 /// ASCII lower case (option values are case-insensitive).
@@ -41,5 +45,10 @@ AnatomicalView parse_view(const std::string& text, const std::string& option = "
 /// PATH has no space tag: assumed LPS ...". Nothing when quiet.
 void warn_if_space_assumed(SpaceSource source, const std::string& path, const std::string& command,
                            bool quiet = false);
+
+/// After a command-line parse error: "did you mean" for an unknown command
+/// (argv[1]) or the first unknown --option of the chosen command, e.g.
+/// "unknown option '--veiw' (did you mean '--view'?)"; "" when nothing is close.
+std::string parse_error_hint(CLI::App& app, int argc, char** argv);
 
 }  // namespace fabrica::cli

@@ -455,3 +455,17 @@ TEST(SegmentationCli, ProgressOnATerminalOnly) {
   EXPECT_EQ(plain.exit_code, 0) << plain.output;
   EXPECT_EQ(plain.output.find("/41 labels"), std::string::npos) << plain.output;
 }
+
+TEST(SegmentationCli, DidYouMeanForCommandsAndOptions) {
+  const auto dir = test::temp_dir("seg-options");
+  const fs::path mesh = test::bundled_data() / "meshes/anatomy/vessels/vmtk_aorta-surface.stl";
+  CliRun r = run_fabrica("lines " + quoted(mesh) + " --veiw anterior -o " + quoted(dir / "a.svg"),
+                         dir / "option.txt");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("unknown option '--veiw' (did you mean '--view'?)"), std::string::npos)
+      << r.output;
+  r = run_fabrica("lnies " + quoted(mesh), dir / "command.txt");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("unknown command 'lnies' (did you mean 'lines'?)"), std::string::npos)
+      << r.output;
+}
