@@ -408,36 +408,39 @@ TEST(SegmentationCli, InfoSmoothTakesTheStaircaseOff) {
   EXPECT_NEAR(v_smooth, v_raw, 0.05 * v_raw);
 }
 
-TEST(SegmentationCli, DidYouMeanForViewsAndFamilies) {
+TEST(SegmentationCli, DidYouMeanAndTheAssumedSpace) {
   const auto dir = test::temp_dir("seg-typos");
-  const fs::path mesh = test::bundled_data() / "meshes/anatomy/vessels/vmtk_aorta-surface.stl";
-  CliRun r = run_fabrica("lines " + quoted(mesh) + " --view anteriour -o " + quoted(dir / "a.svg"),
-                         dir / "view.txt");
-  EXPECT_EQ(r.exit_code, 2) << r.output;
-  EXPECT_NE(r.output.find("did you mean 'anterior'"), std::string::npos) << r.output;
-  r = run_fabrica("render " + quoted(mesh) + " --view postrior -o " + quoted(dir / "a.png"),
-                  dir / "render.txt");
-  EXPECT_EQ(r.exit_code, 2) << r.output;
-  EXPECT_NE(r.output.find("did you mean 'posterior'"), std::string::npos) << r.output;
-  r = run_fabrica(
-      "lines " + quoted(mesh) + " --types contour,sugestive -o " + quoted(dir / "b.svg"),
-      dir / "family.txt");
-  EXPECT_EQ(r.exit_code, 2) << r.output;
-  EXPECT_NE(r.output.find("did you mean 'suggestive'"), std::string::npos) << r.output;
-  // An OFF file has no space tag: LPS is assumed, and said.
-  r = run_fabrica(
-      "lines " + quoted(test::bundled_data() / "meshes/anatomy/vessels/sofa_aneurysm3D_1.off") +
-          " -o " + quoted(dir / "c.svg"),
-      dir / "space.txt");
-  EXPECT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_NE(r.output.find("has no coordinate-space tag: assumed LPS"), std::string::npos)
-      << r.output;
-  r = run_fabrica("extract " + quoted(volumes() / "totalseg_example_seg.nii.gz") + " -o " +
-                      quoted(dir / "x") + " --focus aort",
-                  dir / "focus.txt");
-  EXPECT_EQ(r.exit_code, 2) << r.output;
-  EXPECT_NE(r.output.find("did you mean 'aorta'"), std::string::npos) << r.output;
-  EXPECT_FALSE(fs::exists(dir / "x"));
+  const std::string mesh =
+      quoted(test::bundled_data() / "meshes/anatomy/vessels/vmtk_aorta-surface.stl");
+  const std::string sample = quoted(volumes() / "totalseg_example_seg.nii.gz");
+  struct Case {
+    std::string args;
+    int exit_code;
+    std::string expected;
+  };
+  const Case cases[] = {
+      {"lines " + mesh + " --view anteriour -o " + quoted(dir / "a.svg"), 2,
+       "did you mean 'anterior'"},
+      {"render " + mesh + " --view postrior -o " + quoted(dir / "a.png"), 2,
+       "did you mean 'posterior'"},
+      {"lines " + mesh + " --types contour,sugestive -o " + quoted(dir / "b.svg"), 2,
+       "did you mean 'suggestive'"},
+      {"extract " + sample + " -o " + quoted(dir / "x") + " --focus aort", 2,
+       "did you mean 'aorta'"},
+      {"lines " + mesh + " --veiw anterior -o " + quoted(dir / "a.svg"), 2,
+       "unknown option '--veiw' (did you mean '--view'?)"},
+      {"lnies " + mesh, 2, "unknown command 'lnies' (did you mean 'lines'?)"},
+      // An OFF file has no space tag: LPS is assumed, and said.
+      {"lines " + quoted(test::bundled_data() / "meshes/anatomy/vessels/sofa_aneurysm3D_1.off") +
+           " -o " + quoted(dir / "c.svg"),
+       0, "has no coordinate-space tag: assumed LPS"},
+  };
+  for (const Case& c : cases) {
+    const CliRun r = run_fabrica(c.args, dir / "log.txt");
+    EXPECT_EQ(r.exit_code, c.exit_code) << c.args << "\n" << r.output;
+    EXPECT_NE(r.output.find(c.expected), std::string::npos) << c.args << "\n" << r.output;
+  }
+  EXPECT_FALSE(fs::exists(dir / "x"));  // a bad --focus writes nothing
 }
 
 TEST(SegmentationCli, ProgressOnATerminalOnly) {
@@ -454,18 +457,4 @@ TEST(SegmentationCli, ProgressOnATerminalOnly) {
       run_fabrica(extract.substr(extract.find("extract")) + quoted(dir / "b"), dir / "plain.txt");
   EXPECT_EQ(plain.exit_code, 0) << plain.output;
   EXPECT_EQ(plain.output.find("/41 labels"), std::string::npos) << plain.output;
-}
-
-TEST(SegmentationCli, DidYouMeanForCommandsAndOptions) {
-  const auto dir = test::temp_dir("seg-options");
-  const fs::path mesh = test::bundled_data() / "meshes/anatomy/vessels/vmtk_aorta-surface.stl";
-  CliRun r = run_fabrica("lines " + quoted(mesh) + " --veiw anterior -o " + quoted(dir / "a.svg"),
-                         dir / "option.txt");
-  EXPECT_EQ(r.exit_code, 2) << r.output;
-  EXPECT_NE(r.output.find("unknown option '--veiw' (did you mean '--view'?)"), std::string::npos)
-      << r.output;
-  r = run_fabrica("lnies " + quoted(mesh), dir / "command.txt");
-  EXPECT_EQ(r.exit_code, 2) << r.output;
-  EXPECT_NE(r.output.find("unknown command 'lnies' (did you mean 'lines'?)"), std::string::npos)
-      << r.output;
 }
