@@ -1,10 +1,14 @@
 #include "cli_common.hpp"
 
+#include <CLI/CLI.hpp>
+
 #include <algorithm>
 #include <cctype>
+#include <cstdio>
 #include <sstream>
 
 #include "fabrica/core/error.hpp"
+#include "fabrica/core/suggest.hpp"
 #include "fabrica/lines/extract.hpp"
 
 namespace fabrica::cli {
@@ -50,15 +54,63 @@ std::vector<LineFamily> parse_family_list(const std::string& text, const std::st
     const auto f = parse_family(item);
     if (!f) {
       std::string names;
-      for (auto g : all_families())
+      std::vector<std::string> known;
+      for (auto g : all_families()) {
         names += std::string(names.empty() ? "" : ", ") + family_name(g);
-      throw InputError(option + ": unknown line family \"" + item + "\" (known: " + names +
+        known.emplace_back(family_name(g));
+      }
+      throw InputError(option + ": unknown line family \"" + item + "\"" +
+                       did_you_mean(item, known) + " (known: " + names +
                        ", or default, reference, all" + (allow_none ? ", none)" : ")"));
     }
     if (std::find(out.begin(), out.end(), *f) == out.end()) out.push_back(*f);
   }
   if (out.empty() && !allow_none) throw InputError(option + ": no line family given");
   return out;
+}
+
+AnatomicalView parse_view(const std::string& text, const std::string& option) {
+  if (const auto view = parse_anatomical_view(lower(text))) return *view;
+  const std::vector<std::string> known = {"anterior", "posterior", "left",
+                                          "right",    "superior",  "inferior"};
+  throw InputError(option + ": unknown view \"" + text + "\"" + did_you_mean(text, known) +
+                   " (anterior, posterior, left, right, superior, inferior)");
+}
+
+void warn_if_space_assumed(SpaceSource source, const std::string& path, const std::string& command,
+                           bool quiet) {
+  if (quiet || source != SpaceSource::default_assumed) return;
+  std::fprintf(stderr,
+               "fabrica %s: warning: %s has no coordinate-space tag: assumed LPS (DICOM, ITK); "
+               "give --space ras for RAS meshes (3D Slicer, vmtk), or the views are mirrored\n",
+               command.c_str(), path.c_str());
+}
+
+std::string parse_error_hint(CLI::App& app, int argc, char** argv) {
+  if (argc < 2) return {};
+  std::vector<std::string> commands;
+  for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; }))
+    commands.push_back(sub->get_name());
+  const std::string first = argv[1];
+  if (first.empty() || first[0] == '-') return {};
+  if (std::find(commands.begin(), commands.end(), first) == commands.end()) {
+    const std::string hint = did_you_mean(first, commands);
+    return hint.empty() ? std::string() : "unknown command '" + first + "'" + hint;
+  }
+  std::vector<std::string> options{"--help"};
+  for (const CLI::Option* opt : app.get_subcommand(first)->get_options()) {
+    for (const auto& n : opt->get_lnames()) options.push_back("--" + n);
+    for (const auto& n : opt->get_snames()) options.push_back("-" + n);
+  }
+  for (int i = 2; i < argc; ++i) {
+    std::string token = argv[i];
+    if (token.rfind("--", 0) != 0) continue;
+    token = token.substr(0, token.find('='));
+    if (std::find(options.begin(), options.end(), token) != options.end()) continue;
+    const std::string hint = did_you_mean(token, options);
+    return hint.empty() ? std::string() : "unknown option '" + token + "'" + hint;
+  }
+  return {};
 }
 
 }  // namespace fabrica::cli

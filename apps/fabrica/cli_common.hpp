@@ -6,8 +6,13 @@
 #include <utility>
 #include <vector>
 
+#include "fabrica/core/camera.hpp"
 #include "fabrica/core/mesh.hpp"
 #include "fabrica/lines/line_set.hpp"
+
+namespace CLI {
+class App;
+}
 
 namespace fabrica::cli {
 
@@ -30,5 +35,20 @@ Space parse_space(const std::string& text, const std::string& option = "--space"
 std::vector<LineFamily> parse_family_list(const std::string& text, const std::string& option,
                                           const std::vector<LineFamily>& default_set,
                                           bool allow_none);
+
+/// An anatomical view name (any case) for --view; throws InputError naming
+/// `option`, the known views and the closest one ("did you mean").
+AnatomicalView parse_view(const std::string& text, const std::string& option = "--view");
+
+/// One line on stderr when a mesh (read with `source`) had no coordinate-space tag and LPS was
+/// assumed (the anatomical views depend on it): "fabrica COMMAND: warning:
+/// PATH has no space tag: assumed LPS ...". Nothing when quiet.
+void warn_if_space_assumed(SpaceSource source, const std::string& path, const std::string& command,
+                           bool quiet = false);
+
+/// After a command-line parse error: "did you mean" for an unknown command
+/// (argv[1]) or the first unknown --option of the chosen command, e.g.
+/// "unknown option '--veiw' (did you mean '--view'?)"; "" when nothing is close.
+std::string parse_error_hint(CLI::App& app, int argc, char** argv);
 
 }  // namespace fabrica::cli

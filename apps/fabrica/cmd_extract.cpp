@@ -4,9 +4,12 @@
 // named after its label (sanitised for file names) or label_<N>; a label that
 // yields no surface is reported and skipped. Also writes DIR/surfaces.json
 // (name, label, layer, colour, file, counts) so colours survive.
+#include <unistd.h>
 #include <CLI/CLI.hpp>
+
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -20,8 +23,13 @@
 #include "commands.hpp"
 #include "fabrica/core/atomic_file.hpp"
 #include "fabrica/core/error.hpp"
+#include "fabrica/core/suggest.hpp"
 #include "fabrica/io/label_volume.hpp"
 #include "fabrica/io/mesh_io.hpp"
+#if __has_include("fabrica/render/scene.hpp")
+#include "fabrica/render/scene.hpp"
+#define FABRICA_EXTRACT_SCENE 1
+#endif
 
 namespace fabrica::cli {
 
@@ -38,7 +46,44 @@ struct ExtractCommandOptions {
   std::string format = "stl";
   std::string names;
   std::string space = "lps";
+  std::string min_island = "0";
+  bool largest_component = false;
+  std::vector<std::string> focus;
+  bool quiet = false;
 };
+
+#ifdef FABRICA_EXTRACT_SCENE
+/// Opacity of the context structures in DIR/scene.json (default_style's 0.25
+/// suits a few; a segmentation has dozens that overlap).
+constexpr double kContextOpacity = 0.15;
+#endif
+
+/// --min-island: "N" or "Nvox" voxels, "Nmm3" cubic millimetres (converted
+/// with the volume's voxel size, rounded up).
+std::size_t parse_min_island(const std::string& text, const io::VolumeGeometry& g) {
+  std::string number = text, unit;
+  const auto split = text.find_first_not_of("0123456789.eE+");
+  if (split != std::string::npos) {
+    number = text.substr(0, split);
+    unit = lower(text.substr(split));
+  }
+  double value = -1.0;
+  try {
+    std::size_t used = 0;
+    value = std::stod(number, &used);
+    if (used != number.size()) value = -1.0;
+  } catch (const std::exception&) {
+    value = -1.0;
+  }
+  if (!(value >= 0.0) || !std::isfinite(value) ||
+      !(unit.empty() || unit == "vox" || unit == "voxels" || unit == "mm3" || unit == "mm^3"))
+    throw InputError(
+        "--min-island: expected a number of voxels (e.g. 20) or a volume in mm3 "
+        "(e.g. 500mm3), got \"" +
+        text + "\"");
+  if (unit.rfind("mm", 0) == 0) value /= g.spacing[0] * g.spacing[1] * g.spacing[2];
+  return static_cast<std::size_t>(std::ceil(value - 1e-9));
+}
 
 /// Keeps letters, digits, '-', '_' and '.'; everything else becomes '_'
 /// (runs collapsed); no leading dots, no empty names.
@@ -88,11 +133,39 @@ int run_extract(const ExtractCommandOptions& o) {
 
   io::ExtractOptions options;
   options.labels = o.labels;
+  options.min_island_voxels = parse_min_island(o.min_island, volume.geometry);
+  options.largest_component = o.largest_component;
+  // Progress on a terminal (labels are extracted in parallel).
+  const bool terminal = !o.quiet && isatty(fileno(stderr)) != 0;
+  if (terminal)
+    options.progress = [](std::size_t done, std::size_t total) {
+      std::fprintf(stderr, "\rfabrica extract: %zu/%zu labels", done, total);
+      if (done == total) std::fprintf(stderr, "\n");
+      return true;
+    };
   options.smoothing_iterations = o.smooth;
   options.smoothing_passband = o.passband;
   options.decimate = o.decimate;
   options.iso_value = o.iso;
   const std::vector<io::ExtractedSurface> surfaces = io::extract_surfaces(volume, options);
+
+  // --focus names must be structures of this volume (checked before writing).
+  std::vector<std::string> names;
+  for (const io::ExtractedSurface& s : surfaces)
+    if (!s.mesh.empty()) names.push_back(s.name);
+  std::vector<std::uint8_t> is_focus(surfaces.size(), 0);
+  for (const std::string& f : o.focus) {
+    bool found = false;
+    for (std::size_t i = 0; i < surfaces.size(); ++i)
+      if (!surfaces[i].mesh.empty() &&
+          (lower(surfaces[i].name) == lower(f) ||
+           sanitize_file_name(lower(surfaces[i].name), "") == lower(f))) {
+        is_focus[i] = found = true;
+      }
+    if (!found)
+      throw InputError("--focus: no structure named \"" + f + "\" in " + o.volume +
+                       did_you_mean(f, names) + " (see the names in the label table)");
+  }
 
   const std::filesystem::path dir(o.output);
   std::error_code ec;
@@ -106,8 +179,14 @@ int run_extract(const ExtractCommandOptions& o) {
 
   std::set<std::string> used;
   nlohmann::json manifest = nlohmann::json::array();
-  std::size_t written = 0, skipped = 0, write_failures = 0;
-  for (const io::ExtractedSurface& s : surfaces) {
+  std::size_t written = 0, skipped = 0, write_failures = 0, islands = 0;
+#ifdef FABRICA_EXTRACT_SCENE
+  render::SceneSpec scene;
+  scene.view = AnatomicalView::anterior;
+#endif
+  for (std::size_t index = 0; index < surfaces.size(); ++index) {
+    const io::ExtractedSurface& s = surfaces[index];
+    islands += s.islands_removed;
     const std::string fallback = "label_" + std::to_string(s.label);
     std::string base = sanitize_file_name(s.name, fallback);
     if (used.count(base) != 0) base += "_" + std::to_string(s.label);
@@ -148,7 +227,31 @@ int run_extract(const ExtractCommandOptions& o) {
                             {"faces", mesh.face_count()},
                             {"space", to_string(mesh.space)}};
     if (s.color) entry["color"] = {(*s.color)[0], (*s.color)[1], (*s.color)[2]};
+    if (s.islands_removed > 0) {
+      entry["islands_removed"] = s.islands_removed;
+      entry["island_voxels_removed"] = s.island_voxels_removed;
+    }
     manifest.push_back(std::move(entry));
+#ifdef FABRICA_EXTRACT_SCENE
+    // One structure per label: context unless named by --focus; the
+    // palette's colour for a known name, else the file's, else a cycle.
+    render::StructureSpec st;
+    st.name = s.name;
+    st.mesh = file.filename();
+    st.role = is_focus[index] ? render::Role::focus : render::Role::context;
+    st.style = render::default_style(st.role);
+    // A label map has many structures: lighter ghosts keep the layers readable.
+    if (st.role == render::Role::context) st.style.opacity = kContextOpacity;
+    if (const auto c = render::anatomical_color(s.name)) {
+      st.style.color = *c;
+    } else if (s.color) {
+      st.style.color = {static_cast<float>((*s.color)[0]), static_cast<float>((*s.color)[1]),
+                        static_cast<float>((*s.color)[2]), 1.0f};
+    } else {
+      st.style.color = render::cycle_color(scene.structures.size());
+    }
+    scene.structures.push_back(std::move(st));
+#endif
   }
   if (written > 0) {
     const nlohmann::json doc = {{"volume", o.volume},
@@ -157,7 +260,20 @@ int run_extract(const ExtractCommandOptions& o) {
                                 {"surfaces", manifest}};
     write_file_atomically(dir / "surfaces.json",
                           [&](std::ostream& out) { out << doc.dump(2) << "\n"; });
+#ifdef FABRICA_EXTRACT_SCENE
+    // Focus structures are drawn last, over the context.
+    std::stable_partition(
+        scene.structures.begin(), scene.structures.end(),
+        [](const render::StructureSpec& st) { return st.role != render::Role::focus; });
+    render::write_scene_spec(scene, dir / "scene.json");
+    std::printf("  wrote %s  (%zu structures, %zu focus; fabrica render %s -o FIGURE.png)\n",
+                (dir / "scene.json").string().c_str(), scene.structures.size(), o.focus.size(),
+                (dir / "scene.json").string().c_str());
+#endif
   }
+  if (islands > 0)
+    std::printf("  dropped %zu island(s) below --min-island%s\n", islands,
+                o.largest_component ? " or outside the largest piece" : "");
   std::printf("%zu surface(s) written to %s", written, dir.string().c_str());
   if (skipped > 0) std::printf(", %zu label(s) skipped", skipped);
   if (write_failures > 0) std::printf(", %zu could not be written", write_failures);
@@ -184,7 +300,7 @@ void add_extract_command(CLI::App& app, Action& action) {
                   "label values to extract, e.g. 1,2,5 (default: all nonzero)")
       ->delimiter(',');
   cmd->add_option("--smooth", o->smooth,
-                  "windowed-sinc smoothing iterations (default 20 for labels, 0 for --iso)")
+                  "windowed-sinc smoothing iterations (default 60 for labels, 0 for --iso)")
       ->check(CLI::Range(0, 10000));
   cmd->add_option("--passband", o->passband, "smoothing pass band in (0,2); smaller is smoother")
       ->capture_default_str();
@@ -198,6 +314,15 @@ void add_extract_command(CLI::App& app, Action& action) {
   cmd->add_option("--names", o->names,
                   "label table naming labels: lines 'VALUE NAME [R G B]' (Slicer / ITK-SNAP)");
   cmd->add_option("--space", o->space, "coordinates of the outputs: lps (default) or ras");
+  cmd->add_option("--min-island", o->min_island,
+                  "drop pieces of a label smaller than this: voxels (20) or mm3 (500mm3)")
+      ->capture_default_str();
+  cmd->add_flag("--largest-component", o->largest_component,
+                "keep only the largest piece of each label");
+  cmd->add_option("--focus", o->focus,
+                  "structures drawn as the focus in DIR/scene.json (names; the rest is context)")
+      ->delimiter(',');
+  cmd->add_flag("-q,--quiet", o->quiet, "no progress on stderr");
   cmd->callback([o, &action] { action = [o] { return run_extract(*o); }; });
 }
 

@@ -218,16 +218,15 @@ int run_hatch(const HatchArgs& args) {
   std::optional<std::pair<int, int>> size;
   if (!args.size.empty()) size = parse_size(args.size);
   Camera camera;
+  SpaceSource assumed_space = SpaceSource::file_tag;  // warned about once the work is done
   if (!args.camera_file.empty()) {
     camera = read_camera(args.camera_file);
     if (size) std::tie(camera.width, camera.height) = *size;
   } else {
-    const auto view = parse_anatomical_view(args.view.empty() ? "anterior" : args.view);
-    if (!view)
-      throw InputError("--view: unknown view \"" + args.view +
-                       "\" (anterior, posterior, left, right, superior, inferior)");
+    const AnatomicalView view = parse_view(args.view.empty() ? "anterior" : args.view);
     const auto [w, h] = size.value_or(std::pair<int, int>{800, 800});
-    camera = anatomical_camera(*view, bounding_box(loaded.mesh.positions), space, w, h);
+    camera = anatomical_camera(view, bounding_box(loaded.mesh.positions), space, w, h);
+    assumed_space = loaded.mesh.space_source;
   }
   validate_camera(camera, args.camera_file.empty() ? "camera" : args.camera_file);
 
@@ -287,6 +286,7 @@ int run_hatch(const HatchArgs& args) {
                     strokes.stats.ends[static_cast<std::size_t>(k)]);
     std::printf("\n");
   }
+  warn_if_space_assumed(assumed_space, args.mesh, "hatch", args.quiet);
   return 0;
 }
 

@@ -14,6 +14,7 @@
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "fabrica/core/mesh.hpp"
+#include "fabrica/io/label_volume.hpp"
 #include "fabrica/io/mesh_io.hpp"
 #include "fabrica/io/repair.hpp"
 #include "fabrica/io/validate.hpp"
@@ -29,6 +30,8 @@ struct InfoOptions {
   bool self_intersections = false;
   std::string space;
   std::string output;
+  int smooth = 0;
+  double passband = 0.1;
 };
 
 std::string format_vec(const Vec3& v) {
@@ -69,12 +72,19 @@ void print_validation(std::ostringstream& out, const io::ValidationReport& r, co
   row("unreferenced vertices", num(r.unreferenced_vertices));
   row("consistently oriented",
       r.consistently_oriented ? "yes" : "no (" + num(r.inconsistent_edges) + " edges disagree)");
-  row("outward", r.outward ? (*r.outward ? "yes"
-                                         : "NO (" + num(r.inward_pieces) +
-                                               (r.inward_pieces == 1 ? " closed piece points"
-                                                                     : " closed pieces point") +
-                                               " inward)")
-                           : "n/a (needs a closed, consistently oriented, edge-manifold mesh)");
+  row("outward",
+      r.outward ? (*r.outward ? "yes"
+                              : "NO (" + num(r.inward_pieces) +
+                                    (r.inward_pieces == 1 ? " closed piece points"
+                                                          : " closed pieces point") +
+                                    " inward)")
+      : r.inward_open_pieces > 0
+          ? "NO (" + num(r.inward_open_pieces) +
+                (r.inward_open_pieces == 1 ? " open piece points" : " open pieces point") +
+                " inward: signed volume with boundary loops capped < 0)"
+      : r.closed || !r.consistently_oriented || r.nonmanifold_edges > 0
+          ? "n/a (needs a consistently oriented, edge-manifold mesh)"
+          : "yes (open: signed volume with boundary loops capped >= 0, or flat)");
   if (r.self_intersecting_face_pairs)
     row("self-intersecting pairs", num(*r.self_intersecting_face_pairs));
   char buf[256];
@@ -105,13 +115,19 @@ int run_info(const InfoOptions& o) {
   validate_options.self_intersections = o.self_intersections;
   const io::ValidationReport report = io::validate_mesh(mesh, validate_options);
 
-  const bool repair = o.repair || !o.output.empty();
+  const bool repair = o.repair || !o.output.empty() || o.smooth > 0;
   std::optional<TriangleMesh> repaired;
   std::optional<io::RepairReport> repair_report;
   std::optional<io::ValidationReport> after;
   if (repair) {
     repaired = mesh;
     repair_report = io::repair_mesh(*repaired);
+    if (o.smooth > 0) {
+      io::smooth_surface(*repaired, o.smooth, o.passband);
+      repair_report->changes.push_back("smoothed (windowed sinc, " + std::to_string(o.smooth) +
+                                       " iterations, pass band " + std::to_string(o.passband) +
+                                       "): vertices moved, enclosed volume nearly kept");
+    }
     after = io::validate_mesh(*repaired, validate_options);
     if (!o.output.empty()) io::write_mesh(*repaired, o.output);
   }
@@ -195,6 +211,12 @@ void add_info_command(CLI::App& app, Action& action) {
   cmd->add_option(
       "--space", o->space,
       "coordinate space of the file, overriding its SPACE tag (default: tag, else LPS)");
+  cmd->add_option("--smooth", o->smooth,
+                  "also smooth the repaired copy: N windowed-sinc iterations (volume "
+                  "preserving; removes a voxel staircase, e.g. 20); implies --repair")
+      ->check(CLI::Range(0, 10000));
+  cmd->add_option("--passband", o->passband, "smoothing pass band in (0,2); smaller is smoother")
+      ->capture_default_str();
   cmd->add_option("-o,--output", o->output,
                   "write the repaired mesh here (.obj .ply .off .stl); implies --repair");
   cmd->callback([o, &action] { action = [o] { return run_info(*o); }; });

@@ -111,16 +111,15 @@ int run_lines(const LinesArgs& a) {
 
   Camera camera;
   std::string camera_what;
+  SpaceSource assumed_space = SpaceSource::file_tag;  // warned about once the work is done
   if (!a.camera_file.empty()) {
     camera = read_camera(a.camera_file);
     camera_what = a.camera_file;
   } else {
     const std::string vname = a.view.empty() ? "anterior" : lower(a.view);
-    const auto view = parse_anatomical_view(vname);
-    if (!view)
-      throw InputError("--view: unknown view \"" + a.view +
-                       "\" (anterior, posterior, left, right, superior, inferior)");
-    camera = anatomical_camera(*view, bounding_box(mesh.positions), mesh.space);
+    const AnatomicalView view = parse_view(vname);
+    assumed_space = mesh.space_source;
+    camera = anatomical_camera(view, bounding_box(mesh.positions), mesh.space);
     camera_what = "--view " + vname;
   }
   if (!a.size.empty()) std::tie(camera.width, camera.height) = parse_size(a.size);
@@ -169,6 +168,7 @@ int run_lines(const LinesArgs& a) {
                  "fabrica lines: %zu segments, %zu polylines (%zu of %zu vertices visible) -> %s\n",
                  segments, lines.polylines.size(), visible, total, a.output.c_str());
   }
+  warn_if_space_assumed(assumed_space, a.mesh, "lines", a.quiet);
   return 0;
 }
 

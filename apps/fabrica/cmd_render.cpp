@@ -27,7 +27,7 @@ namespace {
 
 struct RenderArgs {
   std::string input, camera_file, view, style, lines, size, backend, output, svg, hidden, space;
-  std::string save_scene, save_camera;
+  std::string save_scene, save_camera, frame;
   std::vector<std::string> context;
   std::optional<double> tau, lambda, threshold, line_width, context_opacity;
   std::optional<int> smooth;
@@ -69,8 +69,18 @@ int run_render(const RenderArgs& a) {
     s.name = s.mesh.stem().string();
     s.role = render::Role::context;
     s.style = render::default_style(render::Role::context);
+    // Each context structure keeps a colour of its own: the palette's for a
+    // known name, else the next of a cycle of pale hues.
+    s.style.color =
+        render::anatomical_color(s.name).value_or(render::cycle_color(spec.structures.size()));
     spec.structures.push_back(s);
   }
+  std::optional<render::Frame> frame_override;
+  if (!a.frame.empty()) {
+    frame_override = render::parse_frame(a.frame);
+    if (!frame_override) throw InputError("--frame must be focus or all (got \"" + a.frame + "\")");
+  }
+  const render::Frame frame = render::default_frame(spec, frame_override);
   std::optional<Space> space_override;
   if (!a.space.empty()) space_override = parse_space(a.space);
   if (a.smooth && *a.smooth < 0) throw InputError("--smooth must be >= 0 (iterations; 0 = off)");
@@ -101,6 +111,7 @@ int run_render(const RenderArgs& a) {
 
   // 2. Meshes -> prepared Surfaces.
   const render::SceneSurfaces scene = render::load_scene(spec);
+  bool view_from_space = false;
 
   // 3. Camera: --camera, --view, the scene's camera or view, else anterior.
   Camera camera;
@@ -114,12 +125,9 @@ int run_render(const RenderArgs& a) {
   } else {
     std::string name = a.view;
     if (name.empty()) name = spec.view ? to_string(*spec.view) : "anterior";
-    const auto view = parse_anatomical_view(lower(name));
-    if (!view)
-      throw InputError("--view: unknown view \"" + name +
-                       "\" (anterior, posterior, left, right, superior, inferior)");
-    camera = render::view_camera(scene, *view);
+    camera = render::view_camera(scene, parse_view(name), frame);
     camera_what = "--view " + name;
+    view_from_space = true;
   }
   if (!a.size.empty()) std::tie(camera.width, camera.height) = parse_size(a.size);
   validate_camera(camera, camera_what);
@@ -158,6 +166,9 @@ int run_render(const RenderArgs& a) {
                  picture.scene.structures.size(), polylines, camera.width, camera.height,
                  render::to_string(picture.backend), a.output.c_str());
   }
+  for (const auto& path : scene.assumed_space)
+    if (view_from_space)
+      warn_if_space_assumed(SpaceSource::default_assumed, path, "render", a.quiet);
   return 0;
 }
 
@@ -187,6 +198,8 @@ void add_render_command(CLI::App& app, Action& action) {
   cmd->add_flag("--sign-free", args->sign_free, "Hybrid: store t1 as a double angle");
   cmd->add_flag("--float-target", args->float_target, "Hybrid: 32-bit float render target");
   cmd->add_option("--context", args->context, "Context mesh (repeatable): ghosted, silhouettes");
+  cmd->add_option("--frame", args->frame,
+                  "What the view frames: focus (default when there is context) or all");
   cmd->add_option("--context-opacity", args->context_opacity,
                   "Opacity of context structures (0.25)");
   cmd->add_option("--smooth", args->smooth,

@@ -5,12 +5,15 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <exception>
+#include <string>
 
+#include "cli_common.hpp"
 #include "commands.hpp"
 #include "fabrica/core/error.hpp"
 
 int main(int argc, char** argv) {
-  CLI::App app{"fabrica: feature lines, hatching and focus-and-context illustrations of anatomy meshes"};
+  CLI::App app{
+      "fabrica: feature lines, hatching and focus-and-context illustrations of anatomy meshes"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "fabrica 0.1.0");
   fabrica::cli::Action action;
@@ -49,6 +52,8 @@ int main(int argc, char** argv) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
     app.exit(e);
+    const std::string hint = fabrica::cli::parse_error_hint(app, argc, argv);
+    if (!hint.empty()) std::fprintf(stderr, "fabrica: %s\n", hint.c_str());
     return 2;
   }
   try {

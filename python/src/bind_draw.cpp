@@ -175,8 +175,16 @@ void bind_render(py::module_& m) {
   m.def(
       "render_scene",
       [](const std::string& path, std::optional<Camera> camera, const std::string& view,
-         std::optional<int> width, std::optional<int> height, const std::string& backend) {
+         std::optional<int> width, std::optional<int> height, const std::string& backend,
+         const std::string& frame_name) {
         render::SceneSpec spec = render::read_scene_spec(path);
+        std::optional<render::Frame> frame_override;
+        if (!frame_name.empty()) {
+          frame_override = render::parse_frame(frame_name);
+          if (!frame_override)
+            throw InputError("frame must be focus or all (got \"" + frame_name + "\")");
+        }
+        const render::Frame frame = render::default_frame(spec, frame_override);
         const render::HeadlessOptions headless = render::headless_options(backend);
         render::Image image;
         {
@@ -193,7 +201,7 @@ void bind_render(py::module_& m) {
                                                    : "anterior";
             const auto v = parse_anatomical_view(name);
             if (!v) throw InputError("view: unknown view \"" + name + "\"");
-            c = render::view_camera(scene, *v);
+            c = render::view_camera(scene, *v, frame);
           }
           if (width) c.width = *width;  // as --size: after the view is framed
           if (height) c.height = *height;
@@ -206,10 +214,12 @@ void bind_render(py::module_& m) {
       },
       py::arg("path"), py::arg("camera") = py::none(), py::arg("view") = "",
       py::arg("width") = py::none(), py::arg("height") = py::none(), py::arg("backend") = "",
+      py::arg("frame") = "",
       "Renders a scene JSON (the `fabrica render scene.json` format) to an (h, w, 4) uint8 "
-      "array, as `fabrica render scene.json [--camera] [--view] [--size WxH]`: the camera "
-      "given, else the scene's, else its view (anterior by default); width/height change the "
-      "image size after the view is framed, as --size does.");
+      "array, as `fabrica render scene.json [--camera] [--view] [--size WxH] [--frame]`: the "
+      "camera given, else the scene's, else its view (anterior by default), framing the focus "
+      "when the scene has focus and context (frame='all' frames everything); width/height "
+      "change the image size after the view is framed, as --size does.");
   m.def(
       "write_png",
       [](const py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>& a,

@@ -19,6 +19,11 @@ void SceneSurfaces::add(StructureSpec structure, std::shared_ptr<const Surface> 
     box.min = box.min.cwiseMin(b.min);
     box.max = box.max.cwiseMax(b.max);
   }
+  if (structure.role == Role::focus) {
+    focus_box =
+        has_focus ? BoundingBox{focus_box.min.cwiseMin(b.min), focus_box.max.cwiseMax(b.max)} : b;
+    has_focus = true;
+  }
   spec.structures.push_back(std::move(structure));
   surfaces.push_back(std::move(surface));
 }
@@ -32,13 +37,17 @@ SceneSurfaces load_scene(SceneSpec spec) {
     PrepareOptions options;
     options.space = s.space;
     PreparedMesh prepared = prepare_mesh(s.mesh, options);
+    if (prepared.mesh.space_source == SpaceSource::default_assumed)
+      scene.assumed_space.push_back(s.mesh.string());
     auto surface = std::make_shared<const Surface>(std::move(prepared.mesh));
     scene.add(std::move(s), std::move(surface));
   }
   return scene;
 }
 
-Camera view_camera(const SceneSurfaces& scene, AnatomicalView view) {
+Camera view_camera(const SceneSurfaces& scene, AnatomicalView view, Frame frame) {
+  if (frame == Frame::focus && scene.has_focus)
+    return fit_camera(view, scene.focus_box, scene.space);
   return anatomical_camera(view, scene.box, scene.space);
 }
 

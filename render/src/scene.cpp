@@ -2,12 +2,15 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "fabrica/core/atomic_file.hpp"
 #include "fabrica/core/error.hpp"
+#include "fabrica/core/suggest.hpp"
 
 namespace fabrica::render {
 
@@ -42,6 +45,28 @@ std::string lower(std::string_view s) {
   return r;
 }
 
+// Where a value sits in the scene, for messages: "structures[2].opacity".
+std::string at(const std::string& path, const std::string& key) {
+  return path.empty() ? key : path + "." + key;
+}
+
+const char* type_name(const nlohmann::json& v) {
+  return v.type_name();
+}
+
+// Every key of `object` must be one of `known`; else InputError naming the
+// path and the closest known key.
+void check_keys(const nlohmann::json& object, const std::vector<std::string>& known,
+                const std::string& what, const std::string& path) {
+  for (const auto& item : object.items())
+    if (std::find(known.begin(), known.end(), item.key()) == known.end()) {
+      std::string list;
+      for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
+      throw InputError(what + ": " + at(path, item.key()) + ": unknown key" +
+                       did_you_mean(item.key(), known) + " (known here: " + list + ")");
+    }
+}
+
 Color color_from_json(const nlohmann::json& j, const std::string& what) {
   if (!j.is_array() || (j.size() != 3 && j.size() != 4))
     throw InputError(what + " must be an array [r, g, b] or [r, g, b, a] of numbers in [0, 1]");
@@ -60,23 +85,178 @@ nlohmann::json color_to_json(const Color& c) {
 }
 
 double number(const nlohmann::json& j, const char* key, double lo, double hi,
-              const std::string& what) {
+              const std::string& what, const std::string& path) {
   const auto& v = j.at(key);
-  if (!v.is_number()) throw InputError(what + ": '" + key + "' must be a number");
+  if (!v.is_number())
+    throw InputError(what + ": " + at(path, key) + " must be a number (got " + type_name(v) + ")");
   const double d = v.get<double>();
   if (!(d >= lo && d <= hi))
-    throw InputError(what + ": '" + key + "' must be between " + std::to_string(lo) + " and " +
-                     std::to_string(hi));
+    throw InputError(what + ": " + at(path, key) + " must be between " + std::to_string(lo) +
+                     " and " + std::to_string(hi));
   return d;
 }
 
-std::string text(const nlohmann::json& j, const char* key, const std::string& what) {
+std::string text(const nlohmann::json& j, const char* key, const std::string& what,
+                 const std::string& path) {
   const auto& v = j.at(key);
-  if (!v.is_string()) throw InputError(what + ": '" + key + "' must be a string");
+  if (!v.is_string())
+    throw InputError(what + ": " + at(path, key) + " must be a string (got " + type_name(v) + ")");
   return v.get<std::string>();
 }
 
+bool boolean(const nlohmann::json& j, const char* key, const std::string& what,
+             const std::string& path) {
+  const auto& v = j.at(key);
+  if (!v.is_boolean())
+    throw InputError(what + ": " + at(path, key) + " must be true or false (got " + type_name(v) +
+                     ")");
+  return v.get<bool>();
+}
+
+// An enumerated value: parsed, or InputError listing the choices.
+template <typename T, typename Parse>
+T choice(const nlohmann::json& j, const char* key, Parse parse,
+         const std::vector<std::string>& choices, const std::string& what,
+         const std::string& path) {
+  const std::string v = text(j, key, what, path);
+  const std::optional<T> parsed = parse(v);
+  if (parsed) return *parsed;
+  std::string list;
+  for (const auto& c : choices) list += (list.empty() ? "" : ", ") + c;
+  throw InputError(what + ": " + at(path, key) + ": unknown value '" + v + "'" +
+                   did_you_mean(v, choices) + " (use " + list + ")");
+}
+
+const std::vector<std::string> kSceneKeys = {"background", "transparent", "camera",
+                                             "view",       "frame",       "structures"};
+const std::vector<std::string> kStructureKeys = {
+    "name",    "mesh",    "role",        "space",  "shading",    "color",
+    "opacity", "ambient", "toon_levels", "lines",  "line_color", "line_width",
+    "taper",   "fade",    "hidden",      "hybrid", "smooth"};
+const std::vector<std::string> kCameraKeys = {"eye",   "center", "up",   "fov_deg", "projection",
+                                              "width", "height", "near", "far"};
+const std::vector<std::string> kViews = {"anterior", "posterior", "left",
+                                         "right",    "superior",  "inferior"};
+
 }  // namespace
+
+const char* to_string(Frame f) {
+  return f == Frame::focus ? "focus" : "all";
+}
+std::optional<Frame> parse_frame(std::string_view s) {
+  const auto l = lower(s);
+  if (l == "focus") return Frame::focus;
+  if (l == "all") return Frame::all;
+  return std::nullopt;
+}
+
+Frame default_frame(const SceneSpec& spec, std::optional<Frame> frame) {
+  if (frame) return *frame;
+  if (spec.frame) return *spec.frame;
+  const auto has = [&](Role r) {
+    return std::any_of(spec.structures.begin(), spec.structures.end(),
+                       [r](const StructureSpec& s) { return s.role == r; });
+  };
+  return has(Role::focus) && has(Role::context) ? Frame::focus : Frame::all;
+}
+
+Camera fit_camera(AnatomicalView view, const BoundingBox& box, Space space, int width, int height,
+                  double fill) {
+  Camera c = anatomical_camera(view, box, space, width, height);
+  if (!(fill > 0.0 && fill <= 1.0)) fill = 0.6;
+  // Projected half-extent of the box (fraction of the picture's half size);
+  // the perspective projection is not linear in the distance, so a few
+  // rounds of "move the eye so the fraction becomes `fill`" converge.
+  auto extent = [&](const Camera& cam) {
+    double e = 0.0;
+    for (int k = 0; k < 8; ++k) {
+      const Vec3 corner((k & 1) ? box.max.x() : box.min.x(), (k & 2) ? box.max.y() : box.min.y(),
+                        (k & 4) ? box.max.z() : box.min.z());
+      const ProjectedPoint p = project(cam, corner);
+      if (!(p.depth > 0.0)) return std::numeric_limits<double>::infinity();
+      e = std::max({e, std::abs(p.pixel.x() - 0.5 * cam.width) / (0.5 * cam.width),
+                    std::abs(p.pixel.y() - 0.5 * cam.height) / (0.5 * cam.height)});
+    }
+    return e;
+  };
+  for (int round = 0; round < 8; ++round) {
+    const double e = extent(c);
+    if (!std::isfinite(e) || e <= 0.0) break;
+    const double distance = (c.eye - c.center).norm();
+    const double wanted = distance * e / fill;
+    if (std::abs(wanted - distance) < 1e-4 * distance) break;
+    c.eye = c.center - c.forward() * wanted;
+  }
+  return c;
+}
+
+namespace {
+
+// fabrica's anatomical palette (docs/segmentation.md): the conventions of
+// anatomical atlases and of 3D Slicer's and TotalSegmentator's colour
+// tables (arteries red, veins blue, bone ivory, liver red-brown, ...), with
+// values of our own. Exact names first, then keywords in this order.
+struct PaletteEntry {
+  const char* key;
+  Color color;
+};
+const PaletteEntry kPaletteExact[] = {
+    {"aorta", {0.80f, 0.16f, 0.14f, 1.0f}},
+    {"liver", {0.60f, 0.28f, 0.20f, 1.0f}},
+    {"spleen", {0.52f, 0.22f, 0.42f, 1.0f}},
+    {"pancreas", {0.93f, 0.76f, 0.52f, 1.0f}},
+    {"gallbladder", {0.42f, 0.62f, 0.30f, 1.0f}},
+    {"stomach", {0.88f, 0.60f, 0.56f, 1.0f}},
+    {"esophagus", {0.86f, 0.58f, 0.54f, 1.0f}},
+    {"trachea", {0.72f, 0.84f, 0.90f, 1.0f}},
+    {"heart", {0.72f, 0.22f, 0.22f, 1.0f}},
+    {"brain", {0.90f, 0.76f, 0.72f, 1.0f}},
+    {"spinal_cord", {0.96f, 0.90f, 0.58f, 1.0f}},
+    {"urinary_bladder", {0.90f, 0.80f, 0.44f, 1.0f}},
+    {"prostate", {0.84f, 0.64f, 0.60f, 1.0f}},
+    {"thyroid_gland", {0.84f, 0.52f, 0.44f, 1.0f}},
+    {"inferior_vena_cava", {0.22f, 0.38f, 0.78f, 1.0f}},
+    {"superior_vena_cava", {0.22f, 0.38f, 0.78f, 1.0f}},
+};
+const PaletteEntry kPaletteKeywords[] = {
+    {"vena_cava", {0.22f, 0.38f, 0.78f, 1.0f}},  {"vein", {0.28f, 0.44f, 0.84f, 1.0f}},
+    {"vena", {0.28f, 0.44f, 0.84f, 1.0f}},       {"arter", {0.84f, 0.22f, 0.20f, 1.0f}},
+    {"aort", {0.80f, 0.16f, 0.14f, 1.0f}},       {"trunk", {0.84f, 0.22f, 0.20f, 1.0f}},
+    {"kidney", {0.72f, 0.40f, 0.28f, 1.0f}},     {"adrenal", {0.90f, 0.68f, 0.28f, 1.0f}},
+    {"lung", {0.95f, 0.72f, 0.75f, 1.0f}},       {"atri", {0.72f, 0.22f, 0.22f, 1.0f}},
+    {"ventric", {0.72f, 0.22f, 0.22f, 1.0f}},    {"myocard", {0.72f, 0.22f, 0.22f, 1.0f}},
+    {"duoden", {0.92f, 0.70f, 0.62f, 1.0f}},     {"bowel", {0.92f, 0.70f, 0.62f, 1.0f}},
+    {"colon", {0.90f, 0.66f, 0.56f, 1.0f}},      {"intestin", {0.92f, 0.70f, 0.62f, 1.0f}},
+    {"vertebra", {0.93f, 0.89f, 0.78f, 1.0f}},   {"rib", {0.93f, 0.89f, 0.78f, 1.0f}},
+    {"sternum", {0.93f, 0.89f, 0.78f, 1.0f}},    {"clavic", {0.93f, 0.89f, 0.78f, 1.0f}},
+    {"scapula", {0.93f, 0.89f, 0.78f, 1.0f}},    {"humerus", {0.93f, 0.89f, 0.78f, 1.0f}},
+    {"femur", {0.93f, 0.89f, 0.78f, 1.0f}},      {"hip", {0.93f, 0.89f, 0.78f, 1.0f}},
+    {"sacrum", {0.93f, 0.89f, 0.78f, 1.0f}},     {"skull", {0.93f, 0.89f, 0.78f, 1.0f}},
+    {"bone", {0.93f, 0.89f, 0.78f, 1.0f}},       {"cartilage", {0.80f, 0.88f, 0.86f, 1.0f}},
+    {"autochthon", {0.74f, 0.38f, 0.36f, 1.0f}}, {"iliopsoas", {0.74f, 0.38f, 0.36f, 1.0f}},
+    {"gluteus", {0.74f, 0.38f, 0.36f, 1.0f}},    {"muscle", {0.74f, 0.38f, 0.36f, 1.0f}},
+};
+const Color kCycle[] = {
+    {0.72f, 0.80f, 0.92f, 1.0f}, {0.92f, 0.80f, 0.66f, 1.0f}, {0.74f, 0.88f, 0.74f, 1.0f},
+    {0.90f, 0.76f, 0.86f, 1.0f}, {0.94f, 0.90f, 0.66f, 1.0f}, {0.70f, 0.88f, 0.88f, 1.0f},
+};
+
+}  // namespace
+
+std::optional<Color> anatomical_color(std::string_view name) {
+  std::string key = lower(name);
+  std::replace(key.begin(), key.end(), ' ', '_');
+  std::replace(key.begin(), key.end(), '-', '_');
+  for (const auto& e : kPaletteExact)
+    if (key == e.key) return e.color;
+  for (const auto& e : kPaletteKeywords)
+    if (key.find(e.key) != std::string::npos) return e.color;
+  return std::nullopt;
+}
+
+Color cycle_color(std::size_t index) {
+  return kCycle[index % (sizeof kCycle / sizeof kCycle[0])];
+}
 
 const char* to_string(Role r) {
   return r == Role::focus ? "focus" : "context";
@@ -130,78 +310,85 @@ std::optional<HiddenLines> parse_hidden_lines(std::string_view s) {
 SceneSpec scene_spec_from_json(const nlohmann::json& j, const std::filesystem::path& base_dir,
                                const std::string& what) {
   if (!j.is_object()) throw InputError(what + ": a scene must be a JSON object");
+  check_keys(j, kSceneKeys, what, "");
   SceneSpec spec;
   try {
     if (j.contains("background"))
       spec.background = color_from_json(j["background"], what + ": background");
-    if (j.contains("transparent")) spec.transparent = j.at("transparent").get<bool>();
-    if (j.contains("camera")) spec.camera = camera_from_json(j["camera"], what + ": camera");
-    if (j.contains("view")) {
-      const std::string v = text(j, "view", what);
-      spec.view = parse_anatomical_view(v);
-      if (!spec.view)
-        throw InputError(what + ": unknown view '" + v +
-                         "' (anterior, posterior, left, right, superior, inferior)");
+    if (j.contains("transparent")) spec.transparent = boolean(j, "transparent", what, "");
+    if (j.contains("camera")) {
+      if (!j["camera"].is_object()) throw InputError(what + ": camera must be an object");
+      check_keys(j["camera"], kCameraKeys, what, "camera");
+      spec.camera = camera_from_json(j["camera"], what + ": camera");
     }
+    if (j.contains("view"))
+      spec.view = choice<AnatomicalView>(j, "view", parse_anatomical_view, kViews, what, "");
+    if (j.contains("frame"))
+      spec.frame = choice<Frame>(j, "frame", parse_frame, {"focus", "all"}, what, "");
     if (!j.contains("structures") || !j["structures"].is_array() || j["structures"].empty())
       throw InputError(what + ": 'structures' must be a non-empty array");
+    std::vector<std::string> family_names;
+    for (int f = 0; f < kLineFamilyCount; ++f)
+      family_names.emplace_back(family_name(static_cast<LineFamily>(f)));
     std::size_t index = 0;
     for (const auto& s : j["structures"]) {
-      const std::string w = what + ": structures[" + std::to_string(index++) + "]";
+      const std::string path = "structures[" + std::to_string(index++) + "]";
+      const std::string w = what + ": " + path;
       if (!s.is_object()) throw InputError(w + " must be an object");
+      check_keys(s, kStructureKeys, what, path);
       StructureSpec st;
       if (!s.contains("mesh")) throw InputError(w + ": 'mesh' (a file path) is required");
-      st.mesh = text(s, "mesh", w);
+      st.mesh = text(s, "mesh", what, path);
       if (st.mesh.is_relative()) st.mesh = base_dir / st.mesh;
-      st.name = s.contains("name") ? text(s, "name", w) : st.mesh.stem().string();
-      if (s.contains("role")) {
-        const auto r = parse_role(text(s, "role", w));
-        if (!r) throw InputError(w + ": role must be \"focus\" or \"context\"");
-        st.role = *r;
-      }
+      st.name = s.contains("name") ? text(s, "name", what, path) : st.mesh.stem().string();
+      if (s.contains("role"))
+        st.role = choice<Role>(s, "role", parse_role, {"focus", "context"}, what, path);
       st.style = default_style(st.role);
       if (s.contains("space")) {
-        const std::string sp = lower(text(s, "space", w));
-        if (sp == "lps")
-          st.space = Space::lps;
-        else if (sp == "ras")
-          st.space = Space::ras;
-        else
-          throw InputError(w + ": space must be \"lps\" or \"ras\"");
+        const auto parse_space = [](std::string_view v) -> std::optional<Space> {
+          const std::string l = lower(v);
+          if (l == "lps") return Space::lps;
+          if (l == "ras") return Space::ras;
+          return std::nullopt;
+        };
+        st.space = choice<Space>(s, "space", parse_space, {"lps", "ras"}, what, path);
       }
-      if (s.contains("shading")) {
-        const auto sh = parse_shading(text(s, "shading", w));
-        if (!sh) throw InputError(w + ": shading must be none, flat, lambert or toon");
-        st.style.shading = *sh;
-      }
-      if (s.contains("color")) st.style.color = color_from_json(s["color"], w + ": color");
-      if (s.contains("opacity")) st.style.opacity = number(s, "opacity", 0.0, 1.0, w);
-      if (s.contains("ambient")) st.style.ambient = number(s, "ambient", 0.0, 1.0, w);
+      if (s.contains("shading"))
+        st.style.shading = choice<Shading>(s, "shading", parse_shading,
+                                           {"none", "flat", "lambert", "toon"}, what, path);
+      if (s.contains("color")) st.style.color = color_from_json(s["color"], w + ".color");
+      if (s.contains("opacity")) st.style.opacity = number(s, "opacity", 0.0, 1.0, what, path);
+      if (s.contains("ambient")) st.style.ambient = number(s, "ambient", 0.0, 1.0, what, path);
       if (s.contains("toon_levels"))
-        st.style.toon_levels = static_cast<int>(number(s, "toon_levels", 2, 16, w));
+        st.style.toon_levels = static_cast<int>(number(s, "toon_levels", 2, 16, what, path));
       if (s.contains("lines")) {
-        if (!s["lines"].is_array())
-          throw InputError(w + ": 'lines' must be an array of family names");
+        if (!s["lines"].is_array()) throw InputError(w + ".lines must be an array of family names");
         st.style.families.clear();
+        std::size_t k = 0;
         for (const auto& f : s["lines"]) {
-          if (!f.is_string()) throw InputError(w + ": 'lines' must contain family names");
+          const std::string fp = path + ".lines[" + std::to_string(k++) + "]";
+          if (!f.is_string())
+            throw InputError(what + ": " + fp + " must be a family name (got " + type_name(f) +
+                             ")");
           const auto fam = parse_family(f.get<std::string>());
-          if (!fam) throw InputError(w + ": unknown line family '" + f.get<std::string>() + "'");
+          if (!fam)
+            throw InputError(what + ": " + fp + ": unknown line family '" + f.get<std::string>() +
+                             "'" + did_you_mean(f.get<std::string>(), family_names));
           st.style.families.push_back(*fam);
         }
       }
       if (s.contains("line_color"))
-        st.style.lines.color = color_from_json(s["line_color"], w + ": line_color");
-      if (s.contains("line_width")) st.style.lines.width = number(s, "line_width", 0.0, 200.0, w);
-      if (s.contains("taper")) st.style.lines.taper = number(s, "taper", 0.0, 0.5, w);
-      if (s.contains("fade")) st.style.lines.fade_by_strength = s.at("fade").get<bool>();
-      if (s.contains("hidden")) {
-        const auto h = parse_hidden_lines(text(s, "hidden", w));
-        if (!h) throw InputError(w + ": hidden must be omit, dashed or show");
-        st.style.lines.hidden = *h;
-      }
-      if (s.contains("hybrid")) st.style.hybrid_apparent_ridges = s.at("hybrid").get<bool>();
-      if (s.contains("smooth")) st.style.smooth = static_cast<int>(number(s, "smooth", 0, 1000, w));
+        st.style.lines.color = color_from_json(s["line_color"], w + ".line_color");
+      if (s.contains("line_width"))
+        st.style.lines.width = number(s, "line_width", 0.0, 200.0, what, path);
+      if (s.contains("taper")) st.style.lines.taper = number(s, "taper", 0.0, 0.5, what, path);
+      if (s.contains("fade")) st.style.lines.fade_by_strength = boolean(s, "fade", what, path);
+      if (s.contains("hidden"))
+        st.style.lines.hidden = choice<HiddenLines>(s, "hidden", parse_hidden_lines,
+                                                    {"omit", "dashed", "show"}, what, path);
+      if (s.contains("hybrid")) st.style.hybrid_apparent_ridges = boolean(s, "hybrid", what, path);
+      if (s.contains("smooth"))
+        st.style.smooth = static_cast<int>(number(s, "smooth", 0, 1000, what, path));
       spec.structures.push_back(std::move(st));
     }
   } catch (const nlohmann::json::exception& e) {
@@ -216,6 +403,7 @@ nlohmann::json scene_spec_to_json(const SceneSpec& spec) {
   j["transparent"] = spec.transparent;
   if (spec.camera) j["camera"] = camera_to_json(*spec.camera);
   if (spec.view) j["view"] = to_string(*spec.view);
+  if (spec.frame) j["frame"] = to_string(*spec.frame);
   nlohmann::json list = nlohmann::json::array();
   for (const auto& s : spec.structures) {
     nlohmann::json o;

@@ -877,7 +877,7 @@ TEST(Extract, OneReadableMeshPerLabelIntoANewFolder) {
   const auto manifest = nlohmann::json::parse(read_text(out / "surfaces.json"));
   const auto& surfaces = manifest.at("surfaces");
   ASSERT_GE(surfaces.size(), 2u);
-  std::set<std::string> files{"surfaces.json"};
+  std::set<std::string> files{"surfaces.json", "scene.json"};
   std::set<int> labels;
   for (const auto& s : surfaces) {
     const std::string file = s.at("file").get<std::string>();

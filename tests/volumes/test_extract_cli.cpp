@@ -18,19 +18,10 @@ using namespace fabrica;
 
 namespace {
 
-struct CommandRun {
-  int exit_code;
-  std::string output;
-};
+using test::CommandRun;
 
 CommandRun run_fabrica(const std::string& args, const std::filesystem::path& log) {
-  const std::string command =
-      std::string("\"") + FABRICA_EXE + "\" " + args + " > \"" + log.string() + "\" 2>&1";
-  const int status = std::system(command.c_str());
-  std::ifstream in(log);
-  std::stringstream s;
-  s << in.rdbuf();
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, s.str()};
+  return test::run_logged(std::string("\"") + FABRICA_EXE + "\" " + args, log);
 }
 
 std::filesystem::path totalseg() {

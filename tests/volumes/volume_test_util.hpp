@@ -4,11 +4,13 @@
 // point-to-triangle distance.
 #pragma once
 
+#include <sys/wait.h>
 #include <zlib.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -329,5 +331,20 @@ class TriangleDistance {
   std::array<int, 3> n_{};
   std::vector<std::vector<std::size_t>> cells_;
 };
+
+/// Exit code and combined stdout + stderr of a shell command line, run with
+/// its output sent to `log` (for the e2e tests of `fabrica extract`).
+struct CommandRun {
+  int exit_code;
+  std::string output;
+};
+inline CommandRun run_logged(const std::string& command_line, const std::filesystem::path& log) {
+  const std::string command = command_line + " > \"" + log.string() + "\" 2>&1";
+  const int status = std::system(command.c_str());
+  std::ifstream in(log);
+  std::stringstream s;
+  s << in.rdbuf();
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, s.str()};
+}
 
 }  // namespace fabrica::test

@@ -302,15 +302,30 @@ void orient(TriangleMesh& mesh, const detail::ProperTopology& proper, bool outwa
   for (std::size_t p = 0; p < pieces.size(); ++p)
     closed[p] = outward && !pieces[p].open && !pieces[p].conflict && pieces[p].volume6 != 0.0;
   const std::vector<int> depth = detail::nesting_depths(mesh.positions, faces, piece, closed);
+  // Open pieces: outward when their volume with the boundary loops capped is
+  // positive; a (nearly) flat sheet has no side and keeps its majority.
+  const bool any_open = std::any_of(pieces.begin(), pieces.end(),
+                                    [](const PieceState& s) { return s.open && !s.conflict; });
+  const auto capped =
+      outward && any_open
+          ? detail::capped_piece_volumes(topo, mesh.positions, faces, piece, pieces.size(), &flip)
+          : std::vector<detail::CappedVolume>();
   for (std::size_t p = 0; p < pieces.size(); ++p) {
     const PieceState& state = pieces[p];
+    const bool majority_flipped = 2 * state.flipped > state.end - state.begin;
     bool reverse = false;
     if (closed[p]) {
       const bool want_positive = depth[p] % 2 == 0;
       reverse = (state.volume6 > 0.0) != want_positive;
       if (reverse) ++report.components_reversed;
+    } else if (!capped.empty() && state.open && !state.conflict && !capped[p].ambiguous()) {
+      reverse = capped[p].volume6 < 0.0;
+      if (reverse != majority_flipped) {
+        ++report.open_pieces_reversed;
+        report.open_piece_loops += capped[p].loops;
+      }
     } else {
-      reverse = 2 * state.flipped > state.end - state.begin;
+      reverse = majority_flipped;
     }
     if (reverse)
       for (std::size_t i = state.begin; i < state.end; ++i) flip[order[i]] ^= 1;
@@ -386,6 +401,11 @@ RepairReport repair_mesh(TriangleMesh& mesh, const RepairOptions& o) {
       if (report.components_reversed > 0)
         line += " (" + plural(report.components_reversed, "closed piece", "closed pieces") +
                 " turned outward)";
+      if (report.open_pieces_reversed > 0)
+        line += " (" + plural(report.open_pieces_reversed, "open piece", "open pieces") +
+                " turned outward: the signed volume with its " +
+                plural(report.open_piece_loops, "boundary loop", "boundary loops") +
+                " capped was negative)";
       report.changes.push_back(line);
     }
     if (report.nonorientable_pieces > 0)
@@ -396,7 +416,7 @@ RepairReport repair_mesh(TriangleMesh& mesh, const RepairOptions& o) {
   return report;
 }
 
-RepairReport prepare_for_lines(TriangleMesh& mesh) {
+RepairReport prepare_for_lines(TriangleMesh& mesh, const PrepareOptions& options) {
   RepairOptions o;
   o.weld = true;
   o.weld_tolerance = 0.0;
@@ -404,8 +424,8 @@ RepairReport prepare_for_lines(TriangleMesh& mesh) {
   o.remove_duplicates = false;
   o.split_nonmanifold_vertices = false;
   o.split_nonmanifold_edges = false;
-  o.orient = true;
-  o.outward = true;
+  o.orient = !options.keep_orientation;
+  o.outward = !options.keep_orientation;
   return repair_mesh(mesh, o);
 }
 
@@ -415,6 +435,7 @@ nlohmann::json to_json(const RepairReport& r) {
           {"removed_duplicate_faces", r.removed_duplicate_faces},
           {"flipped_faces", r.flipped_faces},
           {"components_reversed", r.components_reversed},
+          {"open_pieces_reversed", r.open_pieces_reversed},
           {"split_nonmanifold_vertices", r.split_nonmanifold_vertices},
           {"cut_nonmanifold_edges", r.cut_nonmanifold_edges},
           {"nonorientable_pieces", r.nonorientable_pieces},

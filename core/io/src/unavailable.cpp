@@ -32,6 +32,10 @@ std::vector<ExtractedSurface> extract_surfaces(const LabelVolume& volume, const 
   unavailable("volume '" + volume.path + "': extracting surfaces", "VTK", "FABRICA_WITH_VTK",
               "libvtk9-dev");
 }
+
+void smooth_surface(TriangleMesh&, int, double) {
+  unavailable("windowed-sinc smoothing (--smooth)", "VTK", "FABRICA_WITH_VTK", "libvtk9-dev");
+}
 #endif
 
 #ifndef FABRICA_HAVE_CGAL

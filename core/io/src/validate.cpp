@@ -277,6 +277,13 @@ ValidationReport validate_mesh(const TriangleMesh& mesh, const ValidateOptions& 
       if (piece_volume6[p] != 0.0 && (piece_volume6[p] > 0.0) != (depth[p] % 2 == 0))
         ++r.inward_pieces;
     r.outward = r.inward_pieces == 0;
+  } else if (!r.closed && nf > 0 && r.consistently_oriented && r.nonmanifold_edges == 0) {
+    // Open pieces face outward when their volume with the boundary loops
+    // capped is positive (as repair and prepare_for_lines orient them).
+    std::size_t pieces = 0;
+    const auto piece = detail::manifold_pieces(topo, pieces);
+    for (const auto& c : detail::capped_piece_volumes(topo, pos, faces, piece, pieces))
+      if (c.loops > 0 && !c.ambiguous() && c.volume6 < 0.0) ++r.inward_open_pieces;
   }
 
   if (options.self_intersections) add_self_intersections(mesh, proper, r);
@@ -309,6 +316,12 @@ ValidationReport validate_mesh(const TriangleMesh& mesh, const ValidateOptions& 
     r.problems.push_back("normals point inward: " +
                          plural(r.inward_pieces, "closed piece faces", "closed pieces face") +
                          " into the solid (lines and shading expect outward normals)");
+  if (r.inward_open_pieces > 0)
+    r.problems.push_back(
+        "normals point inward: " +
+        plural(r.inward_open_pieces, "open piece faces", "open pieces face") +
+        " inward (its signed volume with the boundary loops capped is negative; lines and "
+        "shading expect outward normals: fabrica info --repair turns it)");
   if (r.self_intersecting_face_pairs && *r.self_intersecting_face_pairs > 0)
     r.problems.push_back(plural(*r.self_intersecting_face_pairs, "pair", "pairs") +
                          " of faces intersect each other");
@@ -347,6 +360,7 @@ nlohmann::json to_json(const ValidationReport& r) {
   j["closed"] = r.closed;
   j["outward"] = r.outward ? nlohmann::json(*r.outward) : nlohmann::json(nullptr);
   j["inward_pieces"] = r.inward_pieces;
+  j["inward_open_pieces"] = r.inward_open_pieces;
   j["signed_volume"] = r.signed_volume;
   j["area"] = r.area;
   j["mean_edge_length"] = r.mean_edge_length;

@@ -132,6 +132,76 @@ int vertex_fans(const Topology& topology, std::size_t v, std::vector<int>& fan_o
   return fans;
 }
 
+bool CappedVolume::ambiguous() const {
+  return !(std::abs(volume6) / 6.0 >= kFlatSheetRatio * area * std::sqrt(area)) || area <= 0.0;
+}
+
+std::vector<CappedVolume> capped_piece_volumes(const Topology& topology,
+                                               const std::vector<Vec3>& positions,
+                                               const std::vector<Face>& faces,
+                                               const std::vector<std::int32_t>& piece,
+                                               std::size_t piece_count,
+                                               const std::vector<std::uint8_t>* flip) {
+  std::vector<CappedVolume> out(piece_count);
+  const Vec3 origin = bounding_box(positions).center();
+  auto corners = [&](std::size_t f) {
+    Face t = faces[f];
+    if (flip != nullptr && (*flip)[f]) std::swap(t[1], t[2]);
+    return t;
+  };
+  for (std::size_t f = 0; f < faces.size(); ++f) {
+    const Face t = corners(f);
+    const Vec3 &a = positions[t[0]], &b = positions[t[1]], &c = positions[t[2]];
+    out[piece[f]].volume6 += signed_volume6(a, b, c, origin);
+    out[piece[f]].area += 0.5 * (b - a).cross(c - a).norm();
+  }
+  // Boundary loops: vertices of boundary edges joined through those edges.
+  std::vector<std::int32_t> parent(positions.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  std::vector<std::int32_t> boundary;
+  for (std::size_t e = 0; e < topology.edge_count(); ++e)
+    if (topology.is_boundary_edge(e)) {
+      boundary.push_back(static_cast<std::int32_t>(e));
+      unite(parent, topology.edge(e)[0], topology.edge(e)[1]);
+    }
+  if (boundary.empty()) return out;
+  std::vector<Vec3> sum(positions.size(), Vec3::Zero());
+  std::vector<std::size_t> count(positions.size(), 0);
+  std::vector<std::uint8_t> counted(positions.size(), 0);
+  for (auto e : boundary)
+    for (auto v : topology.edge(e))
+      if (!counted[v]) {
+        counted[v] = 1;
+        const auto root = find_root(parent, v);
+        sum[root] += positions[v];
+        ++count[root];
+      }
+  std::vector<std::int32_t> loop_piece(positions.size(), -1);
+  for (auto e : boundary) {
+    const auto f = static_cast<std::size_t>(topology.edge_faces(e)[0]);
+    const Face t = corners(f);
+    // The directed edge of (the possibly flipped) face f along e.
+    const auto ends = topology.edge(e);
+    std::int32_t s = -1, u = -1;
+    for (int i = 0; i < 3; ++i)
+      if ((t[i] == ends[0] && t[(i + 1) % 3] == ends[1]) ||
+          (t[i] == ends[1] && t[(i + 1) % 3] == ends[0])) {
+        s = t[i];
+        u = t[(i + 1) % 3];
+      }
+    if (s < 0) continue;
+    const auto root = find_root(parent, s);
+    const Vec3 centroid = sum[root] / static_cast<double>(count[root]);
+    // The cap runs against the face's edge so that the capped piece is closed.
+    out[piece[f]].volume6 += signed_volume6(positions[u], positions[s], centroid, origin);
+    if (loop_piece[root] != piece[f]) {
+      loop_piece[root] = piece[f];
+      ++out[piece[f]].loops;
+    }
+  }
+  return out;
+}
+
 std::vector<std::int32_t> manifold_pieces(const Topology& topology, std::size_t& piece_count) {
   const std::size_t nf = topology.face_count();
   std::vector<std::int32_t> parent(nf);

@@ -74,6 +74,30 @@ inline double signed_volume6(const Vec3& a, const Vec3& b, const Vec3& c, const 
   return (a - origin).dot((b - origin).cross(c - origin));
 }
 
+/// Orientation of an open piece: its signed volume with every boundary loop
+/// capped virtually by a fan to the loop's centroid (so the capped piece is
+/// closed and its volume does not depend on the origin), and its area.
+struct CappedVolume {
+  double volume6 = 0.0;  ///< six times the capped signed volume (> 0: outward)
+  double area = 0.0;
+  std::size_t loops = 0;  ///< boundary loops capped
+  /// The capped volume is too small against the area for a side to exist
+  /// (a flat or nearly flat sheet): |volume| < kFlatSheetRatio * area^1.5.
+  bool ambiguous() const;
+};
+inline constexpr double kFlatSheetRatio = 1e-3;
+
+/// Capped volume of every piece (see CappedVolume; `piece` gives the piece of
+/// each proper face, numbered 0..piece_count-1). Faces with flip[f] set count
+/// as reversed (flip may be null). Boundary loops: boundary edges joined at
+/// shared vertices.
+std::vector<CappedVolume> capped_piece_volumes(const Topology& topology,
+                                               const std::vector<Vec3>& positions,
+                                               const std::vector<Face>& faces,
+                                               const std::vector<std::int32_t>& piece,
+                                               std::size_t piece_count,
+                                               const std::vector<std::uint8_t>* flip = nullptr);
+
 /// How many other closed pieces enclose each closed piece (0 for open ones):
 /// piece A is inside piece B when A's bounding box lies in B's and each of A's
 /// six extreme vertices (min/max x, y, z) is inside B by ray parity. A piece

@@ -32,6 +32,11 @@ struct SceneSurfaces {
   std::vector<std::shared_ptr<const Surface>> surfaces;
   BoundingBox box;
   Space space = Space::lps;
+  /// The focus structures' common bounding box (valid when has_focus).
+  BoundingBox focus_box;
+  bool has_focus = false;
+  /// Mesh files read without a space tag (LPS assumed), for the CLI's warning.
+  std::vector<std::string> assumed_space;
 
   /// Appends a structure whose surface is already in memory.
   void add(StructureSpec structure, std::shared_ptr<const Surface> surface);
@@ -42,8 +47,10 @@ struct SceneSurfaces {
 /// file.
 SceneSurfaces load_scene(SceneSpec spec);
 
-/// The anatomical view of the whole scene (its bounding box and space).
-Camera view_camera(const SceneSurfaces& scene, AnatomicalView view);
+/// The anatomical view of the whole scene (its bounding box and space), or,
+/// with Frame::focus and a focus present, fitted to the focus structures
+/// (render::fit_camera).
+Camera view_camera(const SceneSurfaces& scene, AnatomicalView view, Frame frame = Frame::all);
 
 /// The scene the renderer draws: a render mesh per structure and its
 /// chained feature lines for `camera` (object space, 3 px minimum length,

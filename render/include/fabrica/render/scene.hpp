@@ -99,13 +99,44 @@ struct StructureSpec {
   std::optional<Space> space;  ///< override of the file's coordinate tag
 };
 
+/// What the default camera frames: every structure, or the focus
+/// structures only (the context may then be cut at the picture's edges).
+enum class Frame { all, focus };
+
 struct SceneSpec {
   std::vector<StructureSpec> structures;
   std::optional<Camera> camera;
   std::optional<AnatomicalView> view;
+  /// Unset: focus when the scene has both focus and context structures
+  /// (default_frame), else all.
+  std::optional<Frame> frame;
   Color background{1.0f, 1.0f, 1.0f, 1.0f};
   bool transparent = false;
 };
+
+const char* to_string(Frame frame);
+std::optional<Frame> parse_frame(std::string_view s);
+/// `frame` if set, else focus when `spec` has focus and context structures, else all.
+Frame default_frame(const SceneSpec& spec, std::optional<Frame> frame = std::nullopt);
+
+/// A camera looking from the anatomical side `view` at the centre of `box`,
+/// at the distance where the box's projected corners fill `fill` of the
+/// picture (of its width or height, whichever is reached first): a tight
+/// fit, unlike anatomical_camera's bounding sphere. Used to frame the focus;
+/// the default 0.6 leaves room for the context around it.
+Camera fit_camera(AnatomicalView view, const BoundingBox& box, Space space, int width = 1024,
+                  int height = 1024, double fill = 0.6);
+
+/// The colour of a named structure in fabrica's anatomical palette
+/// (docs/segmentation.md: arteries red, veins blue, bone ivory, ...): the
+/// name is matched case-insensitively, '_' and ' ' alike, by its exact entry
+/// or else by the first keyword it contains (TotalSegmentator and 3D Slicer
+/// names such as "aorta", "kidney_left", "iliac_artery_right",
+/// "vertebrae_L3"). nullopt for an unknown name.
+std::optional<Color> anatomical_color(std::string_view name);
+/// A pale colour for structure number `index` when its name is unknown
+/// (a fixed cycle of distinct hues).
+Color cycle_color(std::size_t index);
 
 const char* to_string(Role role);
 const char* to_string(Shading shading);
@@ -115,11 +146,14 @@ std::optional<Shading> parse_shading(std::string_view s);
 std::optional<HiddenLines> parse_hidden_lines(std::string_view s);
 
 /// Keys (all optional except structures[].mesh): background [r,g,b(,a)],
-/// transparent, camera {...} (camera JSON), view "anterior"|..., structures:
-/// [{name, mesh, role, space, shading, color, opacity, ambient, toon_levels,
-/// lines: [families], line_color, line_width, taper, fade, hidden, hybrid, smooth}].
+/// transparent, camera {...} (camera JSON), view "anterior"|..., frame
+/// "focus"|"all", structures: [{name, mesh, role, space, shading, color,
+/// opacity, ambient, toon_levels, lines: [families], line_color, line_width,
+/// taper, fade, hidden, hybrid, smooth}].
 /// Missing style keys take default_style(role). Relative mesh paths are
-/// resolved against `base_dir`. Throws InputError naming `what`.
+/// resolved against `base_dir`. Validation is strict: an unknown key or a
+/// value of the wrong type throws InputError naming `what`, the JSON path
+/// (e.g. structures[2].colour) and the closest known key ("did you mean").
 SceneSpec scene_spec_from_json(const nlohmann::json& j, const std::filesystem::path& base_dir,
                                const std::string& what = "scene");
 nlohmann::json scene_spec_to_json(const SceneSpec& spec);

@@ -102,8 +102,9 @@ std::vector<LabelInfo> read_label_names(const std::filesystem::path& path);
 struct ExtractOptions {
   /// Label values to extract (in every layer); empty = every nonzero label.
   std::vector<int> labels;
-  /// Windowed-sinc smoothing iterations; 0 = none. Unset: 20 for label maps,
-  /// 0 for iso-surfaces (a level set is already smooth).
+  /// Windowed-sinc smoothing iterations; 0 = none. Unset: 60 for label maps
+  /// (removes the voxel staircase, docs/segmentation.md), 0 for iso-surfaces
+  /// (a level set is already smooth).
   std::optional<int> smoothing_iterations;
   /// Windowed-sinc pass band in (0, 2): smaller smooths more.
   double smoothing_passband = 0.1;
@@ -113,6 +114,15 @@ struct ExtractOptions {
   /// such as level sets; also allowed on label maps, e.g. 0.5 for a mask).
   /// A scalar (non-integer) volume requires it.
   std::optional<double> iso_value;
+  /// Drop the pieces of a label (6-connected voxels) with fewer voxels than
+  /// this before contouring (islands that would become ink dots); 0 = keep all.
+  std::size_t min_island_voxels = 0;
+  /// Keep only the largest piece (6-connected voxels) of each label.
+  bool largest_component = false;
+  /// A volume with more distinct values than this is not a label map (a CT
+  /// or MR image): extract_surfaces refuses it unless `labels` names the
+  /// values to extract. 0 = no limit.
+  std::size_t max_labels = 1000;
   /// Optional progress report, called after each label is done with
   /// (labels done, labels in total); calls never overlap but may come from
   /// worker threads. Return false to cancel: labels not started yet come
@@ -127,8 +137,10 @@ struct ExtractedSurface {
   int layer = 0;
   std::string name;  ///< from the file, else "label_<N>" (or "label_<N>_layer<L>"), "isosurface"
   std::optional<std::array<double, 3>> color;
-  std::size_t voxel_count = 0;  ///< voxels carrying the label (0 for an iso-surface)
-  TriangleMesh mesh;            ///< LPS mm, closed, faces outward
+  std::size_t voxel_count = 0;            ///< voxels carrying the label (0 for an iso-surface)
+  std::size_t islands_removed = 0;        ///< pieces dropped (min_island_voxels, largest_component)
+  std::size_t island_voxels_removed = 0;  ///< their voxels
+  TriangleMesh mesh;                      ///< LPS mm, closed, faces outward
   std::string problem;
 };
 
@@ -137,9 +149,18 @@ struct ExtractedSurface {
 /// and a `problem`; an exception while extracting one label is caught and
 /// reported the same way, so one bad label never stops the others.
 /// Throws InputError for invalid options (pass band, decimation, iso value
-/// missing for a scalar volume).
+/// missing for a scalar volume) and for a volume that is not a label map
+/// (non-integer values without an iso value; more than max_labels distinct
+/// values without `labels`).
 std::vector<ExtractedSurface> extract_surfaces(const LabelVolume& volume,
                                                const ExtractOptions& options = {});
+
+/// Volume-preserving windowed-sinc smoothing of any surface (the filter
+/// extraction uses; `fabrica info --repair --smooth N`): moves vertices only,
+/// vertex i stays vertex i, faces unchanged. Boundary vertices are smoothed
+/// too. Throws InputError for iterations outside [0, 10000], a pass band
+/// outside (0, 2) or a malformed mesh.
+void smooth_surface(TriangleMesh& mesh, int iterations, double passband = 0.1);
 
 /// Every distinct nonzero label value with its voxel count, per layer:
 /// result[layer][value] = count.

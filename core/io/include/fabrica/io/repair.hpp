@@ -27,6 +27,10 @@
 //     solid is reversed: a piece should enclose positive signed volume, except
 //     a cavity wall (nested inside an odd number of other closed pieces, by
 //     ray parity of its extreme vertices), which should enclose negative.
+//     Every open piece is reversed when its signed volume with each boundary
+//     loop capped virtually (a fan to the loop's centroid) is negative; a
+//     (nearly) flat sheet, whose capped volume is below 1e-3 area^1.5, has no
+//     inside and keeps the orientation of the majority of its faces.
 // With split_nonmanifold_edges off, non-manifold edges stay (the orientation
 // walk does not cross them) and validate_mesh keeps reporting them.
 #pragma once
@@ -62,6 +66,10 @@ struct RepairReport {
   std::size_t removed_duplicate_faces = 0;
   std::size_t flipped_faces = 0;        ///< faces whose orientation changed (net)
   std::size_t components_reversed = 0;  ///< closed pieces turned outward
+  /// Open pieces turned outward (their file orientation, the majority of
+  /// their faces, pointed inward by the capped-volume rule of step 6).
+  std::size_t open_pieces_reversed = 0;
+  std::size_t open_piece_loops = 0;  ///< boundary loops capped on those pieces
   std::size_t split_nonmanifold_vertices =
       0;                                  ///< vertices appended by splitting (vertices and edges)
   std::size_t cut_nonmanifold_edges = 0;  ///< non-manifold edges that were cut apart
@@ -81,10 +89,16 @@ struct RepairReport {
 /// finite.
 RepairReport repair_mesh(TriangleMesh& mesh, const RepairOptions& options = {});
 
+struct PrepareOptions {
+  /// Keep the file's orientation: weld only, flip no face (--keep-orientation).
+  bool keep_orientation = false;
+};
+
 /// What the line engine needs by default: weld exact duplicates, orient
-/// consistently and outward per closed piece. Removes no face and adds no
-/// vertex, so face f stays face f and vertex i stays vertex i.
-RepairReport prepare_for_lines(TriangleMesh& mesh);
+/// consistently and outward per piece, closed or open (step 6). Removes no
+/// face and adds no vertex, so face f stays face f and vertex i stays vertex
+/// i. The report's `changes` say what was flipped and why.
+RepairReport prepare_for_lines(TriangleMesh& mesh, const PrepareOptions& options = {});
 
 /// The report as a JSON object (without face_origin).
 nlohmann::json to_json(const RepairReport& report);

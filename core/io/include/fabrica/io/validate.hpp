@@ -71,6 +71,10 @@ struct ValidationReport {
   /// (positive signed volume; negative for a nested cavity wall).
   std::optional<bool> outward;
   std::size_t inward_pieces = 0;  ///< closed pieces facing into the solid (when outward is set)
+  /// Open pieces (consistently oriented, edge-manifold mesh) whose signed
+  /// volume with every boundary loop capped by a fan to its centroid is
+  /// negative: they face inward (a flat sheet, with no inside, never counts).
+  std::size_t inward_open_pieces = 0;
 
   double signed_volume = 0.0;     ///< sum over faces (divergence theorem), units^3
   double area = 0.0;              ///< total face area, units^2
