@@ -2,9 +2,12 @@
 
 #include <algorithm>
 #include <cctype>
+#include <deque>
+#include <mutex>
 #include <sstream>
 
 #include "fabrica/core/error.hpp"
+#include "fabrica/io/repair.hpp"
 #include "fabrica/lines/extract.hpp"
 
 namespace fabrica::cli {
@@ -59,6 +62,64 @@ std::vector<LineFamily> parse_family_list(const std::string& text, const std::st
   }
   if (out.empty() && !allow_none) throw InputError(option + ": no line family given");
   return out;
+}
+
+namespace {
+
+/// What identifies a loaded mesh: the file as it is now and how it was read.
+struct MeshKey {
+  std::string path;
+  std::uintmax_t size = 0;
+  std::filesystem::file_time_type mtime;
+  std::optional<Space> space;
+  bool keep_file_normals = false, prepared = false;
+  bool operator==(const MeshKey&) const = default;
+};
+
+struct MeshCache {
+  std::mutex mutex;
+  std::deque<std::pair<MeshKey, std::shared_ptr<const PreparedMesh>>> entries;  // newest first
+  static constexpr std::size_t capacity = 2;
+};
+
+MeshCache& mesh_cache() {
+  static MeshCache cache;
+  return cache;
+}
+
+}  // namespace
+
+std::shared_ptr<const PreparedMesh> load_prepared_mesh(const std::filesystem::path& path,
+                                                       const io::ReadOptions& options,
+                                                       bool prepare_for_lines) {
+  std::error_code ec_size, ec_time;
+  MeshKey key;
+  key.path = std::filesystem::absolute(path).lexically_normal().string();
+  key.size = std::filesystem::file_size(path, ec_size);
+  key.mtime = std::filesystem::last_write_time(path, ec_time);
+  key.space = options.space;
+  key.keep_file_normals = options.keep_file_normals;
+  key.prepared = prepare_for_lines;
+  const bool cacheable = !ec_size && !ec_time;  // a missing file: read_mesh names the problem
+  MeshCache& cache = mesh_cache();
+  if (cacheable) {
+    const std::lock_guard<std::mutex> lock(cache.mutex);
+    for (const auto& [k, mesh] : cache.entries)
+      if (k == key) return mesh;
+    // Another input: let go of the previous one before reading (flat memory).
+    std::erase_if(cache.entries, [&](const auto& e) { return e.first.path != key.path; });
+  }
+  io::LoadedMesh loaded = io::read_mesh(path, options);
+  std::vector<std::string> changes;
+  if (prepare_for_lines) changes = io::prepare_for_lines(loaded.mesh).changes;
+  auto prepared = std::make_shared<const PreparedMesh>(
+      PreparedMesh{Surface(std::move(loaded.mesh)), std::move(loaded.info), std::move(changes)});
+  if (cacheable) {
+    const std::lock_guard<std::mutex> lock(cache.mutex);
+    cache.entries.emplace_front(key, prepared);
+    while (cache.entries.size() > MeshCache::capacity) cache.entries.pop_back();
+  }
+  return prepared;
 }
 
 }  // namespace fabrica::cli

@@ -2,11 +2,15 @@
 // every command accepts the same spellings and reports the same errors.
 #pragma once
 
+#include <filesystem>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "fabrica/core/mesh.hpp"
+#include "fabrica/core/surface.hpp"
+#include "fabrica/io/mesh_io.hpp"
 #include "fabrica/lines/line_set.hpp"
 
 namespace fabrica::cli {
@@ -30,5 +34,24 @@ Space parse_space(const std::string& text, const std::string& option = "--space"
 std::vector<LineFamily> parse_family_list(const std::string& text, const std::string& option,
                                           const std::vector<LineFamily>& default_set,
                                           bool allow_none);
+
+/// A mesh as the drawing commands use it: read, optionally prepared for the
+/// line engine (io::prepare_for_lines), wrapped in a Surface whose lazily
+/// computed geometry (normals, curvature, ...) is kept with it.
+struct PreparedMesh {
+  Surface surface;
+  io::MeshFileInfo info;
+  std::vector<std::string> changes;  ///< what preparation changed (empty when not prepared)
+};
+
+/// Reads and prepares `path`, or returns the copy made by an earlier call with
+/// the same file (same path, size and modification time) and the same options,
+/// so that `fabrica batch` reads and precomputes an input once per worker for
+/// all its views and styles. The process keeps at most two meshes, both of the
+/// last input read (prepared and plain), so memory stays flat. Throws what
+/// io::read_mesh throws.
+std::shared_ptr<const PreparedMesh> load_prepared_mesh(const std::filesystem::path& path,
+                                                       const io::ReadOptions& options,
+                                                       bool prepare_for_lines);
 
 }  // namespace fabrica::cli

@@ -260,8 +260,9 @@ int run_hatch(const HatchArgs& args) {
 
   io::ReadOptions read_options;
   if (!args.space.empty()) read_options.space = parse_space(args.space);
-  io::LoadedMesh loaded = io::read_mesh(args.mesh, read_options);
-  const Space space = loaded.mesh.space;
+  const auto loaded = load_prepared_mesh(args.mesh, read_options, false);
+  const Surface& surface = loaded->surface;
+  const Space space = surface.mesh().space;
 
   std::optional<std::pair<int, int>> size;
   if (!args.size.empty()) size = parse_size(args.size);
@@ -275,11 +276,10 @@ int run_hatch(const HatchArgs& args) {
       throw InputError("--view: unknown view \"" + args.view +
                        "\" (anterior, posterior, left, right, superior, inferior)");
     const auto [w, h] = size.value_or(std::pair<int, int>{800, 800});
-    camera = anatomical_camera(*view, bounding_box(loaded.mesh.positions), space, w, h);
+    camera = anatomical_camera(*view, bounding_box(surface.positions()), space, w, h);
   }
   validate_camera(camera, args.camera_file.empty() ? "camera" : args.camera_file);
 
-  Surface surface(std::move(loaded.mesh));
   hatching::HatchingOptions options;
   options.light = parse_light(args.light, camera);
   options.intensity_threshold = args.threshold;

@@ -95,20 +95,17 @@ int run_lines(const LinesArgs& a) {
 
   io::ReadOptions ro;
   if (!a.space.empty()) ro.space = parse_space(a.space);
-  auto loaded = io::read_mesh(a.mesh, ro);
-  TriangleMesh mesh = std::move(loaded.mesh);
   // Mesh preparation the lines need (on by default, reported): STL welding
   // happened in read_mesh; orient consistently and outward (inward normals
   // make contours vanish and swap ridges with valleys); normals are always
-  // computed from the geometry.
-  if (!a.keep_normals_orientation) {
-    const auto report = io::prepare_for_lines(mesh);
-    if (!a.quiet)
-      for (const auto& c : report.changes) std::fprintf(stderr, "fabrica lines: %s\n", c.c_str());
-  }
-  if (!a.quiet && loaded.info.welded_vertices > 0)
+  // computed from the geometry. Cached for `fabrica batch` (cli_common.hpp).
+  const auto loaded = load_prepared_mesh(a.mesh, ro, !a.keep_normals_orientation);
+  if (!a.quiet)
+    for (const auto& c : loaded->changes) std::fprintf(stderr, "fabrica lines: %s\n", c.c_str());
+  const TriangleMesh& mesh = loaded->surface.mesh();
+  if (!a.quiet && loaded->info.welded_vertices > 0)
     std::fprintf(stderr, "fabrica lines: welded %zu coincident STL vertices\n",
-                 loaded.info.welded_vertices);
+                 loaded->info.welded_vertices);
 
   Camera camera;
   std::string camera_what;
@@ -128,7 +125,7 @@ int run_lines(const LinesArgs& a) {
   validate_camera(camera, camera_what);
   check_camera_sees_mesh(camera, mesh, camera_what);
 
-  Surface surface(std::move(mesh));
+  const Surface& surface = loaded->surface;
   LineOptions opt;
   opt.families = parse_family_list(a.types, "--types", LineOptions{}.families, false);
   opt.feature_size = a.feature_size;

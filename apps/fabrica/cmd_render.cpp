@@ -43,7 +43,7 @@ struct RenderArgs {
 
 struct Loaded {
   render::StructureSpec spec;
-  std::unique_ptr<Surface> surface;
+  std::shared_ptr<const Surface> surface;
   render::Structure structure;
 };
 
@@ -119,12 +119,11 @@ int run_render(const RenderArgs& a) {
   for (const auto& s : spec.structures) {
     io::ReadOptions ro;
     ro.space = s.space;
-    auto file = io::read_mesh(s.mesh, ro);
-    io::prepare_for_lines(file.mesh);
-    const BoundingBox b = bounding_box(file.mesh.positions);
+    const auto file = load_prepared_mesh(s.mesh, ro, true);
+    const BoundingBox b = bounding_box(file->surface.positions());
     if (first) {
       box = b;
-      space = file.mesh.space;
+      space = file->surface.mesh().space;
       first = false;
     } else {
       box.min = box.min.cwiseMin(b.min);
@@ -132,7 +131,7 @@ int run_render(const RenderArgs& a) {
     }
     Loaded l;
     l.spec = s;
-    l.surface = std::make_unique<Surface>(std::move(file.mesh));
+    l.surface = std::shared_ptr<const Surface>(file, &file->surface);
     loaded.push_back(std::move(l));
   }
 

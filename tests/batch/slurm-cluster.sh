@@ -17,8 +17,13 @@ usage() { echo "usage: $0 start|stop DIR" >&2; exit 2; }
 cmd=$1
 dir=$(mkdir -p "$2" && cd "$2" && pwd)
 
+# A localhost port nothing listens on (bash's /dev/tcp; no other tool needed).
 free_port() {
-  python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])'
+  local port
+  while :; do
+    port=$((20000 + RANDOM % 40000))
+    if ! (exec 3<>"/dev/tcp/127.0.0.1/$port") 2>/dev/null; then echo "$port"; return; fi
+  done
 }
 
 # Stops one daemon by the pid in FILE (TERM, then KILL after 10 s).
