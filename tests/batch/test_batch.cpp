@@ -300,6 +300,58 @@ TEST_F(Batch, DryRunListsTheItemsAsCommandLines) {
   EXPECT_FALSE(fs::exists(root / "out"));
 }
 
+TEST(BatchInputs, VolumeLabelsCameraFilesAndHatching) {
+  const fs::path root = fabrica::test::temp_dir("batch-volume");
+  fs::create_directory_symlink(fabrica::test::bundled_data(), root / "data");
+  const std::string liver = (root / "data/meshes/anatomy/liver/sofa_liver_coarse.obj").string();
+  ASSERT_EQ(fabrica({"render", liver, "--view", "left", "--size", "64x64", "--save-camera",
+                     (root / "side.json").string(), "-o", (root / "side.png").string(), "--quiet"},
+                    root / "camera.log")
+                .code,
+            0);
+  write_text(root / "m.json",
+             json({{"inputs",
+                    {{{"volume", "data/meshes/volumes/totalseg_example_seg.nii.gz"},
+                      {"labels", {2, 5}},
+                      {"name", "seg"}},
+                     {{"mesh", liver}, {"name", "liver"}}}},
+                   {"views", {"anterior", {{"camera", "side.json"}}}},
+                   {"styles",
+                    {{{"command", "hatch"}, {"formats", {"svg"}}, {"threshold", 0.8}},
+                     {{"command", "lines"}, {"types", "contour"}, {"formats", "seg"}}}},
+                   {"size", {200, 200}}})
+                 .dump());
+  const auto r =
+      fabrica({"batch", (root / "m.json").string(), "-o", (root / "out").string()}, root / "log");
+  // The side camera suits the liver; it may see neither label: those items may fail.
+  ASSERT_TRUE(r.code == 0 || r.code == 5) << r.log;
+  for (const char* out : {"seg-label2/hatch-anterior.svg", "seg-label5/hatch-anterior.svg",
+                          "seg-label2/lines-anterior.seg", "seg-label5/lines-anterior.seg",
+                          "liver/lines-side.seg", "liver/hatch-side.svg"}) {
+    ASSERT_TRUE(fs::exists(root / "out" / out)) << out << "\n" << r.log;
+    const json meta = json::parse(read_text(root / "out" / (std::string(out) + ".meta.json")));
+    if (std::string(out).starts_with("seg"))
+      EXPECT_EQ(meta["input"]["label"], out[9] == '2' ? 2 : 5);
+    else
+      EXPECT_EQ(meta["view"]["camera"]["width"], 64);  // as in the file; --size sets the image
+  }
+  // Each item is what the command makes from the label surface (written as
+  // `fabrica extract` would) or with the camera file.
+  auto by_hand = [&](const std::string& mesh, const std::vector<std::string>& view,
+                     const std::string& made) {
+    std::vector<std::string> args = {"lines",   mesh,      "--size",
+                                     "200x200", "--types", "contour",
+                                     "--quiet", "-o",      (root / "by-hand.seg").string()};
+    args.insert(args.begin() + 2, view.begin(), view.end());
+    const auto x = fabrica(args, root / "hand.log");
+    ASSERT_EQ(x.code, 0) << x.log;
+    EXPECT_EQ(read_text(root / "by-hand.seg"), read_text(root / "out" / made));
+  };
+  by_hand((root / "out/.batch/volumes/seg-label5.ply").string(), {"--view", "anterior"},
+          "seg-label5/lines-anterior.seg");
+  by_hand(liver, {"--camera", (root / "side.json").string()}, "liver/lines-side.seg");
+}
+
 TEST(BatchManifest, EveryProblemIsReportedWithItsJsonPathBeforeAnyWork) {
   const fs::path root = fabrica::test::temp_dir("batch-bad");
   const json m = {

@@ -254,8 +254,9 @@ class Worker {
     if (in.kind == Input::Kind::scene) {
       json meshes = json::array();
       for (const auto& s : render::read_scene_spec(in.path).structures)
-        meshes.push_back({{"path", fs::path(s.mesh).lexically_relative(plan_.base).string()},
-                          {"hash", hash(s.mesh)}});
+        meshes.push_back(
+            {{"path", fs::path(s.mesh).lexically_relative(in.path.parent_path()).string()},
+             {"hash", hash(s.mesh)}});
       j["meshes"] = meshes;
     }
 #endif
