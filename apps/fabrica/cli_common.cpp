@@ -122,4 +122,38 @@ std::shared_ptr<const PreparedMesh> load_prepared_mesh(const std::filesystem::pa
   return prepared;
 }
 
+#if __has_include("fabrica/render/renderer.hpp")
+namespace {
+struct KeptRenderer {
+  bool keep = false;
+  std::optional<render::Backend> backend;
+  std::shared_ptr<render::Renderer> renderer;
+};
+KeptRenderer& kept_renderer() {
+  static KeptRenderer kept;
+  return kept;
+}
+}  // namespace
+
+std::shared_ptr<render::Renderer> headless_renderer(const render::HeadlessOptions& options) {
+  KeptRenderer& kept = kept_renderer();
+  if (kept.keep && kept.renderer && kept.backend == options.backend) {
+    kept.renderer->context().make_current();
+    return kept.renderer;
+  }
+  kept.renderer.reset();  // at most one context at a time
+  auto renderer = std::make_shared<render::Renderer>(render::create_headless_context(options));
+  if (kept.keep) {
+    kept.renderer = renderer;
+    kept.backend = options.backend;
+  }
+  return renderer;
+}
+
+void keep_headless_renderer(bool keep) {
+  kept_renderer().keep = keep;
+  if (!keep) kept_renderer().renderer.reset();
+}
+#endif
+
 }  // namespace fabrica::cli

@@ -12,6 +12,10 @@
 #include "fabrica/core/surface.hpp"
 #include "fabrica/io/mesh_io.hpp"
 #include "fabrica/lines/line_set.hpp"
+#if __has_include("fabrica/render/renderer.hpp")
+#include "fabrica/render/context.hpp"
+#include "fabrica/render/renderer.hpp"
+#endif
 
 namespace fabrica::cli {
 
@@ -53,5 +57,15 @@ struct PreparedMesh {
 std::shared_ptr<const PreparedMesh> load_prepared_mesh(const std::filesystem::path& path,
                                                        const io::ReadOptions& options,
                                                        bool prepare_for_lines);
+
+#if __has_include("fabrica/render/renderer.hpp")
+/// A headless renderer for `options`: a new one (its GL context ends with
+/// it), or, once keep_headless_renderer(true) was called (a `fabrica batch`
+/// worker), the process's one, created at first use and kept between items:
+/// one GL context per worker. Throws what render::create_headless_context throws.
+std::shared_ptr<render::Renderer> headless_renderer(const render::HeadlessOptions& options);
+/// Turns keeping on or off; off also lets go of the kept renderer.
+void keep_headless_renderer(bool keep);
+#endif
 
 }  // namespace fabrica::cli

@@ -218,9 +218,9 @@ std::string write_hatching_png(const HatchArgs& args, const Surface& surface, co
   render::Scene scene;
   scene.structures.push_back(std::move(structure));
 
-  std::unique_ptr<render::GlContext> context;
+  std::shared_ptr<render::Renderer> renderer;  // one GL context per `fabrica batch` worker
   try {
-    context = render::create_headless_context(headless);
+    renderer = headless_renderer(headless);
   } catch (const Error& e) {
     if (e.kind() != ErrorKind::unavailable) throw;
     throw Error(ErrorKind::unavailable, "-o " + args.output +
@@ -228,13 +228,12 @@ std::string write_hatching_png(const HatchArgs& args, const Surface& surface, co
                                             "or OSMesa) and none could be created (" +
                                             e.what() + "); write .svg instead");
   }
-  render::Renderer renderer(std::move(context));
   render::RenderOptions options;
   options.transparent_background = args.transparent;
   options.scale_lines_with_image = false;  // widths in image pixels, as in the SVG
-  const render::Image image = renderer.render(scene, camera, options);
+  const render::Image image = renderer->render(scene, camera, options);
   render::write_png(image, args.output);
-  return render::to_string(renderer.context().backend());
+  return render::to_string(renderer->context().backend());
 }
 #endif
 

@@ -196,7 +196,8 @@ int run_render(const RenderArgs& a) {
     if (!ho.backend || *ho.backend == render::Backend::glfw)
       throw InputError("--backend must be egl or osmesa (got \"" + a.backend + "\")");
   }
-  render::Renderer renderer(render::create_headless_context(ho));
+  const auto kept = headless_renderer(ho);  // one GL context per `fabrica batch` worker
+  render::Renderer& renderer = *kept;
   render::RenderOptions ro;
   ro.transparent_background = spec.transparent;
   if (a.tau) ro.hybrid.tau = *a.tau;

@@ -177,6 +177,15 @@ TEST_F(Batch, ItemIsWhatTheCommandMakes) {
       root / "single.log");
   ASSERT_EQ(r.code, 0) << r.log;
   EXPECT_EQ(read_text(out), read_text(full / "liver/lines-anterior.svg"));
+  // A picture drawn by a worker's GL context after other items = a fresh command's.
+  const auto p =
+      fabrica({"render", (root / "data/meshes/anatomy/liver/sofa_liver2.obj").string(), "--view",
+               "anterior", "--size", "256x256", "--lines", "contour", "--quiet", "-o",
+               (root / "single.png").string(), "--svg", (root / "single-r.svg").string()},
+              root / "single-render.log");
+  ASSERT_EQ(p.code, 0) << p.log;
+  EXPECT_EQ(read_text(root / "single.png"), read_text(full / "liver/shaded-anterior.png"));
+  EXPECT_EQ(read_text(root / "single-r.svg"), read_text(full / "liver/shaded-anterior.svg"));
 }
 
 TEST_F(Batch, OneJobAndTwoJobsGiveTheSameBytes) {

@@ -153,6 +153,18 @@ std::pair<long, long> resolve_shard(const Options& o) {
   return {index, count};
 }
 
+/// While it lives, the drawing commands of this process share one GL context.
+struct OneGlContext {
+#if __has_include("fabrica/render/renderer.hpp")
+  OneGlContext() {
+    keep_headless_renderer(true);
+  }
+  ~OneGlContext() {
+    keep_headless_renderer(false);
+  }
+#endif
+};
+
 std::string report_name(long index, long count) {
   return count == 1
              ? "batch-report.json"
@@ -572,6 +584,7 @@ int run_batch(const Options& o) {
       throw InputError("--worker: expected W/J");
     tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
                                 static_cast<std::size_t>(std::max(1, cores / jobs)));
+    const OneGlContext gl;
     Worker worker(plan, o.dir, o.resume);
     for (const std::size_t k : chunk(items, w, jobs)) {
       const Record r = worker.run(k);
@@ -596,6 +609,7 @@ int run_batch(const Options& o) {
   if (jobs == 1) {
     tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
                                 static_cast<std::size_t>(cores));
+    const OneGlContext gl;
     Worker worker(plan, o.dir, o.resume);
     for (const std::size_t k : items) {
       records[k] = worker.run(k);
