@@ -2,12 +2,15 @@
 // manifest with one unreadable input makes every other item and reports the
 // bad ones (exit 5); --jobs 1 and --jobs 2, three shards in separate folders,
 // and a run killed with SIGKILL then resumed all give the same bytes as the
-// full run, and the resumed run leaves finished items alone; bad manifests
-// fail before any work (exit 2) naming every problem by its JSON path.
+// full run, and the resumed run leaves finished items alone; an item is what
+// its command makes by hand (also for volume labels and camera files); ten
+// times the items do not grow a worker's memory; bad manifests fail before
+// any work (exit 2) naming every problem by its JSON path.
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -59,9 +62,13 @@ pid_t start(const std::vector<std::string>& args, const fs::path& log) {
   return pid;
 }
 
-int wait_exit(pid_t pid) {
+/// Waits for the child; its exit code (128 + signal when killed), and its peak
+/// resident memory in KiB in `max_rss_kib` when given.
+int wait_exit(pid_t pid, long* max_rss_kib = nullptr) {
   int status = 0;
-  waitpid(pid, &status, 0);
+  rusage usage{};
+  wait4(pid, &status, 0, &usage);
+  if (max_rss_kib) *max_rss_kib = usage.ru_maxrss;
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
@@ -359,6 +366,28 @@ TEST(BatchInputs, VolumeLabelsCameraFilesAndHatching) {
   by_hand((root / "out/.batch/volumes/seg-label5.ply").string(), {"--view", "anterior"},
           "seg-label5/lines-anterior.seg");
   by_hand(liver, {"--camera", (root / "side.json").string()}, "liver/lines-side.seg");
+}
+
+TEST(BatchMemory, TenTimesTheItemsInOneProcessDoNotGrowItsMemory) {
+  const fs::path root = fabrica::test::temp_dir("batch-memory");
+  fs::create_directory_symlink(fabrica::test::bundled_data(), root / "data");
+  long rss[2] = {0, 0};
+  for (int run = 0; run < 2; ++run) {
+    const int views = run == 0 ? 4 : 40;  // 8 and 80 items
+    const fs::path m = root / (run == 0 ? "small.json" : "large.json");
+    write_text(m, json({{"inputs", {"data/meshes/anatomy/liver/sofa_liver2.obj"}},
+                        {"views", {{{"orbit", views}}}},
+                        {"styles",
+                         {{{"command", "lines"}, {"types", "contour,suggestive,ridge"}},
+                          {{"command", "render"}, {"formats", {"png", "svg"}}}}},
+                        {"size", {256, 256}}})
+                      .dump());
+    const pid_t pid = start({"batch", m.string(), "-o", (root / std::to_string(run)).string(),
+                             "--jobs", "1", "--quiet"},
+                            root / "log");
+    ASSERT_EQ(wait_exit(pid, &rss[run]), 0) << read_text(root / "log");
+  }
+  EXPECT_LE(rss[1], rss[0] * 11 / 10) << "8 items: " << rss[0] << " KiB, 80 items: " << rss[1];
 }
 
 TEST(BatchManifest, EveryProblemIsReportedWithItsJsonPathBeforeAnyWork) {
