@@ -171,6 +171,14 @@ std::string report_name(long index, long count) {
              : "batch-report-" + std::to_string(index) + "-of-" + std::to_string(count) + ".json";
 }
 
+/// Temporaries of `path` left by a killed run (core/atomic_file: PATH.tmp-PID-N).
+void remove_temporaries(const fs::path& path) {
+  std::error_code ec;
+  const std::string prefix = path.filename().string() + ".tmp-";
+  for (const auto& e : fs::directory_iterator(path.parent_path(), ec))
+    if (e.path().filename().string().starts_with(prefix)) fs::remove(e.path(), ec);
+}
+
 /// One worker: runs items one after another; the mesh cache keeps the
 /// current input's Surface between them.
 class Worker {
@@ -373,6 +381,8 @@ class Worker {
       std::error_code ec;
       fs::create_directories((dir_ / rel).parent_path(), ec);
       fs::remove(meta_path(rel), ec);  // no stale record while the output is being remade
+      remove_temporaries(dir_ / rel);
+      remove_temporaries(meta_path(rel));
     }
     try {
       for (const auto& run : runs) run_args(run.args);
