@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
+#include <deque>
+#include <mutex>
 #include <sstream>
 
 #include "fabrica/core/error.hpp"
@@ -112,5 +114,95 @@ std::string parse_error_hint(CLI::App& app, int argc, char** argv) {
   }
   return {};
 }
+
+namespace {
+
+/// What identifies a loaded mesh: the file as it is now and how it was read.
+struct MeshKey {
+  std::string path;
+  std::uintmax_t size = 0;
+  std::filesystem::file_time_type mtime;
+  std::optional<Space> space;
+  bool oriented = false;
+  bool operator==(const MeshKey&) const = default;
+};
+
+struct MeshCache {
+  std::mutex mutex;
+  std::deque<std::pair<MeshKey, std::shared_ptr<const LoadedSurface>>> entries;  // newest first
+  static constexpr std::size_t capacity = 2;
+};
+
+MeshCache& mesh_cache() {
+  static MeshCache cache;
+  return cache;
+}
+
+}  // namespace
+
+std::shared_ptr<const LoadedSurface> load_prepared_surface(const std::filesystem::path& path,
+                                                           const PrepareOptions& options) {
+  std::error_code ec_size, ec_time;
+  MeshKey key;
+  key.path = std::filesystem::absolute(path).lexically_normal().string();
+  key.size = std::filesystem::file_size(path, ec_size);
+  key.mtime = std::filesystem::last_write_time(path, ec_time);
+  key.space = options.space;
+  key.oriented = options.orient;
+  const bool cacheable = !ec_size && !ec_time;  // a missing file: the reader names the problem
+  MeshCache& cache = mesh_cache();
+  if (cacheable) {
+    const std::lock_guard<std::mutex> lock(cache.mutex);
+    for (const auto& [k, mesh] : cache.entries)
+      if (k == key) return mesh;
+    // Another input: let go of the previous one before reading (flat memory).
+    std::erase_if(cache.entries, [&](const auto& e) { return e.first.path != key.path; });
+  }
+  PreparedMesh prepared = prepare_mesh(path, options);
+  auto loaded = std::make_shared<LoadedSurface>();
+  loaded->messages = prepared.messages();
+  loaded->info = std::move(prepared.info);
+  loaded->surface = std::make_shared<const Surface>(std::move(prepared.mesh));
+  if (cacheable) {
+    const std::lock_guard<std::mutex> lock(cache.mutex);
+    cache.entries.emplace_front(key, loaded);
+    while (cache.entries.size() > MeshCache::capacity) cache.entries.pop_back();
+  }
+  return loaded;
+}
+
+#if __has_include("fabrica/render/renderer.hpp")
+namespace {
+struct KeptRenderer {
+  bool keep = false;
+  std::optional<render::Backend> backend;
+  std::shared_ptr<render::Renderer> renderer;
+};
+KeptRenderer& kept_renderer() {
+  static KeptRenderer kept;
+  return kept;
+}
+}  // namespace
+
+std::shared_ptr<render::Renderer> headless_renderer(const render::HeadlessOptions& options) {
+  KeptRenderer& kept = kept_renderer();
+  if (kept.keep && kept.renderer && kept.backend == options.backend) {
+    kept.renderer->context().make_current();
+    return kept.renderer;
+  }
+  kept.renderer.reset();  // at most one context at a time
+  auto renderer = std::make_shared<render::Renderer>(render::create_headless_context(options));
+  if (kept.keep) {
+    kept.renderer = renderer;
+    kept.backend = options.backend;
+  }
+  return renderer;
+}
+
+void keep_headless_renderer(bool keep) {
+  kept_renderer().keep = keep;
+  if (!keep) kept_renderer().renderer.reset();
+}
+#endif
 
 }  // namespace fabrica::cli

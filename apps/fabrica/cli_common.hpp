@@ -2,13 +2,22 @@
 // every command accepts the same spellings and reports the same errors.
 #pragma once
 
+#include <filesystem>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "fabrica/core/camera.hpp"
 #include "fabrica/core/mesh.hpp"
+#include "fabrica/core/surface.hpp"
+#include "fabrica/io/mesh_io.hpp"
+#include "fabrica/io/prepare.hpp"
 #include "fabrica/lines/line_set.hpp"
+#if __has_include("fabrica/render/renderer.hpp")
+#include "fabrica/render/context.hpp"
+#include "fabrica/render/renderer.hpp"
+#endif
 
 namespace CLI {
 class App;
@@ -50,5 +59,33 @@ void warn_if_space_assumed(SpaceSource source, const std::string& path, const st
 /// (argv[1]) or the first unknown --option of the chosen command, e.g.
 /// "unknown option '--veiw' (did you mean '--view'?)"; "" when nothing is close.
 std::string parse_error_hint(CLI::App& app, int argc, char** argv);
+
+/// A mesh as the drawing commands use it: fabrica::prepare_mesh's result
+/// wrapped in a Surface whose lazily computed geometry (normals, curvature,
+/// ...) is kept with it.
+struct LoadedSurface {
+  std::shared_ptr<const Surface> surface;
+  io::MeshFileInfo info;
+  std::vector<std::string> messages;  ///< PreparedMesh::messages(): what preparation changed
+};
+
+/// fabrica::prepare_mesh(path, options) as a Surface, or the one made by an
+/// earlier call with the same file (same path, size and modification time)
+/// and the same options, so that `fabrica batch` reads and precomputes an
+/// input once per worker for all its views and styles. The process keeps at
+/// most two meshes, both of the last input read, so memory stays flat.
+/// Throws what prepare_mesh throws.
+std::shared_ptr<const LoadedSurface> load_prepared_surface(const std::filesystem::path& path,
+                                                           const PrepareOptions& options);
+
+#if __has_include("fabrica/render/renderer.hpp")
+/// A headless renderer for `options`: a new one (its GL context ends with
+/// it), or, once keep_headless_renderer(true) was called (a `fabrica batch`
+/// worker), the process's one, created at first use and kept between items:
+/// one GL context per worker. Throws what render::create_headless_context throws.
+std::shared_ptr<render::Renderer> headless_renderer(const render::HeadlessOptions& options);
+/// Turns keeping on or off; off also lets go of the kept renderer.
+void keep_headless_renderer(bool keep);
+#endif
 
 }  // namespace fabrica::cli

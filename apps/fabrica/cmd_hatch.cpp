@@ -164,9 +164,9 @@ std::string write_hatching_png(const HatchArgs& args, const Surface& surface, co
   render::Scene scene;
   scene.structures.push_back(std::move(structure));
 
-  std::unique_ptr<render::GlContext> context;
+  std::shared_ptr<render::Renderer> renderer;  // one GL context per `fabrica batch` worker
   try {
-    context = render::create_headless_context(headless);
+    renderer = headless_renderer(headless);
   } catch (const Error& e) {
     if (e.kind() != ErrorKind::unavailable) throw;
     throw Error(ErrorKind::unavailable, "-o " + args.output +
@@ -174,13 +174,12 @@ std::string write_hatching_png(const HatchArgs& args, const Surface& surface, co
                                             "or OSMesa) and none could be created (" +
                                             e.what() + "); write .svg instead");
   }
-  render::Renderer renderer(std::move(context));
   render::RenderOptions options;
   options.transparent_background = args.transparent;
   options.scale_lines_with_image = false;  // widths in image pixels, as in the SVG
-  const render::Image image = renderer.render(scene, camera, options);
+  const render::Image image = renderer->render(scene, camera, options);
   render::write_png(image, args.output);
-  return render::to_string(renderer.context().backend());
+  return render::to_string(renderer->context().backend());
 }
 #endif
 
@@ -206,14 +205,16 @@ int run_hatch(const HatchArgs& args) {
     throw InputError("--line-width: must be a positive number of pixels");
 
   // The same preparation as `fabrica lines`: oriented outward (inward
-  // normals would turn the light's shading inside out).
+  // normals would turn the light's shading inside out). Cached for `fabrica
+  // batch` (cli_common.hpp).
   PrepareOptions prepare;
   if (!args.space.empty()) prepare.space = parse_space(args.space);
   prepare.orient = !args.keep_orientation;
-  PreparedMesh loaded = prepare_mesh(args.mesh, prepare);
+  const auto loaded = load_prepared_surface(args.mesh, prepare);
   if (!args.quiet)
-    for (const auto& m : loaded.messages()) std::fprintf(stderr, "fabrica hatch: %s\n", m.c_str());
-  const Space space = loaded.mesh.space;
+    for (const auto& m : loaded->messages) std::fprintf(stderr, "fabrica hatch: %s\n", m.c_str());
+  const Surface& surface = *loaded->surface;
+  const Space space = surface.mesh().space;
 
   std::optional<std::pair<int, int>> size;
   if (!args.size.empty()) size = parse_size(args.size);
@@ -225,12 +226,11 @@ int run_hatch(const HatchArgs& args) {
   } else {
     const AnatomicalView view = parse_view(args.view.empty() ? "anterior" : args.view);
     const auto [w, h] = size.value_or(std::pair<int, int>{800, 800});
-    camera = anatomical_camera(view, bounding_box(loaded.mesh.positions), space, w, h);
-    assumed_space = loaded.mesh.space_source;
+    camera = anatomical_camera(view, bounding_box(surface.positions()), space, w, h);
+    assumed_space = surface.mesh().space_source;
   }
   validate_camera(camera, args.camera_file.empty() ? "camera" : args.camera_file);
 
-  Surface surface(std::move(loaded.mesh));
   DrawHatchingOptions drawing;
   drawing.light = args.light;
   hatching::HatchingOptions& options = drawing.hatching;

@@ -99,15 +99,15 @@ int run_lines(const LinesArgs& a) {
   // Mesh preparation the lines need (on by default, reported): STL welding
   // happens in the reader; orient consistently and outward (inward normals
   // make contours vanish and swap ridges with valleys); normals are always
-  // computed from the geometry.
+  // computed from the geometry. Cached for `fabrica batch` (cli_common.hpp).
   PrepareOptions prepare;
   if (!a.space.empty()) prepare.space = parse_space(a.space);
   prepare.orient = !a.keep_normals_orientation;
-  PreparedMesh prepared = prepare_mesh(a.mesh, prepare);
+  const auto loaded = load_prepared_surface(a.mesh, prepare);
   if (!a.quiet)
-    for (const auto& m : prepared.messages())
-      std::fprintf(stderr, "fabrica lines: %s\n", m.c_str());
-  TriangleMesh mesh = std::move(prepared.mesh);
+    for (const auto& m : loaded->messages) std::fprintf(stderr, "fabrica lines: %s\n", m.c_str());
+  const Surface& surface = *loaded->surface;
+  const TriangleMesh& mesh = surface.mesh();
 
   Camera camera;
   std::string camera_what;
@@ -126,7 +126,6 @@ int run_lines(const LinesArgs& a) {
   validate_camera(camera, camera_what);
   check_camera_sees_mesh(camera, mesh, camera_what);
 
-  Surface surface(std::move(mesh));
   options.lines.families = parse_family_list(a.types, "--types", LineOptions{}.families, false);
   if (!a.light.empty()) {
     options.lines.pel.light_direction = options.lines.laplacian.light_direction =

@@ -109,8 +109,12 @@ int run_render(const RenderArgs& a) {
   }
   if (a.transparent) spec.transparent = true;
 
-  // 2. Meshes -> prepared Surfaces.
-  const render::SceneSurfaces scene = render::load_scene(spec);
+  // 2. Meshes -> prepared Surfaces (cached for `fabrica batch`, cli_common.hpp).
+  const render::SceneSurfaces scene = render::load_scene(spec, [](const render::StructureSpec& s) {
+    PrepareOptions prepare;
+    prepare.space = s.space;
+    return load_prepared_surface(s.mesh, prepare)->surface;
+  });
   bool view_from_space = false;
 
   // 3. Camera: --camera, --view, the scene's camera or view, else anterior.
@@ -143,7 +147,8 @@ int run_render(const RenderArgs& a) {
   ro.hybrid.per_fragment = a.per_fragment;
   ro.hybrid.sign_free = a.sign_free;
   ro.hybrid.float_target = a.float_target;
-  const render::RenderedScene picture = render::render_scene(scene, camera, ro, ho);
+  const auto renderer = headless_renderer(ho);  // one GL context per `fabrica batch` worker
+  const render::RenderedScene picture = render::render_scene(*renderer, scene, camera, ro);
   render::write_png(picture.image, out_path);
 
   // 5. Vector lines: focus lines hidden by opaque structures, context lines by every surface.

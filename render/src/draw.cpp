@@ -28,21 +28,26 @@ void SceneSurfaces::add(StructureSpec structure, std::shared_ptr<const Surface> 
   surfaces.push_back(std::move(surface));
 }
 
-SceneSurfaces load_scene(SceneSpec spec) {
+SceneSurfaces load_scene(SceneSpec spec, const SurfaceLoader& loader) {
   SceneSurfaces scene;
   std::vector<StructureSpec> structures = std::move(spec.structures);
   scene.spec = std::move(spec);
   scene.spec.structures.clear();
   for (StructureSpec& s : structures) {
-    PrepareOptions options;
-    options.space = s.space;
-    PreparedMesh prepared = prepare_mesh(s.mesh, options);
-    if (prepared.mesh.space_source == SpaceSource::default_assumed)
+    std::shared_ptr<const Surface> surface = loader(s);
+    if (surface->mesh().space_source == SpaceSource::default_assumed)
       scene.assumed_space.push_back(s.mesh.string());
-    auto surface = std::make_shared<const Surface>(std::move(prepared.mesh));
     scene.add(std::move(s), std::move(surface));
   }
   return scene;
+}
+
+SceneSurfaces load_scene(SceneSpec spec) {
+  return load_scene(std::move(spec), [](const StructureSpec& s) {
+    PrepareOptions options;
+    options.space = s.space;
+    return std::make_shared<const Surface>(prepare_mesh(s.mesh, options).mesh);
+  });
 }
 
 Camera view_camera(const SceneSurfaces& scene, AnatomicalView view, Frame frame) {

@@ -10,6 +10,8 @@
 //   camera); fabrica::render::write_png(picture.image, "out.png");
 #pragma once
 
+#include <functional>
+
 #include <memory>
 #include <string>
 #include <vector>
@@ -46,6 +48,12 @@ struct SceneSurfaces {
 /// it as fabrica::prepare_mesh does (oriented outward). InputError names the
 /// file.
 SceneSurfaces load_scene(SceneSpec spec);
+
+/// The same with the surfaces made by `loader` (for example a cache that
+/// reuses surfaces already prepared: `fabrica batch`). The loader must
+/// prepare them as prepare_mesh does.
+using SurfaceLoader = std::function<std::shared_ptr<const Surface>(const StructureSpec&)>;
+SceneSurfaces load_scene(SceneSpec spec, const SurfaceLoader& loader);
 
 /// The anatomical view of the whole scene (its bounding box and space), or,
 /// with Frame::focus and a focus present, fitted to the focus structures

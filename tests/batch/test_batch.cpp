@@ -1,0 +1,456 @@
+// End-to-end tests of `fabrica batch` (docs/batch.md) on bundled meshes: a
+// manifest with one unreadable input makes every other item and reports the
+// bad ones (exit 5); --jobs 1 and --jobs 2, three shards in separate folders,
+// and a run killed with SIGKILL then resumed all give the same bytes as the
+// full run, and the resumed run leaves finished items alone; an item is what
+// its command makes by hand (also for volume labels and camera files); ten
+// times the items do not grow a worker's memory; bad manifests fail before
+// any work (exit 2) naming every problem by its JSON path.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "test_support.hpp"
+
+extern char** environ;
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+void write_text(const fs::path& p, const std::string& text) {
+  std::ofstream(p, std::ios::binary) << text;
+}
+
+/// Starts `fabrica ARGS...` with stdout and stderr into LOG; returns its pid.
+pid_t start(const std::vector<std::string>& args, const fs::path& log) {
+  std::vector<std::string> all = {FABRICA_EXE};
+  all.insert(all.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (auto& a : all) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&actions, 1, 2);
+  posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
+  pid_t pid = -1;
+  EXPECT_EQ(posix_spawn(&pid, all[0].c_str(), &actions, nullptr, argv.data(), environ), 0);
+  posix_spawn_file_actions_destroy(&actions);
+  return pid;
+}
+
+/// Waits for the child; its exit code (128 + signal when killed), and its peak
+/// resident memory in KiB in `max_rss_kib` when given.
+int wait_exit(pid_t pid, long* max_rss_kib = nullptr) {
+  int status = 0;
+  rusage usage{};
+  wait4(pid, &status, 0, &usage);
+  if (max_rss_kib) *max_rss_kib = usage.ru_maxrss;
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+struct Result {
+  int code;
+  std::string log;
+};
+
+Result fabrica(const std::vector<std::string>& args, const fs::path& log) {
+  const int code = wait_exit(start(args, log));
+  return {code, read_text(log)};
+}
+
+/// Every output below DIR (relative path -> bytes), without the reports and
+/// the batch's own working files in DIR/.batch.
+std::map<std::string, std::string> outputs(const fs::path& dir) {
+  std::map<std::string, std::string> files;
+  for (const auto& e : fs::recursive_directory_iterator(dir)) {
+    const std::string rel = e.path().lexically_relative(dir).string();
+    if (!e.is_regular_file() || rel.starts_with(".batch") || rel.starts_with("batch-report"))
+      continue;
+    files[rel] = read_text(e.path());
+  }
+  return files;
+}
+
+/// A manifest over three bundled meshes (one glob) and a broken one, three
+/// views (a preset and an orbit of two) and two styles (lines as SVG + JSON,
+/// render as PNG + SVG) at 256x256: 4 x 3 x 2 = 24 items, 6 of them on the
+/// broken input.
+class Batch : public ::testing::Test {
+ protected:
+  static fs::path root, manifest, full;
+  static Result full_run;
+
+  static void SetUpTestSuite() {
+    root = fabrica::test::temp_dir("batch");
+    fs::create_directory_symlink(fabrica::test::bundled_data(), root / "data");
+    write_text(root / "broken.off", "OFF\n3 1 0\n0 0 0\n1 0 nan\n");
+    const json m = {{"inputs",
+                     {{{"mesh", "data/meshes/anatomy/liver/sofa_liver_coarse.obj"}},
+                      {{"mesh", "broken.off"}},
+                      {{"glob", "data/meshes/anatomy/brain/vtkdata_mni-surface-mesh.o*"}},
+                      {{"mesh", "data/meshes/anatomy/liver/sofa_liver2.obj"}, {"name", "liver"}}}},
+                    {"views", {"anterior", {{"orbit", 2}, {"from", "left"}}}},
+                    {"styles",
+                     {{{"name", "lines"},
+                       {"command", "lines"},
+                       {"types", {"contour", "suggestive"}},
+                       {"formats", {"svg", "json"}}},
+                      {{"name", "shaded"},
+                       {"command", "render"},
+                       {"lines", {"contour"}},
+                       {"formats", {"png", "svg"}}}}},
+                    {"size", {256, 256}}};
+    manifest = root / "manifest.json";
+    write_text(manifest, m.dump(2));
+    full = root / "full";
+    full_run = fabrica({"batch", manifest.string(), "-o", full.string(), "--jobs", "2"},
+                       root / "full.log");
+  }
+};
+fs::path Batch::root, Batch::manifest, Batch::full;
+Result Batch::full_run;
+
+TEST_F(Batch, MakesEveryGoodItemAndReportsTheBadInput) {
+  ASSERT_EQ(full_run.code, 5) << full_run.log;
+  const json report = json::parse(read_text(full / "batch-report.json"));
+  EXPECT_EQ(report["total_items"], 24);
+  ASSERT_EQ(report["items"].size(), 24u);
+  EXPECT_EQ(report["summary"]["made"], 18);
+  EXPECT_EQ(report["summary"]["failed"], 6);
+  for (std::size_t k = 0; k < 24; ++k) {
+    const json& item = report["items"][k];
+    EXPECT_EQ(item["index"], k);  // input-major: input = k / 6
+    const bool bad = k / 6 == 1;
+    EXPECT_EQ(item["input"], bad ? "broken"
+                                 : (k / 6 == 0   ? "sofa_liver_coarse"
+                                    : k / 6 == 2 ? "vtkdata_mni-surface-mesh"
+                                                 : "liver"));
+    EXPECT_EQ(item["status"], bad ? "failed" : "made") << item.dump();
+    if (bad) {
+      EXPECT_NE(item["reason"].get<std::string>().find("broken.off"), std::string::npos)
+          << item.dump();
+      EXPECT_EQ(item["reason"].get<std::string>().find('\n'), std::string::npos);
+    }
+    for (const auto& o : item["outputs"]) {
+      EXPECT_EQ(fs::exists(full / o.get<std::string>()), !bad) << o;
+      if (!bad) {
+        const json meta = json::parse(read_text(full / (o.get<std::string>() + ".meta.json")));
+        EXPECT_EQ(meta["item"], k);
+        EXPECT_TRUE(meta["input"]["hash"].get<std::string>().starts_with("fnv1a64:"));
+        EXPECT_EQ(meta["output"], o);
+        EXPECT_FALSE(meta["commands"].empty());
+      }
+    }
+  }
+  // The names of the outputs, and a camera recorded for an orbit view.
+  EXPECT_TRUE(fs::exists(full / "liver/shaded-orbit1.png"));
+  EXPECT_TRUE(fs::exists(full / "liver/shaded-orbit1.svg"));
+  EXPECT_TRUE(fs::exists(full / "sofa_liver_coarse/lines-anterior.json"));
+  const json meta = json::parse(read_text(full / "liver/lines-orbit1.svg.meta.json"));
+  EXPECT_TRUE(meta["view"]["camera"].contains("eye"));
+  EXPECT_NE(full_run.log.find("failed"), std::string::npos);
+}
+
+TEST_F(Batch, ItemIsWhatTheCommandMakes) {
+  ASSERT_EQ(full_run.code, 5) << full_run.log;
+  const fs::path out = root / "single.svg";
+  const auto r = fabrica(
+      {"lines", (root / "data/meshes/anatomy/liver/sofa_liver2.obj").string(), "--view", "anterior",
+       "--size", "256x256", "--types", "contour,suggestive", "--quiet", "-o", out.string()},
+      root / "single.log");
+  ASSERT_EQ(r.code, 0) << r.log;
+  EXPECT_EQ(read_text(out), read_text(full / "liver/lines-anterior.svg"));
+  // A picture drawn by a worker's GL context after other items = a fresh command's.
+  const auto p =
+      fabrica({"render", (root / "data/meshes/anatomy/liver/sofa_liver2.obj").string(), "--view",
+               "anterior", "--size", "256x256", "--lines", "contour", "--quiet", "-o",
+               (root / "single.png").string(), "--svg", (root / "single-r.svg").string()},
+              root / "single-render.log");
+  ASSERT_EQ(p.code, 0) << p.log;
+  EXPECT_EQ(read_text(root / "single.png"), read_text(full / "liver/shaded-anterior.png"));
+  EXPECT_EQ(read_text(root / "single-r.svg"), read_text(full / "liver/shaded-anterior.svg"));
+}
+
+TEST_F(Batch, OneJobAndTwoJobsGiveTheSameBytes) {
+  ASSERT_EQ(full_run.code, 5) << full_run.log;
+  const fs::path one = root / "one";
+  EXPECT_EQ(fabrica({"batch", manifest.string(), "-o", one.string(), "--jobs", "1", "--quiet"},
+                    root / "one.log")
+                .code,
+            5);
+  const auto a = outputs(full), b = outputs(one);
+  EXPECT_EQ(a.size(), 18u * 2 * 2);  // two outputs per item, each with its .meta.json
+  EXPECT_TRUE(a == b);
+}
+
+TEST_F(Batch, ShardsInSeparateFoldersMakeTheFullRun) {
+  ASSERT_EQ(full_run.code, 5) << full_run.log;
+  std::map<std::string, std::string> joined;
+  std::vector<std::string> dirs;
+  for (int i = 0; i < 3; ++i) {
+    const fs::path dir = root / ("shard" + std::to_string(i));
+    dirs.push_back(dir.string());
+    const auto r = fabrica({"batch", manifest.string(), "-o", dir.string(), "--shard",
+                            std::to_string(i) + "/3", "--jobs", "1"},
+                           root / ("shard" + std::to_string(i) + ".log"));
+    EXPECT_EQ(r.code, 5) << r.log;  // every shard has items of the broken input
+    const json report =
+        json::parse(read_text(dir / ("batch-report-" + std::to_string(i) + "-of-3.json")));
+    EXPECT_EQ(report["items"].size(), 8u);
+    for (const auto& item : report["items"]) EXPECT_EQ(item["index"].get<int>() % 3, i);
+    for (auto& [k, v] : outputs(dir)) EXPECT_TRUE(joined.emplace(k, v).second) << k;
+  }
+  EXPECT_TRUE(joined == outputs(full));
+  std::vector<std::string> merge = {"batch", "merge"};
+  merge.insert(merge.end(), dirs.begin(), dirs.end());
+  merge.insert(merge.end(), {"-o", (root / "merged.json").string()});
+  EXPECT_EQ(fabrica(merge, root / "merge.log").code, 5);
+  const json merged = json::parse(read_text(root / "merged.json"));
+  const json single = json::parse(read_text(full / "batch-report.json"));
+  EXPECT_EQ(merged["summary"]["made"], 18);
+  EXPECT_EQ(merged["summary"]["failed"], 6);
+  EXPECT_EQ(merged["summary"]["missing"], 0);
+  for (std::size_t k = 0; k < 24; ++k) {
+    EXPECT_EQ(merged["items"][k]["status"], single["items"][k]["status"]);
+    EXPECT_EQ(merged["items"][k]["outputs"], single["items"][k]["outputs"]);
+  }
+  // Two shards only: the third's items are missing.
+  EXPECT_EQ(fabrica({"batch", "merge", dirs[0], dirs[1], "-o", (root / "partial.json").string()},
+                    root / "partial.log")
+                .code,
+            5);
+  EXPECT_EQ(json::parse(read_text(root / "partial.json"))["summary"]["missing"], 8);
+}
+
+TEST_F(Batch, KilledRunResumesToTheSameBytesWithoutRedoingFinishedItems) {
+  ASSERT_EQ(full_run.code, 5) << full_run.log;
+  const fs::path dir = root / "killed";
+  const pid_t pid =
+      start({"batch", manifest.string(), "-o", dir.string(), "--jobs", "1"}, root / "killed.log");
+  // Wait for a few finished items (the .meta.json of each of their outputs
+  // is written last), then SIGKILL.
+  auto finished = [&] {
+    std::map<std::string, fs::file_time_type> done;
+    if (!fs::exists(dir)) return done;
+    for (const auto& e : fs::recursive_directory_iterator(dir)) {
+      const std::string name = e.path().string();
+      if (!name.ends_with(".meta.json") || name.find("/.batch/") != std::string::npos) continue;
+      json meta;
+      try {
+        meta = json::parse(read_text(e.path()));
+      } catch (const json::exception&) {
+        continue;
+      }
+      bool all = true;
+      for (const auto& o : meta["outputs"])
+        all = all && fs::exists(dir / (o.get<std::string>() + ".meta.json"));
+      const fs::path out = name.substr(0, name.size() - 10);
+      if (all) done[out.string()] = fs::last_write_time(out);
+    }
+    return done;
+  };
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  while (finished().size() < 6 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  kill(pid, SIGKILL);
+  EXPECT_EQ(wait_exit(pid), 128 + SIGKILL) << "the run ended before it could be killed";
+  const auto before = finished();
+  ASSERT_GE(before.size(), 6u);
+  EXPECT_FALSE(fs::exists(dir / "batch-report.json"));
+
+  const auto r =
+      fabrica({"batch", manifest.string(), "-o", dir.string(), "--jobs", "2", "--resume"},
+              root / "resumed.log");
+  EXPECT_EQ(r.code, 5) << r.log;
+  const auto resumed = outputs(dir), expected = outputs(full);
+  EXPECT_TRUE(resumed == expected);
+  for (const auto& [file, bytes] : resumed)
+    EXPECT_TRUE(expected.count(file) && expected.at(file) == bytes) << file;
+  for (const auto& [file, bytes] : expected) EXPECT_TRUE(resumed.count(file)) << file;
+  for (const auto& [file, time] : before) EXPECT_EQ(fs::last_write_time(file), time) << file;
+  const json report = json::parse(read_text(dir / "batch-report.json"));
+  EXPECT_GE(report["summary"]["skipped"].get<std::size_t>(), before.size() / 2);
+  EXPECT_EQ(report["summary"]["failed"], 6);
+
+  // A second resume redoes nothing but the failed items.
+  EXPECT_EQ(fabrica({"batch", manifest.string(), "-o", dir.string(), "--resume", "--quiet"},
+                    root / "again.log")
+                .code,
+            5);
+  EXPECT_EQ(json::parse(read_text(dir / "batch-report.json"))["summary"]["skipped"], 18);
+}
+
+TEST_F(Batch, DryRunListsTheItemsAsCommandLines) {
+  const auto r =
+      fabrica({"batch", manifest.string(), "--dry-run", "--shard", "0/3"}, root / "dry.log");
+  ASSERT_EQ(r.code, 0) << r.log;
+  EXPECT_NE(r.log.find("# 8 item(s) of 24 (shard 0/3)"), std::string::npos) << r.log;
+  EXPECT_NE(r.log.find("\n3\tfabrica render data/meshes/anatomy/liver/sofa_liver_coarse.obj"),
+            std::string::npos)
+      << r.log;
+  EXPECT_NE(r.log.find("0\tfabrica lines data/meshes/anatomy/liver/sofa_liver_coarse.obj --view "
+                       "anterior --size 256x256 --types contour,suggestive --quiet -o "
+                       "sofa_liver_coarse/lines-anterior.svg"),
+            std::string::npos)
+      << r.log;
+  EXPECT_FALSE(fs::exists(root / "out"));
+}
+
+TEST(BatchInputs, VolumeLabelsCameraFilesAndHatching) {
+  const fs::path root = fabrica::test::temp_dir("batch-volume");
+  fs::create_directory_symlink(fabrica::test::bundled_data(), root / "data");
+  const std::string liver = (root / "data/meshes/anatomy/liver/sofa_liver_coarse.obj").string();
+  ASSERT_EQ(fabrica({"render", liver, "--view", "left", "--size", "64x64", "--save-camera",
+                     (root / "side.json").string(), "-o", (root / "side.png").string(), "--quiet"},
+                    root / "camera.log")
+                .code,
+            0);
+  write_text(root / "m.json",
+             json({{"inputs",
+                    {{{"volume", "data/meshes/volumes/totalseg_example_seg.nii.gz"},
+                      {"labels", {2, 5}},
+                      {"name", "seg"}},
+                     {{"mesh", liver}, {"name", "liver"}}}},
+                   {"views", {"anterior", {{"camera", "side.json"}}}},
+                   {"styles",
+                    {{{"command", "hatch"}, {"formats", {"svg"}}, {"threshold", 0.8}},
+                     {{"command", "lines"}, {"types", "contour"}, {"formats", "seg"}}}},
+                   {"size", {200, 200}}})
+                 .dump());
+  const auto r =
+      fabrica({"batch", (root / "m.json").string(), "-o", (root / "out").string()}, root / "log");
+  // The side camera suits the liver; it may see neither label: those items may fail.
+  ASSERT_TRUE(r.code == 0 || r.code == 5) << r.log;
+  for (const char* out : {"seg-label2/hatch-anterior.svg", "seg-label5/hatch-anterior.svg",
+                          "seg-label2/lines-anterior.seg", "seg-label5/lines-anterior.seg",
+                          "liver/lines-side.seg", "liver/hatch-side.svg"}) {
+    ASSERT_TRUE(fs::exists(root / "out" / out)) << out << "\n" << r.log;
+    const json meta = json::parse(read_text(root / "out" / (std::string(out) + ".meta.json")));
+    if (std::string(out).starts_with("seg"))
+      EXPECT_EQ(meta["input"]["label"], out[9] == '2' ? 2 : 5);
+    else
+      EXPECT_EQ(meta["view"]["camera"]["width"], 64);  // as in the file; --size sets the image
+  }
+  // Each item is what the command makes from the label surface (written as
+  // `fabrica extract` would) or with the camera file.
+  auto by_hand = [&](const std::string& mesh, const std::vector<std::string>& view,
+                     const std::string& made) {
+    std::vector<std::string> args = {"lines",   mesh,      "--size",
+                                     "200x200", "--types", "contour",
+                                     "--quiet", "-o",      (root / "by-hand.seg").string()};
+    args.insert(args.begin() + 2, view.begin(), view.end());
+    const auto x = fabrica(args, root / "hand.log");
+    ASSERT_EQ(x.code, 0) << x.log;
+    EXPECT_EQ(read_text(root / "by-hand.seg"), read_text(root / "out" / made));
+  };
+  by_hand((root / "out/.batch/volumes/seg-label5.ply").string(), {"--view", "anterior"},
+          "seg-label5/lines-anterior.seg");
+  by_hand(liver, {"--camera", (root / "side.json").string()}, "liver/lines-side.seg");
+}
+
+TEST(BatchMemory, TenTimesTheItemsInOneProcessDoNotGrowItsMemory) {
+  const fs::path root = fabrica::test::temp_dir("batch-memory");
+  fs::create_directory_symlink(fabrica::test::bundled_data(), root / "data");
+  long rss[2] = {0, 0};
+  for (int run = 0; run < 2; ++run) {
+    const int views = run == 0 ? 4 : 40;  // 8 and 80 items
+    const fs::path m = root / (run == 0 ? "small.json" : "large.json");
+    write_text(m, json({{"inputs", {"data/meshes/anatomy/liver/sofa_liver2.obj"}},
+                        {"views", {{{"orbit", views}}}},
+                        {"styles",
+                         {{{"command", "lines"}, {"types", "contour,suggestive,ridge"}},
+                          {{"command", "render"}, {"formats", {"png", "svg"}}}}},
+                        {"size", {256, 256}}})
+                      .dump());
+    const pid_t pid = start({"batch", m.string(), "-o", (root / std::to_string(run)).string(),
+                             "--jobs", "1", "--quiet"},
+                            root / "log");
+    ASSERT_EQ(wait_exit(pid, &rss[run]), 0) << read_text(root / "log");
+  }
+  EXPECT_LE(rss[1], rss[0] * 11 / 10) << "8 items: " << rss[0] << " KiB, 80 items: " << rss[1];
+}
+
+TEST(BatchManifest, EveryProblemIsReportedWithItsJsonPathBeforeAnyWork) {
+  const fs::path root = fabrica::test::temp_dir("batch-bad");
+  const json m = {
+      {"inputs", {{{"mesh", "a.off"}, {"colour", "red"}}, {{"glob", "nothing/*.stl"}}}},
+      {"views", {"anterior", "sideways", {{"orbit", 0}}}},
+      {"styles",
+       {{{"command", "lines"}, {"typez", "contour"}},
+        {{"command", "lines"}, {"name", "l2"}, {"types", "contour,wiggles"}, {"smooth", "x"}},
+        {{"command", "render"}, {"formats", {"svg"}}},
+        {{"command", "paint"}},
+        {{"command", "hatch"}, {"view", "left"}, {"draw-ridges", "yes"}}}},
+      {"size", {0, 256}}};
+  write_text(root / "m.json", m.dump());
+  const auto r =
+      fabrica({"batch", (root / "m.json").string(), "-o", (root / "out").string()}, root / "log");
+  EXPECT_EQ(r.code, 2) << r.log;
+  for (const char* path :
+       {"inputs[0].colour", "inputs[1].glob", "views[1]", "views[2].orbit", "styles[0].typez",
+        "styles[1].types", "styles[1].smooth", "styles[2].formats", "styles[3].command",
+        "styles[4].view", "styles[4].draw-ridges", "size"})
+    EXPECT_NE(r.log.find(std::string(path) + ": "), std::string::npos) << path << "\n" << r.log;
+  EXPECT_FALSE(fs::exists(root / "out"));
+
+  write_text(root / "not.json", "{\"inputs\": [");
+  EXPECT_EQ(fabrica({"batch", (root / "not.json").string()}, root / "log2").code, 2);
+  EXPECT_EQ(fabrica({"batch", (root / "m.json").string(), "--shard", "3/3"}, root / "log3").code,
+            2);
+}
+
+TEST(BatchManifest, ShardAutoReadsTheSchedulersEnvironment) {
+  const fs::path root = fabrica::test::temp_dir("batch-auto");
+  fs::create_directory_symlink(fabrica::test::bundled_data(), root / "data");
+  write_text(root / "m.json", json({{"inputs", {"data/meshes/anatomy/liver/sofa_liver_coarse.obj"}},
+                                    {"views", {"anterior", "left", "right", "superior"}},
+                                    {"styles", {{{"command", "lines"}}}}})
+                                  .dump());
+  auto dry = [&](const std::vector<std::pair<const char*, const char*>>& env,
+                 std::vector<std::string> extra) {
+    for (const auto& [k, v] : env) setenv(k, v, 1);
+    std::vector<std::string> args = {"batch", (root / "m.json").string(), "--dry-run", "--shard",
+                                     "auto"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const auto r = fabrica(args, root / "log");
+    for (const auto& [k, v] : env) unsetenv(k);
+    return r;
+  };
+  auto r = dry(
+      {{"SLURM_ARRAY_TASK_ID", "5"}, {"SLURM_ARRAY_TASK_MIN", "4"}, {"SLURM_ARRAY_TASK_MAX", "6"}},
+      {});
+  EXPECT_EQ(r.code, 0) << r.log;
+  EXPECT_NE(r.log.find("shard 1/3"), std::string::npos) << r.log;
+  EXPECT_NE(r.log.find("\n1\tfabrica lines"), std::string::npos) << r.log;
+  r = dry({{"JOB_COMPLETION_INDEX", "1"}}, {"--shard-count", "2"});
+  EXPECT_NE(r.log.find("shard 1/2"), std::string::npos) << r.log;
+  EXPECT_NE(r.log.find("\n3\tfabrica lines"), std::string::npos) << r.log;
+  EXPECT_EQ(dry({{"JOB_COMPLETION_INDEX", "1"}}, {}).code, 2);
+  EXPECT_EQ(dry({}, {}).code, 2);
+}
+
+}  // namespace
