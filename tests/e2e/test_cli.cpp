@@ -484,6 +484,11 @@ const std::vector<BadMesh>& bad_meshes() {
          write_bytes(d / "comps.vtp", vtp_with("NumberOfPoints=\"4\"", "4294967295", "ascii"));
          return d / "comps.vtp";
        }},
+      {"vtp_points_with_six_components",  // fuzz_vtp finding: VTK leaked its arrays
+       [](const fs::path& d) {
+         write_bytes(d / "six.vtp", vtp_with("NumberOfPoints=\"4\"", "6", "ascii"));
+         return d / "six.vtp";
+       }},
       {"vtp_huge_point_count",
        [](const fs::path& d) {
          write_bytes(d / "huge.vtp", vtp_with("NumberOfPoints=\"900000000\"", "3", "ascii"));

@@ -286,7 +286,14 @@ class VtpChecker {
         for (const char* key : {"NumberOfPoints", "NumberOfVerts", "NumberOfLines",
                                 "NumberOfStrips", "NumberOfPolys"})
           if (const auto v = attribute(tag, key)) count(*v, key, 1.0);
+      } else if (tag.starts_with("Points")) {
+        in_points_ = true;
+      } else if (tag.starts_with("/Points")) {
+        in_points_ = false;
       } else if (tag.starts_with("DataArray")) {
+        // Points have 3 components (VTK leaks its arrays when they do not).
+        if (in_points_ && attribute(tag, "NumberOfComponents").value_or("1") != "3")
+          bad("the points' DataArray must have NumberOfComponents=\"3\"");
         data_array(tag, xml, gt + 1);
       }
     }
@@ -402,6 +409,7 @@ class VtpChecker {
   std::string_view appended_;
   bool appended_base64_ = false;
   bool compressed_ = false;
+  bool in_points_ = false;
   std::size_t header_bytes_ = 4;
 };
 
