@@ -621,6 +621,8 @@ TEST(VolumeErrors, HeadersDeclaringTooMuchOrAbsurdGeometryAreRefusedWhenRead) {
   expect_input_error(dir / "huge.nrrd", "voxels");
   test::write_bytes(dir / "gz.nrrd", nrrd("", "1000 1000 1000", "gzip"));
   expect_input_error(dir / "gz.nrrd", "compressed");
+  test::write_bytes(dir / "comma.nrrd", nrrd("spacings: 1 , 1\n"));  // fuzz_nrrd finding
+  expect_input_error(dir / "comma.nrrd", "spacings");
   test::write_bytes(dir / "spacing.nrrd", nrrd("spacings: 1e23 1 1\n"));
   expect_input_error(dir / "spacing.nrrd", "spacing");
   test::write_bytes(dir / "origin.nrrd",

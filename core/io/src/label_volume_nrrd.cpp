@@ -284,7 +284,15 @@ LabelVolume read_nrrd(const std::filesystem::path& path) {
                          " values but dimension is " + std::to_string(dimension));
       for (int a = 0; a < 3; ++a) {
         const std::string& t = tokens[spatial_axes[a]];
-        g.spacing[a] = lowercase(t) == "nan" ? 1.0 : parse_numbers(t, what, "spacings")[0];
+        if (lowercase(t) == "nan") {
+          g.spacing[a] = 1.0;
+          continue;
+        }
+        const std::vector<double> v = parse_numbers(t, what, "spacings");
+        if (v.size() != 1)  // "," parses as no number (fuzz_nrrd finding: read past the end)
+          throw InputError(what + ": 'spacings' should hold one number per axis, reads '" + t +
+                           "'");
+        g.spacing[a] = v[0];
       }
     }
     volume.orientation_source =

@@ -426,7 +426,8 @@ std::vector<LabelInfo> read_label_names(const std::filesystem::path& path) {
       info.name = tokens[1];
       check_utf8_name(info.name, what, "the name on line " + std::to_string(line_number));
       for (std::size_t k = 2; k < tokens.size() && rgb.size() < 3; ++k)
-        rgb.push_back(parse_numbers(tokens[k], what, "line " + std::to_string(line_number))[0]);
+        for (double c : parse_numbers(tokens[k], what, "line " + std::to_string(line_number)))
+          if (rgb.size() < 3) rgb.push_back(c);  // "," holds no number: nothing to take
     }
     if (rgb.size() == 3) {
       const bool bytes = rgb[0] > 1.0 || rgb[1] > 1.0 || rgb[2] > 1.0;
