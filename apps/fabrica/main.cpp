@@ -2,14 +2,58 @@
 //   0 success, 1 internal error, 2 bad input or arguments,
 //   3 output could not be written, 4 needed facility unavailable,
 //   5 a batch finished but some items failed.
+#include <tbb/global_control.h>
+
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
+#include <memory>
 #include <string>
 
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "fabrica/core/atomic_file.hpp"
 #include "fabrica/core/error.hpp"
+
+namespace {
+
+/// Options every command gets and checks every command shares: --threads N
+/// (unless the command has its own), finite numbers for every
+/// floating-point option, positive stroke widths.
+void add_common_options(CLI::App& app, int& threads) {
+  const CLI::Validator finite(
+      [](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double v = std::strtod(text.c_str(), &end);
+        if (end == text.c_str() || !std::isfinite(v))
+          return "expected a finite number, got \"" + text + "\"";
+        return {};
+      },
+      "FINITE", "finite");
+  const CLI::Validator positive(
+      [](std::string& text) -> std::string {
+        if (!(std::strtod(text.c_str(), nullptr) > 0.0))
+          return "expected a positive number, got \"" + text + "\"";
+        return {};
+      },
+      "POSITIVE", "positive");
+  for (CLI::App* sub : app.get_subcommands({})) {
+    for (CLI::Option* option : sub->get_options()) {
+      if (option->get_type_name() != "FLOAT") continue;
+      option->check(finite);
+      for (const char* width : {"--width", "--stroke-width", "--line-width"})
+        if (option->check_lname(std::string(width).substr(2))) option->check(positive);
+    }
+    if (sub->get_option_no_throw("--threads") == nullptr)
+      sub->add_option("--threads", threads,
+                      "Worker threads (0 = all cores); the output does not depend on it")
+          ->check(CLI::Range(0, 4096));
+  }
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -38,6 +82,8 @@ int main(int argc, char** argv) {
 #ifdef FABRICA_HAVE_CMD_BATCH
   fabrica::cli::add_batch_command(app, action);
 #endif
+  int threads = 0;
+  add_common_options(app, threads);
   if (argc < 2) {  // no command: the usage, on stderr, as a bad-arguments error
     std::fputs(app.help().c_str(), stderr);
     return 2;
@@ -51,13 +97,25 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    app.exit(e);
+    // One line: the "did you mean" for a misspelt command or option, else
+    // the parser's own message.
     const std::string hint = fabrica::cli::parse_error_hint(app, argc, argv);
-    if (!hint.empty()) std::fprintf(stderr, "fabrica: %s\n", hint.c_str());
+    std::fprintf(stderr, "fabrica: %s (see fabrica --help)\n",
+                 hint.empty() ? e.what() : hint.c_str());
     return 2;
   }
   try {
-    return action ? action() : 0;
+    std::unique_ptr<tbb::global_control> parallelism;
+    if (threads > 0)
+      parallelism = std::make_unique<tbb::global_control>(
+          tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+    // A command writes all its outputs or none (a batch commits per item).
+    fabrica::StagedOutputs staged;
+    for (const CLI::App* command : app.get_subcommands())
+      if (command->get_name() == "batch") staged.commit();
+    const int code = action ? action() : 0;
+    staged.commit();
+    return code;
   } catch (const fabrica::Error& e) {
     std::fprintf(stderr, "fabrica: %s\n", e.what());
     return e.exit_code();

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cerrno>
 #include <cstring>
 #include <fstream>
 #include <mutex>
@@ -82,6 +83,8 @@ class TemporaryGuard {
   TemporarySlot* slot_ = nullptr;
 };
 
+thread_local StagedOutputs* t_staging = nullptr;
+
 void rename_into_place(const std::filesystem::path& tmp, const std::filesystem::path& path) {
   std::error_code ec;
   std::filesystem::rename(tmp, path, ec);
@@ -99,8 +102,13 @@ void write_path_atomically(const std::filesystem::path& path,
   const auto parent = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
   if (!std::filesystem::is_directory(parent))
     throw OutputError(path.string() + ": cannot write: folder " + parent.string() + " does not exist");
+  // Checked now rather than at the rename, which may wait for the other
+  // outputs of the command (StagedOutputs).
+  if (std::filesystem::is_directory(path))
+    throw OutputError(path.string() + ": cannot write: it is a folder; choose a file name");
+  remove_stale_temporaries(path);
   const auto tmp = temporary_beside(path);
-  const TemporaryGuard guard(tmp);
+  auto guard = std::make_unique<TemporaryGuard>(tmp);
   try {
     write(tmp);
   } catch (...) {
@@ -109,7 +117,87 @@ void write_path_atomically(const std::filesystem::path& path,
     throw;
   }
   if (!std::filesystem::exists(tmp)) throw OutputError(path.string() + ": writer produced no file");
+  if (StagedOutputs* staging = StagedOutputs::current()) {
+    guard.reset();  // the staging registers it again for the time it waits
+    staging->stage(tmp, path);
+    return;
+  }
   rename_into_place(tmp, path);
+}
+
+struct StagedOutputs::Entry {
+  std::filesystem::path tmp, target;
+  TemporaryGuard guard;
+  Entry(std::filesystem::path t, std::filesystem::path p)
+      : tmp(std::move(t)), target(std::move(p)), guard(tmp) {}
+};
+
+StagedOutputs::StagedOutputs() : previous_(t_staging) {
+  t_staging = this;
+}
+
+StagedOutputs::~StagedOutputs() {
+  t_staging = previous_;
+  for (const auto& e : entries_) {
+    std::error_code ec;
+    std::filesystem::remove(e->tmp, ec);
+  }
+}
+
+StagedOutputs* StagedOutputs::current() {
+  return t_staging;
+}
+
+void StagedOutputs::stage(const std::filesystem::path& tmp, const std::filesystem::path& target) {
+  try {
+    entries_.push_back(std::make_unique<Entry>(tmp, target));
+  } catch (...) {
+    std::error_code ec;
+    std::filesystem::remove(tmp, ec);
+    throw;
+  }
+}
+
+void StagedOutputs::commit() {
+  t_staging = previous_;
+  std::vector<std::unique_ptr<Entry>> entries;
+  entries.swap(entries_);
+  for (std::size_t k = 0; k < entries.size(); ++k) {
+    try {
+      rename_into_place(entries[k]->tmp, entries[k]->target);
+    } catch (...) {
+      for (std::size_t j = k + 1; j < entries.size(); ++j) {
+        std::error_code ec;
+        std::filesystem::remove(entries[j]->tmp, ec);
+      }
+      throw;
+    }
+  }
+}
+
+void remove_stale_temporaries(const std::filesystem::path& path) {
+  const auto parent = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
+  const std::string prefix = path.filename().string() + ".tmp-";
+  std::error_code ec;
+  std::filesystem::directory_iterator it(parent, ec), end;
+  for (; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
+    // NAME.tmp-PID-N: a PID of digits, a dash, a counter of digits.
+    const std::size_t dash = name.find('-', prefix.size());
+    if (dash == std::string::npos || dash == prefix.size() || dash + 1 >= name.size()) continue;
+    const std::string pid_text = name.substr(prefix.size(), dash - prefix.size());
+    const std::string counter = name.substr(dash + 1);
+    auto digits = [](const std::string& t) {
+      return !t.empty() && t.size() <= 10 && t.find_first_not_of("0123456789") == std::string::npos;
+    };
+    if (!digits(pid_text) || !digits(counter)) continue;
+    const long pid = std::stol(pid_text);
+    if (pid <= 0 || pid == static_cast<long>(::getpid())) continue;
+    if (::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH) continue;  // still running
+    std::error_code ignored;
+    std::filesystem::remove(it->path(), ignored);
+  }
 }
 
 void write_file_atomically(const std::filesystem::path& path,

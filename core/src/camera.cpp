@@ -8,6 +8,7 @@
 
 #include "fabrica/core/atomic_file.hpp"
 #include "fabrica/core/error.hpp"
+#include "fabrica/core/input_file.hpp"
 
 namespace fabrica {
 
@@ -45,10 +46,13 @@ void validate_camera(const Camera& c, const std::string& what) {
   const Vec3 f = (c.center - c.eye) / distance;
   if (f.cross(c.up.normalized()).norm() < 1e-6)
     throw InputError(what + ": up vector is parallel to the viewing direction; choose another up");
-  if (!(c.fov_deg > 0.0 && c.fov_deg < 180.0))
-    throw InputError(what + ": fov_deg must be between 0 and 180 degrees (got " + std::to_string(c.fov_deg) + ")");
-  if (c.width <= 0 || c.height <= 0)
-    throw InputError(what + ": width and height must be positive pixel counts");
+  if (!(c.fov_deg >= kMinFovDeg && c.fov_deg < 180.0))
+    throw InputError(what + ": fov_deg must be at least " + std::to_string(kMinFovDeg) +
+                     " and below 180 degrees (got " + std::to_string(c.fov_deg) + ")");
+  if (c.width <= 0 || c.height <= 0 || c.width > kMaxImageSide || c.height > kMaxImageSide)
+    throw InputError(what + ": width and height must be pixel counts from 1 to " +
+                     std::to_string(kMaxImageSide) + " (got " + std::to_string(c.width) + "x" +
+                     std::to_string(c.height) + ")");
 }
 
 ProjectedPoint project(const Camera& c, const Vec3& p) {
@@ -156,11 +160,7 @@ nlohmann::json camera_to_json(const Camera& c) {
 }
 
 Camera read_camera(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path.string() + ": cannot open camera file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  std::string text = ss.str();
+  std::string text = read_input_file(path, path.string() + " (camera file)", kMaxJsonBytes);
   // A reference .seg file: the first line is "# {json}".
   if (text.rfind("# ", 0) == 0) text = text.substr(2, text.find('\n') - 2);
   nlohmann::json j;

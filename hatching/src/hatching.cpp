@@ -327,7 +327,13 @@ StrokeSet hatch(const Surface& surface, const Camera& camera, const IntensityFie
   result.width = camera.width;
   result.height = camera.height;
   const double side = std::max(camera.width, camera.height);
-  const int grid_depth = options.grid_depth >= 0 ? options.grid_depth : default_grid_depth(side);
+  int grid_depth = options.grid_depth >= 0 ? options.grid_depth : default_grid_depth(side);
+  // The automatic depth stays within the grid's memory bound (it is 29 at
+  // 16384 px, whose grid would need 4 GiB); an explicit one is checked by the grid.
+  if (options.grid_depth < 0)
+    while (grid_depth > 0 && ProximityGrid::cell_count(camera.width, camera.height, grid_depth) >
+                                 ProximityGrid::kMaxCells)
+      --grid_depth;
   const int seed_depth = std::min(
       grid_depth, options.seed_depth >= 0 ? options.seed_depth : std::max(0, grid_depth - 2));
   result.grid_depth = grid_depth;

@@ -136,8 +136,9 @@ IntensityRidges detect_intensity_ridges(const Surface& surface, const IntensityF
       if (tri[k] == v1) c1 = k;
       if (tri[k] == v2) c2 = k;
     }
-    if (c1 < 0 || c2 < 0) return false;
+    if (c1 < 0 || c2 < 0 || c1 == c2) return false;
     const int c0 = 3 - c1 - c2;
+    if (c0 < 0 || c0 > 2) return false;  // a repeated vertex
     // Rates of the barycentric coordinates along dir: (n × e_k)·d / (2A) =
     // e_k · (d × n) / (2A), e_k the edge opposite corner k (the normal part
     // of dir drops out).
@@ -236,7 +237,9 @@ IntensityRidges detect_intensity_ridges(const Surface& surface, const IntensityF
     std::array<Vec3, 3> where;
     int count = 0;
     for (int k = 0; k < 3; ++k) {
-      const std::size_t e = static_cast<std::size_t>(topology.face_edge(f, k));
+      const std::int32_t edge = topology.face_edge(f, k);
+      if (edge < 0) continue;  // a face with a repeated vertex has no edge there
+      const auto e = static_cast<std::size_t>(edge);
       const double t = edge_t[e];
       if (t < 0.0) continue;
       const std::int32_t v1 = topology.edge(e)[0];

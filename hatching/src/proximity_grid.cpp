@@ -2,6 +2,7 @@
 #include "fabrica/hatching/proximity_grid.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
@@ -14,7 +15,68 @@ namespace {
 
 constexpr int kMarkOffset = 2;  // queries at level d look at marks of level d + 2
 
+Vec2 lattice_of(double side, const Vec2& center, int level, const Vec2& pixel) {
+  const double h = std::ldexp(side, -(level / 2));
+  const Vec2 q = (pixel - center) / h;
+  if (level % 2 == 0) return Vec2(q.x() + 0.5, q.y() + 0.5);
+  return Vec2(q.x() + q.y() + 0.5, q.x() - q.y() + 0.5);
+}
+
+/// Frame index of the first cell and cell counts of `level` covering the image.
+std::array<int, 4> level_extent(int width, int height, int level) {
+  const double side = static_cast<double>(std::max(width, height));
+  const Vec2 center(0.5 * width, 0.5 * height);
+  double lo_x = std::numeric_limits<double>::max(), hi_x = -lo_x, lo_y = lo_x, hi_y = -lo_x;
+  for (const Vec2& corner : {Vec2(0, 0), Vec2(width, 0), Vec2(0, height), Vec2(width, height)}) {
+    const Vec2 u = lattice_of(side, center, level, corner);
+    lo_x = std::min(lo_x, u.x());
+    hi_x = std::max(hi_x, u.x());
+    lo_y = std::min(lo_y, u.y());
+    hi_y = std::max(hi_y, u.y());
+  }
+  const int i0 = static_cast<int>(std::floor(lo_x)), j0 = static_cast<int>(std::floor(lo_y));
+  return {i0, j0, static_cast<int>(std::floor(hi_x)) - i0 + 1,
+          static_cast<int>(std::floor(hi_y)) - j0 + 1};
+}
+
+/// Clips the segment a-b to the box [lo, hi] (Liang-Barsky); false when
+/// nothing of it is inside.
+bool clip_to_box(Vec2& a, Vec2& b, const Vec2& lo, const Vec2& hi) {
+  double t0 = 0.0, t1 = 1.0;
+  const Vec2 d = b - a;
+  for (int axis = 0; axis < 2; ++axis) {
+    const double p[2] = {-d[axis], d[axis]};
+    const double q[2] = {a[axis] - lo[axis], hi[axis] - a[axis]};
+    for (int k = 0; k < 2; ++k) {
+      if (p[k] == 0.0) {
+        if (q[k] < 0.0) return false;
+        continue;
+      }
+      const double r = q[k] / p[k];
+      if (p[k] < 0.0)
+        t0 = std::max(t0, r);
+      else
+        t1 = std::min(t1, r);
+    }
+  }
+  if (t0 > t1) return false;
+  const Vec2 start = a;
+  a = start + t0 * d;
+  b = start + t1 * d;
+  return true;
+}
+
 }  // namespace
+
+std::size_t ProximityGrid::cell_count(int width, int height, int max_level) {
+  if (width <= 0 || height <= 0 || max_level < 0) return 0;
+  std::size_t total = 0;
+  for (int d = 0; d <= max_level + kMarkOffset; ++d) {
+    const auto e = level_extent(width, height, d);
+    total += static_cast<std::size_t>(e[2]) * static_cast<std::size_t>(e[3]);
+  }
+  return total;
+}
 
 ProximityGrid::ProximityGrid(int width, int height, int max_level)
     : width_(width), height_(height), max_level_(max_level) {
@@ -24,24 +86,23 @@ ProximityGrid::ProximityGrid(int width, int height, int max_level)
   if (max_level < 0 || max_level > 40)
     throw InputError("proximity grid: grid depth must be in [0, 40] (got " +
                      std::to_string(max_level) + ")");
+  if (cell_count(width, height, max_level) > kMaxCells)
+    throw InputError("proximity grid: grid depth " + std::to_string(max_level) + " at " +
+                     std::to_string(width) + "x" + std::to_string(height) + " needs " +
+                     std::to_string(cell_count(width, height, max_level) >> 20) +
+                     " MiB, more than the " + std::to_string(kMaxCells >> 20) +
+                     " MiB allowed; use a smaller --grid-depth");
   side_ = static_cast<double>(std::max(width, height));
   center_ = Vec2(0.5 * width, 0.5 * height);
   const int count = max_level + kMarkOffset + 1;
   levels_.resize(static_cast<std::size_t>(count));
   for (int d = 0; d < count; ++d) {
     Level& level = levels_[static_cast<std::size_t>(d)];
-    double lo_x = std::numeric_limits<double>::max(), hi_x = -lo_x, lo_y = lo_x, hi_y = -lo_x;
-    for (const Vec2& corner : {Vec2(0, 0), Vec2(width, 0), Vec2(0, height), Vec2(width, height)}) {
-      const Vec2 u = to_lattice(d, corner);
-      lo_x = std::min(lo_x, u.x());
-      hi_x = std::max(hi_x, u.x());
-      lo_y = std::min(lo_y, u.y());
-      hi_y = std::max(hi_y, u.y());
-    }
-    level.i0 = static_cast<int>(std::floor(lo_x));
-    level.j0 = static_cast<int>(std::floor(lo_y));
-    level.nx = static_cast<int>(std::floor(hi_x)) - level.i0 + 1;
-    level.ny = static_cast<int>(std::floor(hi_y)) - level.j0 + 1;
+    const auto e = level_extent(width, height, d);
+    level.i0 = e[0];
+    level.j0 = e[1];
+    level.nx = e[2];
+    level.ny = e[3];
     level.marks.assign(static_cast<std::size_t>(level.nx) * static_cast<std::size_t>(level.ny), 0);
   }
 }
@@ -51,10 +112,14 @@ double ProximityGrid::cell_size(int level) const {
 }
 
 Vec2 ProximityGrid::to_lattice(int level, const Vec2& pixel) const {
-  const double h = std::ldexp(side_, -(level / 2));
-  const Vec2 q = (pixel - center_) / h;
-  if (level % 2 == 0) return Vec2(q.x() + 0.5, q.y() + 0.5);
-  return Vec2(q.x() + q.y() + 0.5, q.x() - q.y() + 0.5);
+  return lattice_of(side_, center_, level, pixel);
+}
+
+bool ProximityGrid::near_image(const Vec2& pixel) const {
+  // Farther out, lattice indices would not fit an int (a camera zoomed far
+  // in projects the mesh to enormous pixel coordinates): nothing is marked there.
+  return pixel.allFinite() && pixel.x() > -side_ && pixel.y() > -side_ &&
+         pixel.x() < width_ + side_ && pixel.y() < height_ + side_;
 }
 
 Vec2 ProximityGrid::from_lattice(int level, const Vec2& lattice) const {
@@ -116,8 +181,13 @@ void ProximityGrid::mark_segment_level(int level_index, const Vec2& a_px, const 
   }
 }
 
-void ProximityGrid::mark_segment(const Vec2& a, const Vec2& b) {
-  if (!a.allFinite() || !b.allFinite()) return;
+void ProximityGrid::mark_segment(const Vec2& a_px, const Vec2& b_px) {
+  if (!a_px.allFinite() || !b_px.allFinite()) return;
+  // Only the part near the image is marked (queries farther out see nothing).
+  Vec2 a = a_px, b = b_px;
+  if (!clip_to_box(a, b, Vec2(-0.5 * side_, -0.5 * side_),
+                   Vec2(width_ + 0.5 * side_, height_ + 0.5 * side_)))
+    return;
   for (int d = 0; d < static_cast<int>(levels_.size()); ++d) mark_segment_level(d, a, b);
 }
 
@@ -127,6 +197,7 @@ void ProximityGrid::mark_polyline(const std::vector<Vec2>& points) {
 }
 
 bool ProximityGrid::is_marked(int level, const Vec2& pixel) const {
+  if (!near_image(pixel)) return false;
   level = std::clamp(level, 0, static_cast<int>(levels_.size()) - 1);
   const Vec2 u = to_lattice(level, pixel);
   return marked_cell(levels_[static_cast<std::size_t>(level)], static_cast<int>(std::floor(u.x())),
@@ -134,6 +205,7 @@ bool ProximityGrid::is_marked(int level, const Vec2& pixel) const {
 }
 
 bool ProximityGrid::blocked(const Vec2& pixel, int level) const {
+  if (!near_image(pixel)) return false;
   level = std::clamp(level, 0, max_level_);
   const int fine = level + kMarkOffset;
   const Level& l = levels_[static_cast<std::size_t>(fine)];

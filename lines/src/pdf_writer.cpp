@@ -43,6 +43,9 @@ void write_pdf(const std::filesystem::path& path, const LineSet& lines, const Ca
   // One pixel = one PDF point (1/72 inch).
   cairo_surface_t* surface =
       cairo_pdf_surface_create_for_stream(append_to_string, &data, camera.width, camera.height);
+  // No creation date (cairo writes the current time): the same lines give
+  // the same bytes, on every run and at any thread count (issue 15).
+  cairo_pdf_surface_set_metadata(surface, CAIRO_PDF_METADATA_CREATE_DATE, "");
   cairo_t* cr = cairo_create(surface);
   cairo_set_line_cap(cr, CAIRO_LINE_CAP_ROUND);
   cairo_set_line_join(cr, CAIRO_LINE_JOIN_ROUND);

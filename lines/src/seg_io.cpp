@@ -6,6 +6,7 @@
 
 #include "fabrica/core/atomic_file.hpp"
 #include "fabrica/core/error.hpp"
+#include "fabrica/core/input_file.hpp"
 
 namespace fabrica {
 
@@ -55,6 +56,7 @@ SegFile read_seg(std::istream& in, const std::string& what) {
 }
 
 SegFile read_seg_file(const std::filesystem::path& path) {
+  require_regular_file(path, path.string() + " (.seg file)");
   std::ifstream in(path);
   if (!in) throw InputError(path.string() + ": cannot open .seg file");
   return read_seg(in, path.string());

@@ -10,6 +10,7 @@
 
 #include "fabrica/core/atomic_file.hpp"
 #include "fabrica/core/error.hpp"
+#include "fabrica/core/input_file.hpp"
 #include "fabrica/core/suggest.hpp"
 
 namespace fabrica::render {
@@ -433,11 +434,10 @@ nlohmann::json scene_spec_to_json(const SceneSpec& spec) {
 }
 
 SceneSpec read_scene_spec(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path.string() + ": cannot open scene file");
+  const std::string text = read_input_file(path, path.string() + " (scene file)", kMaxJsonBytes);
   nlohmann::json j;
   try {
-    in >> j;
+    j = nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception& e) {
     throw InputError(path.string() + ": not valid JSON (" + e.what() + ")");
   }

@@ -137,3 +137,25 @@ TEST(Camera, AnatomicalViewsLookFromTheRightSideInLpsAndRas) {
   EXPECT_FALSE(parse_anatomical_view("sideways").has_value());
   EXPECT_EQ(parse_anatomical_view("posterior"), AnatomicalView::posterior);
 }
+
+TEST(Camera, RefusesImagesLargerThanAnyCommandDrawsAndNearZeroFieldsOfView) {
+  Camera c;
+  c.eye = {0, 0, 10};
+  c.center = {0, 0, 0};
+  c.up = {0, 1, 0};
+  c.width = c.height = kMaxImageSide;
+  EXPECT_NO_THROW(validate_camera(c));
+  c.width = 100000;
+  EXPECT_THROW(validate_camera(c), InputError);
+  c.width = 512;
+  c.fov_deg = 1e-9;  // hatching ran a minute, then crashed (issue 15)
+  EXPECT_THROW(validate_camera(c), InputError);
+  c.fov_deg = kMinFovDeg;
+  EXPECT_NO_THROW(validate_camera(c));
+}
+
+TEST(Camera, ACameraFileThatIsNotARegularFileIsBadInput) {
+  const auto dir = test::temp_dir("camera-fifo");
+  EXPECT_THROW(read_camera(dir), InputError);  // a folder
+  EXPECT_THROW(read_camera("/dev/zero"), InputError);
+}

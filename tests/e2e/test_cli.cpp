@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -333,6 +334,22 @@ std::string truncated_ply() {
 const char* kTetraObj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
 const char* kTetraOffBody = "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
 
+/// A small .vtp (a tetrahedron) with `piece` as the Piece's point count and
+/// `components` components of its points, in `format` (ascii or binary).
+std::string vtp_with(const std::string& piece, const std::string& components,
+                     const std::string& format) {
+  const std::string points = format == "binary" ? "AAAAAA==" : "0 0 0 1 0 0 0 1 0 0 0 1";
+  return "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"0.1\" "
+         "byte_order=\"LittleEndian\">\n<PolyData>\n<Piece " +
+         piece +
+         " NumberOfPolys=\"1\">\n<Points>\n<DataArray type=\"Float32\" "
+         "NumberOfComponents=\"" +
+         components + "\" format=\"" + format + "\">\n" + points +
+         "\n</DataArray>\n</Points>\n<Polys>\n<DataArray type=\"Int32\" Name=\"connectivity\" "
+         "format=\"ascii\">0 1 2</DataArray>\n<DataArray type=\"Int32\" Name=\"offsets\" "
+         "format=\"ascii\">3</DataArray>\n</Polys>\n</Piece>\n</PolyData>\n</VTKFile>\n";
+}
+
 struct BadMesh {
   std::string name;
   std::function<fs::path(const fs::path& dir)> make;  ///< creates the file, returns its path
@@ -449,6 +466,65 @@ const std::vector<BadMesh>& bad_meshes() {
        [](const fs::path& d) {
          fs::create_directories(d / "folder.stl");
          return d / "folder.stl";
+       }},
+      // Issue 15's adversarial findings: not a regular file, VTP counts VTK
+      // would trust, headers declaring billions of elements, NaN coordinates.
+      {"fifo",
+       [](const fs::path& d) {
+         ::mkfifo((d / "pipe.obj").c_str(), 0644);
+         return d / "pipe.obj";
+       }},
+      {"vtp_negative_point_count",
+       [](const fs::path& d) {
+         write_bytes(d / "neg.vtp", vtp_with("NumberOfPoints=\"-1\"", "3", "binary"));
+         return d / "neg.vtp";
+       }},
+      {"vtp_huge_component_count",
+       [](const fs::path& d) {
+         write_bytes(d / "comps.vtp", vtp_with("NumberOfPoints=\"4\"", "4294967295", "ascii"));
+         return d / "comps.vtp";
+       }},
+      {"vtp_points_with_six_components",  // fuzz_vtp finding: VTK leaked its arrays
+       [](const fs::path& d) {
+         write_bytes(d / "six.vtp", vtp_with("NumberOfPoints=\"4\"", "6", "ascii"));
+         return d / "six.vtp";
+       }},
+      {"vtp_huge_point_count",
+       [](const fs::path& d) {
+         write_bytes(d / "huge.vtp", vtp_with("NumberOfPoints=\"900000000\"", "3", "ascii"));
+         return d / "huge.vtp";
+       }},
+      {"ply_billions_of_vertices",
+       [](const fs::path& d) {
+         write_bytes(d / "big.ply",
+                     "ply\nformat ascii 1.0\nelement vertex 3000000000\nproperty float x\n"
+                     "property float y\nproperty float z\nelement face 1\n"
+                     "property list uchar int vertex_indices\nend_header\n0 0 0\n");
+         return d / "big.ply";
+       }},
+      {"off_billions_of_faces",
+       [](const fs::path& d) {
+         write_bytes(d / "big.off", std::string("OFF\n4 4000000000 0\n") + kTetraOffBody);
+         return d / "big.off";
+       }},
+      {"vtk_billions_of_points",
+       [](const fs::path& d) {
+         write_bytes(d / "big.vtk",
+                     "# vtk DataFile Version 3.0\nbig\nBINARY\nDATASET POLYDATA\n"
+                     "POINTS 2000000000 float\n");
+         return d / "big.vtk";
+       }},
+      {"stl_billions_of_triangles",
+       [](const fs::path& d) {
+         write_bytes(d / "big.stl", truncated_stl("binary", 4000000000u, 2));
+         return d / "big.stl";
+       }},
+      {"nan_coordinates",
+       [](const fs::path& d) {
+         write_bytes(d / "nan.obj",
+                     "v 0 0 0\nv nan 0 0\nv 0 1 0\nv 0 0 1\n"
+                     "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+         return d / "nan.obj";
        }},
   };
   return cases;
@@ -593,6 +669,22 @@ const std::vector<std::pair<std::string, std::string>>& awkward_meshes() {
       {"tiny_coordinates",
        "v 0 0 0\nv 1e-300 0 0\nv 0 1e-300 0\nv 0 0 1e-300\n"
        "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"},
+      // A face with a repeated vertex (read out of bounds in hatching's
+      // intensity ridges before issue 15), slivers, coincident vertices, an
+      // open surface, many components.
+      {"repeated_vertex_face",
+       "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\nf 1 1 2\n"},
+      {"slivers",
+       "v 0 0 0\nv 1 0 0\nv 0.5 1e-9 0\nv 0.5 0.5 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n"},
+      {"coincident_vertices",
+       "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 1 0 0\nv 0 1 0\n"
+       "f 1 3 2\nf 1 5 4\nf 1 4 6\nf 2 3 4\n"},
+      {"open_surface", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0.2\nf 1 2 3\nf 2 4 3\n"},
+      {"many_components",
+       "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 3 0 0\nv 4 0 0\nv 3 1 0\nv 3 0 1\n"
+       "v 6 0 0\nv 7 0 0\nv 6 1 0\nv 6 0 1\n"
+       "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\nf 5 7 6\nf 5 6 8\nf 5 8 7\nf 6 7 8\n"
+       "f 9 11 10\nf 9 10 12\nf 9 12 11\nf 10 11 12\n"},
   };
   return cases;
 }
@@ -977,8 +1069,16 @@ TEST_P(Drawing, BadCameraFileExits2) {
   write_bytes(dir / "broken.json", "{ \"eye\": [0, 0, ");
   write_bytes(dir / "same.json", R"({"eye": [1, 2, 3], "center": [1, 2, 3], "up": [0, 0, 1]})");
   write_bytes(dir / "words.json", R"({"eye": "front", "center": [0, 0, 0]})");
+  // Issue 15: a field of view so narrow that image-space work explodes, an
+  // image larger than any command draws, a camera that is not a file.
+  write_bytes(dir / "narrow.json",
+              R"({"eye": [0, 0, 100], "center": [0, 0, 0], "up": [0, 1, 0], "fov_deg": 1e-9})");
+  write_bytes(dir / "huge.json", R"({"eye": [0, 0, 100], "center": [0, 0, 0], "up": [0, 1, 0],
+                                     "width": 100000, "height": 100000})");
+  ::mkfifo((dir / "fifo.json").c_str(), 0644);
   for (const fs::path& camera :
-       {dir / "broken.json", dir / "same.json", dir / "words.json", dir / "missing.json"}) {
+       {dir / "broken.json", dir / "same.json", dir / "words.json", dir / "missing.json",
+        dir / "narrow.json", dir / "huge.json", dir / "fifo.json"}) {
     const Outcome r = run_fabrica({cmd, aneurysm().string(), "-o",
                                    (out_dir / ("x" + output_extension(cmd))).string(), "--camera",
                                    camera.string()});
@@ -1262,6 +1362,154 @@ TEST(Docs, EveryCommandTheReadmeShowsExists) {
   for (const auto& c : shown)
     EXPECT_TRUE(has_command(c)) << "README.md shows `fabrica " << c
                                 << "`, which this build does not have";
+}
+
+// ------------------------------------------------- hardening (issue 15)
+
+/// A 2x2x2 ASCII NRRD label volume with `extra` header lines.
+std::string small_nrrd(const std::string& extra, const std::string& sizes = "2 2 2",
+                       const std::string& spacings = "1 1 1") {
+  return "NRRD0004\ntype: uint8\ndimension: 3\nsizes: " + sizes + "\nspacings: " + spacings +
+         "\nencoding: ascii\n" + extra + "\n0 1 0 1 0 1 0 1\n";
+}
+
+TEST(Hardening, DefectiveVolumeHeadersExit2NamingTheInputAndWriteNothing) {
+  if (!has_command("extract")) GTEST_SKIP() << "no extract command in this build";
+  const std::vector<std::pair<std::string, std::string>> cases{
+      {"segment_index.seg.nrrd", small_nrrd("Segment4294967296_Name:=a\n")},
+      {"label_value.seg.nrrd", small_nrrd("Segment0_Name:=a\nSegment0_LabelValue:=4294967296\n")},
+      {"not_utf8.seg.nrrd", small_nrrd("Segment0_Name:=\xff\xfe bone\nSegment0_LabelValue:=1\n")},
+      {"billion_voxels.nrrd", small_nrrd("", "1000 1000 1000")},
+      {"spacing.nrrd", small_nrrd("", "2 2 2", "1e23 1 1")},
+      {"nan_spacing.nrrd", small_nrrd("", "2 2 2", "1 nanx 1")},
+      {"origin.nrrd",
+       small_nrrd("space: left-posterior-superior\nspace directions: (1,0,0) (0,1,0) (0,0,1)\n"
+                  "space origin: (1e308,0,0)\n")},
+  };
+  for (const auto& [name, text] : cases) {
+    const fs::path dir = work_dir();
+    write_bytes(dir / name, text);
+    const Outcome r = run_fabrica({"extract", (dir / name).string(), "-o", (dir / "out").string()});
+    EXPECT_EQ(r.code, 2) << name << "\n" << describe(r);
+    EXPECT_TRUE(one_line(r.err)) << describe(r);
+    EXPECT_NE(r.err.find(name), std::string::npos) << describe(r);
+    EXPECT_FALSE(fs::exists(dir / "out")) << name << ": something was written";
+  }
+  const fs::path dir = work_dir();
+  const Outcome r = run_fabrica(
+      {"extract", totalseg().string(), "-o", (dir / "out").string(), "--passband", "1e-308"});
+  EXPECT_EQ(r.code, 2) << describe(r);
+  EXPECT_NE(r.err.find("passband"), std::string::npos) << describe(r);
+  EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
+TEST(Hardening, NonFiniteOrNegativeWidthsAndParserErrorsExit2WithThePrefix) {
+  const fs::path dir = work_dir();
+  std::vector<std::vector<std::string>> calls;
+  for (const char* value : {"inf", "nan", "-1", "0"}) {
+    if (has_command("lines"))
+      calls.push_back(
+          {"lines", aneurysm().string(), "-o", (dir / "x.svg").string(), "--width", value});
+    if (has_command("hatch"))
+      calls.push_back(
+          {"hatch", aneurysm().string(), "-o", (dir / "x.svg").string(), "--stroke-width", value});
+  }
+  if (has_command("geometry"))
+    calls.push_back(
+        {"geometry", aneurysm().string(), "-o", (dir / "x.csv").string(), "--smooth", "lots"});
+  calls.push_back({"info", "--no-such-option"});
+  for (const auto& call : calls) {
+    const Outcome r = run_fabrica(call);
+    EXPECT_EQ(r.code, 2) << describe(r);
+    EXPECT_TRUE(one_line(r.err)) << describe(r);
+    EXPECT_EQ(r.err.rfind("fabrica: ", 0), 0u) << describe(r);
+    EXPECT_TRUE(list_dir(dir).empty()) << joined(list_dir(dir));
+  }
+}
+
+TEST(Hardening, HatchingMemoryIsBounded) {
+  if (!has_command("hatch")) GTEST_SKIP() << "no hatch command in this build";
+  const fs::path dir = work_dir();
+  const Outcome deep = run_fabrica(
+      {"hatch", aneurysm().string(), "-o", (dir / "x.svg").string(), "--grid-depth", "30"},
+      std::chrono::seconds(20));
+  EXPECT_EQ(deep.code, 2) << describe(deep);
+  EXPECT_NE(deep.err.find("grid-depth"), std::string::npos) << describe(deep);
+  EXPECT_TRUE(list_dir(dir).empty()) << joined(list_dir(dir));
+}
+
+TEST(Hardening, RenderWritesAllItsOutputsOrNone) {
+  if (!has_command("render")) GTEST_SKIP() << "no render command in this build";
+  const fs::path dir = work_dir();
+  for (const char* option : {"--svg", "--save-camera", "--save-scene"}) {
+    const std::string second = std::string(option) == "--svg" ? "x.svg" : "x.json";
+    const Outcome r = run_fabrica({"render", aneurysm().string(), "-o", (dir / "r.png").string(),
+                                   option, (dir / "missing" / second).string()});
+    if (r.code == 4) GTEST_SKIP() << "no headless GL: " << r.err;
+    EXPECT_EQ(r.code, 3) << describe(r);
+    EXPECT_TRUE(list_dir(dir).empty()) << option << " left " << joined(list_dir(dir));
+  }
+}
+
+TEST(Hardening, StaleTemporariesOfDeadProcessesAreRemoved) {
+  if (!has_command("geometry")) GTEST_SKIP() << "no geometry command in this build";
+  const fs::path dir = work_dir();
+  // The PID of a process that has ended.
+  const pid_t child = ::fork();
+  if (child == 0) ::_exit(0);
+  ::waitpid(child, nullptr, 0);
+  const std::string dead = "x.csv.tmp-" + std::to_string(child) + "-0";
+  const std::string alive = "x.csv.tmp-" + std::to_string(::getpid()) + "-7";
+  write_bytes(dir / dead, "partial");
+  write_bytes(dir / alive, "being written");
+  write_bytes(dir / "other.csv.tmp-1-0", "not ours");
+  const Outcome r = run_fabrica({"geometry", aneurysm().string(), "-o", (dir / "x.csv").string()});
+  ASSERT_EQ(r.code, 0) << describe(r);
+  std::vector<std::string> kept{"other.csv.tmp-1-0", "x.csv", alive};
+  std::sort(kept.begin(), kept.end());
+  EXPECT_EQ(list_dir(dir), kept);
+}
+
+/// Output bytes of `args` run with --threads `threads` (stdout when `output` is empty).
+std::string output_at(std::vector<std::string> args, const fs::path& output, int threads) {
+  args.push_back("--threads");
+  args.push_back(std::to_string(threads));
+  const Outcome r = run_fabrica(args, std::chrono::seconds(300));
+  if (r.code == 4) return "unavailable";
+  EXPECT_EQ(r.code, 0) << describe(r);
+  return output.empty() ? r.out : read_text(output);
+}
+
+TEST(Hardening, EveryOutputKindIsTheSameAtAnyThreadCount) {
+  const fs::path dir = work_dir();
+  const std::string mesh = aneurysm().string();
+  std::vector<std::pair<std::vector<std::string>, fs::path>> runs;
+  if (has_command("info")) runs.push_back({{"info", mesh, "--json"}, {}});
+  if (has_command("geometry")) runs.push_back({{"geometry", mesh, "-o"}, dir / "g.csv"});
+  if (has_command("lines"))
+    for (const char* ext : {".svg", ".pdf", ".json", ".seg"})
+      runs.push_back({{"lines", mesh, "--types", "all", "-o"}, dir / (std::string("l") + ext)});
+  if (has_command("hatch")) runs.push_back({{"hatch", mesh, "-q", "-o"}, dir / "h.svg"});
+  if (has_command("render")) runs.push_back({{"render", mesh, "-o"}, dir / "r.png"});
+  if (has_command("extract"))
+    runs.push_back({{"extract", totalseg().string(), "--labels", "5", "-o"}, dir / "e"});
+  for (auto& [args, output] : runs) {
+    if (!output.empty()) args.push_back(output.string());
+    const bool folder = args[0] == "extract";
+    auto result = [&, &args = args, &output = output](int threads) {
+      if (folder) fs::remove_all(output);
+      std::string bytes = output_at(args, folder ? fs::path() : output, threads);
+      if (folder && fs::exists(output))
+        for (const auto& name : list_dir(output)) bytes += name + read_text(output / name);
+      return bytes;
+    };
+    const std::string one = result(1);
+    if (one == "unavailable") continue;
+    EXPECT_GT(one.size(), 100u) << args[0];
+    for (int threads : {2, 8})
+      EXPECT_TRUE(result(threads) == one)
+          << args[0] << " " << output << " differs at --threads " << threads;
+  }
 }
 
 }  // namespace

@@ -164,3 +164,22 @@ TEST(ProximityGrid, RejectsBadSizes) {
   EXPECT_THROW(ProximityGrid(10, 10, -1), fabrica::InputError);
   EXPECT_THROW(ProximityGrid(10, 10, 41), fabrica::InputError);
 }
+
+TEST(ProximityGrid, MemoryIsBoundedAndDeepGridsAreRefusedBeforeAllocating) {
+  EXPECT_LE(ProximityGrid::cell_count(800, 800, 20), std::size_t{1} << 24);
+  EXPECT_GT(ProximityGrid::cell_count(800, 800, 30), ProximityGrid::kMaxCells);
+  EXPECT_THROW(ProximityGrid(800, 800, 30), fabrica::InputError);
+  EXPECT_GT(ProximityGrid::cell_count(16384, 16384, 29), ProximityGrid::kMaxCells);
+}
+
+TEST(ProximityGrid, SegmentsFarOutsideTheImageAreClippedNotWalked) {
+  // A camera zoomed far in projects the mesh to pixel coordinates near 1e12;
+  // walking such a segment cell by cell took a minute, then overflowed.
+  ProximityGrid grid(64, 64, 12);
+  grid.mark_segment(Vec2(-1e12, 32.0), Vec2(1e12, 32.5));
+  EXPECT_TRUE(grid.is_marked(12, Vec2(32.0, 32.25)));
+  grid.mark_segment(Vec2(1e12, 1e12), Vec2(2e12, -3e12));  // never crosses the image
+  EXPECT_FALSE(grid.is_marked(12, Vec2(60.0, 60.0)));
+  EXPECT_FALSE(grid.blocked(Vec2(1e15, -1e15), 5));
+  EXPECT_FALSE(grid.is_marked(3, Vec2(std::numeric_limits<double>::quiet_NaN(), 1.0)));
+}

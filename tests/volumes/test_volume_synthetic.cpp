@@ -599,3 +599,52 @@ TEST(VolumeErrors, NonFiniteValuesAndBadOptions) {
   ASSERT_EQ(corner.size(), 1u);
   EXPECT_EQ(test::open_and_misoriented_edges(corner[0].mesh).first, 0u);
 }
+
+TEST(VolumeErrors, HeadersDeclaringTooMuchOrAbsurdGeometryAreRefusedWhenRead) {
+  // Issue 15's adversarial findings: each was read without complaint and
+  // failed only when meshes were written (exit 3), or crashed (std::stoi).
+  const auto dir = test::temp_dir("vol-limits");
+  auto nrrd = [](const std::string& extra, const std::string& sizes = "2 2 2",
+                 const std::string& encoding = "ascii") {
+    return "NRRD0004\ntype: uint8\ndimension: 3\nsizes: " + sizes + "\nencoding: " + encoding +
+           "\n" + extra + "\n0 1 0 1 0 1 0 1\n";
+  };
+  test::write_bytes(dir / "index.seg.nrrd", nrrd("Segment4294967296_Name:=a\n"));
+  expect_input_error(dir / "index.seg.nrrd", "too large");
+  test::write_bytes(dir / "value.seg.nrrd", nrrd("Segment0_LabelValue:=4294967296\n"));
+  expect_input_error(dir / "value.seg.nrrd", "32-bit");
+  test::write_bytes(dir / "name.seg.nrrd", nrrd("Segment0_Name:=\xc3\x28 bad\n"));
+  expect_input_error(dir / "name.seg.nrrd", "UTF-8");
+  test::write_bytes(dir / "ascii.nrrd", nrrd("", "1000 1000 1000"));
+  expect_input_error(dir / "ascii.nrrd", "header describes");
+  test::write_bytes(dir / "huge.nrrd", nrrd("", "100000 100000 100000", "raw"));
+  expect_input_error(dir / "huge.nrrd", "voxels");
+  test::write_bytes(dir / "gz.nrrd", nrrd("", "1000 1000 1000", "gzip"));
+  expect_input_error(dir / "gz.nrrd", "compressed");
+  test::write_bytes(dir / "comma.nrrd", nrrd("spacings: 1 , 1\n"));  // fuzz_nrrd finding
+  expect_input_error(dir / "comma.nrrd", "spacings");
+  test::write_bytes(dir / "spacing.nrrd", nrrd("spacings: 1e23 1 1\n"));
+  expect_input_error(dir / "spacing.nrrd", "spacing");
+  test::write_bytes(dir / "origin.nrrd",
+                    nrrd("space directions: (1,0,0) (0,1,0) (0,0,1)\nspace origin: (1e308,0,0)\n"));
+  expect_input_error(dir / "origin.nrrd", "mm from the origin");
+  Eigen::Matrix<double, 3, 4> sform = Eigen::Matrix<double, 3, 4>::Identity();
+  sform(0, 0) = 1e30;
+  test::write_nifti(dir / "srow.nii", {2, 2, 2}, sform, std::vector<std::uint8_t>(8, 1), false);
+  expect_input_error(dir / "srow.nii", "spacing");
+  test::write_bytes(dir / "names.txt", "1 \"caf\xe9\"\n");
+  try {
+    (void)io::read_label_names(dir / "names.txt");
+    ADD_FAILURE() << "a Latin-1 label name was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("UTF-8"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW((void)io::read_label_volume("/dev/zero"), InputError);
+  std::vector<std::uint8_t> labels(8, 1);
+  VolumeGeometry g;
+  g.dims = {2, 2, 2};
+  test::write_mha(dir / "one.mha", g, test::as_bytes(labels), "MET_UCHAR", false);
+  ExtractOptions tiny;
+  tiny.smoothing_passband = 1e-308;
+  EXPECT_THROW(io::extract_surfaces(io::read_label_volume(dir / "one.mha"), tiny), InputError);
+}

@@ -287,8 +287,8 @@ void check_options(const ExtractOptions& options) {
       (*options.smoothing_iterations < 0 || *options.smoothing_iterations > 10000))
     throw InputError("smoothing iterations must be between 0 and 10000, got " +
                      std::to_string(*options.smoothing_iterations));
-  if (!(options.smoothing_passband > 0.0 && options.smoothing_passband < 2.0))
-    throw InputError("smoothing pass band must be in (0, 2), got " +
+  if (!(options.smoothing_passband >= 1e-3 && options.smoothing_passband < 2.0))
+    throw InputError("smoothing pass band (--passband) must be in [0.001, 2), got " +
                      std::to_string(options.smoothing_passband));
   if (!(options.decimate >= 0.0 && options.decimate < 1.0))
     throw InputError("decimation must be a fraction of faces to remove in [0, 1), got " +

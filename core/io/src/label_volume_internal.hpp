@@ -59,8 +59,27 @@ void decode_samples(std::string_view bytes, const SampleLayout& layout, LabelVol
 void decode_text_samples(std::string_view text, const SampleLayout& layout, LabelVolume& volume,
                          const std::string& what);
 
-/// Throws InputError unless the geometry is usable (dims > 0, spacing > 0,
-/// finite, direction not singular); normalises nothing.
+/// Limits on what a volume header may declare (docs/reliability.md): more
+/// samples (voxels x layers) than kMaxVoxelSamples are refused before any
+/// allocation; spacing outside [kMinSpacingMm, kMaxSpacingMm] and positions
+/// (origin, corners) farther than kMaxCoordinateMm from 0 are bad input,
+/// since the meshes made from them would not fit single precision.
+inline constexpr double kMaxVoxelSamples = 1073741824.0;  // 2^30: 4 GiB of 32-bit labels
+inline constexpr double kMinSpacingMm = 1e-6;
+inline constexpr double kMaxSpacingMm = 1e5;
+inline constexpr double kMaxCoordinateMm = 1e7;
+
+/// Throws InputError unless `layer_count` layers of the volume's voxels are
+/// at most kMaxVoxelSamples (computed without overflow).
+void check_sample_count(const VolumeGeometry& geometry, std::size_t layer_count,
+                        const std::string& what);
+
+/// A segment or label name must be UTF-8 text (it goes into JSON and SVG).
+void check_utf8_name(std::string_view name, const std::string& what, const std::string& field);
+
+/// Throws InputError unless the geometry is usable (dims > 0, at most
+/// kMaxVoxelSamples voxels, spacing within limits, finite, positions within
+/// kMaxCoordinateMm, direction not singular); normalises nothing.
 void check_geometry(const VolumeGeometry& geometry, const std::string& what);
 
 std::string lowercase(std::string_view s);

@@ -8,7 +8,9 @@
 // axis (first or last): each of its values is one label-map layer.
 #include <algorithm>
 #include <bit>
+#include <charconv>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -111,7 +113,7 @@ Vec3 parse_vector(const std::string& text, const std::string& what, const std::s
 long long parse_integer(const std::string& text, const std::string& what,
                         const std::string& field) {
   const std::vector<double> v = parse_numbers(text, what, field);
-  if (v.size() != 1 || v[0] != std::floor(v[0]))
+  if (v.size() != 1 || v[0] != std::floor(v[0]) || std::abs(v[0]) > 9e18)
     throw InputError(what + ": '" + field + "' should be one integer, reads '" + text + "'");
   return static_cast<long long>(v[0]);
 }
@@ -282,7 +284,15 @@ LabelVolume read_nrrd(const std::filesystem::path& path) {
                          " values but dimension is " + std::to_string(dimension));
       for (int a = 0; a < 3; ++a) {
         const std::string& t = tokens[spatial_axes[a]];
-        g.spacing[a] = lowercase(t) == "nan" ? 1.0 : parse_numbers(t, what, "spacings")[0];
+        if (lowercase(t) == "nan") {
+          g.spacing[a] = 1.0;
+          continue;
+        }
+        const std::vector<double> v = parse_numbers(t, what, "spacings");
+        if (v.size() != 1)  // "," parses as no number (fuzz_nrrd finding: read past the end)
+          throw InputError(what + ": 'spacings' should hold one number per axis, reads '" + t +
+                           "'");
+        g.spacing[a] = v[0];
       }
     }
     volume.orientation_source =
@@ -367,17 +377,28 @@ LabelVolume read_nrrd(const std::filesystem::path& path) {
     std::size_t p = 7;
     while (p < key.size() && std::isdigit(static_cast<unsigned char>(key[p]))) ++p;
     if (p == 7 || p >= key.size() || key[p] != '_') continue;
-    const int index = std::stoi(key.substr(7, p - 7));
+    int index = 0;
+    if (const auto r = std::from_chars(key.data() + 7, key.data() + p, index); r.ec != std::errc())
+      throw InputError(what + ": field '" + key + "': the segment number is too large");
     const std::string name = key.substr(p + 1);
     SegmentFields& s = segments[index];
     const std::string v = trim(value);
     const std::string field_name = key;
+    auto as_int = [&](const std::string& text) {
+      const long long n = parse_integer(text, what, field_name);
+      if (n < std::numeric_limits<std::int32_t>::min() ||
+          n > std::numeric_limits<std::int32_t>::max())
+        throw InputError(what + ": field '" + field_name + "' = " + text +
+                         " does not fit a 32-bit label");
+      return static_cast<int>(n);
+    };
     if (name == "Name") {
+      check_utf8_name(v, what, "field '" + field_name + "'");
       s.name = v;
     } else if (name == "LabelValue") {
-      s.value = static_cast<int>(parse_integer(v, what, field_name));
+      s.value = as_int(v);
     } else if (name == "Layer") {
-      s.layer = static_cast<int>(parse_integer(v, what, field_name));
+      s.layer = as_int(v);
     } else if (name == "Color") {
       const std::vector<double> c = parse_numbers(v, what, field_name);
       if (c.size() >= 3) s.color = std::array<double, 3>{c[0], c[1], c[2]};

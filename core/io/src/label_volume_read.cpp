@@ -13,6 +13,7 @@
 #include <type_traits>
 
 #include "fabrica/core/error.hpp"
+#include "fabrica/core/input_file.hpp"
 #include "inflate.hpp"
 #include "label_volume_internal.hpp"
 
@@ -98,16 +99,7 @@ std::vector<double> parse_numbers(std::string_view text, const std::string& what
 }
 
 std::string read_file_bytes(const std::filesystem::path& path, const std::string& what) {
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec))
-    throw InputError(what + ": file not found; check the path");
-  if (std::filesystem::is_directory(path, ec))
-    throw InputError(what + ": is a folder, not a volume file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(what + ": cannot open the file (permissions?)");
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) throw InputError(what + ": read error");
-  return bytes;
+  return read_input_file(path, what);
 }
 
 std::string inflate_bytes(std::string_view compressed, std::size_t expected,
@@ -220,6 +212,7 @@ std::size_t sample_count(const SampleLayout& layout, const LabelVolume& volume) 
 
 void decode_samples(std::string_view bytes, const SampleLayout& layout, LabelVolume& volume,
                     const std::string& what) {
+  check_sample_count(volume.geometry, layout.layer_count, what);
   const std::size_t needed = sample_count(layout, volume) * element_size(layout.type);
   if (bytes.size() < needed)
     throw InputError(what + ": voxel data holds " + std::to_string(bytes.size()) +
@@ -253,7 +246,13 @@ void decode_samples(std::string_view bytes, const SampleLayout& layout, LabelVol
 
 void decode_text_samples(std::string_view text, const SampleLayout& layout, LabelVolume& volume,
                          const std::string& what) {
+  check_sample_count(volume.geometry, layout.layer_count, what);
   const std::size_t needed = sample_count(layout, volume);
+  // Every value takes at least one character and a separator.
+  if (needed > text.size() / 2 + 1)
+    throw InputError(what + ": the header describes " + std::to_string(needed) +
+                     " values but the text voxel data has only " + std::to_string(text.size()) +
+                     " characters; the file is truncated or the header is wrong");
   std::vector<double> values;
   values.reserve(needed);
   std::string buffer(text);
@@ -280,14 +279,54 @@ void decode_text_samples(std::string_view text, const SampleLayout& layout, Labe
   decode_typed<double>(reinterpret_cast<const char*>(values.data()), as_double, volume, what);
 }
 
+void check_sample_count(const VolumeGeometry& g, std::size_t layer_count, const std::string& what) {
+  const double samples = static_cast<double>(g.dims[0]) * static_cast<double>(g.dims[1]) *
+                         static_cast<double>(g.dims[2]) * static_cast<double>(layer_count);
+  if (samples > kMaxVoxelSamples)
+    throw InputError(what + ": the header declares " + std::to_string(g.dims[0]) + " x " +
+                     std::to_string(g.dims[1]) + " x " + std::to_string(g.dims[2]) + " voxels" +
+                     (layer_count > 1 ? " x " + std::to_string(layer_count) + " layers" : "") +
+                     ", more than the " + std::to_string(static_cast<long long>(kMaxVoxelSamples)) +
+                     " fabrica reads; crop or resample the volume");
+}
+
+void check_utf8_name(std::string_view name, const std::string& what, const std::string& field) {
+  std::size_t i = 0;
+  while (i < name.size()) {
+    const auto c = static_cast<unsigned char>(name[i]);
+    const std::size_t len = c < 0x80           ? 1
+                            : (c >> 5) == 0x6  ? 2
+                            : (c >> 4) == 0xE  ? 3
+                            : (c >> 3) == 0x1E ? 4
+                                               : 0;
+    bool ok = len > 0 && i + len <= name.size() && !(c < 0x20 && c != '\t');
+    for (std::size_t k = 1; ok && k < len; ++k)
+      ok = (static_cast<unsigned char>(name[i + k]) & 0xC0) == 0x80;
+    if (!ok)
+      throw InputError(what + ": " + field + " is not UTF-8 text (byte " + std::to_string(i) +
+                       "); save the file with UTF-8 names");
+    i += len;
+  }
+}
+
 void check_geometry(const VolumeGeometry& g, const std::string& what) {
   for (int a = 0; a < 3; ++a)
     if (g.dims[a] <= 0)
       throw InputError(what + ": size along axis " + std::to_string(a) + " is " +
                        std::to_string(g.dims[a]) + "; every axis needs at least one voxel");
+  check_sample_count(g, 1, what);
   if (!g.spacing.allFinite() || (g.spacing.array() <= 0.0).any())
     throw InputError(what + ": voxel spacing must be positive and finite");
+  if ((g.spacing.array() < kMinSpacingMm).any() || (g.spacing.array() > kMaxSpacingMm).any())
+    throw InputError(what + ": voxel spacing " + std::to_string(g.spacing.minCoeff()) + " to " +
+                     std::to_string(g.spacing.maxCoeff()) + " mm is outside the " +
+                     std::to_string(kMinSpacingMm) + " to " + std::to_string(kMaxSpacingMm) +
+                     " mm fabrica accepts; check the header's spacing or directions");
   if (!g.origin.allFinite()) throw InputError(what + ": origin is not a finite position");
+  const Vec3 extent(g.dims[0] * g.spacing[0], g.dims[1] * g.spacing[1], g.dims[2] * g.spacing[2]);
+  if (g.origin.cwiseAbs().maxCoeff() > kMaxCoordinateMm || extent.maxCoeff() > kMaxCoordinateMm)
+    throw InputError(what + ": the volume lies more than " + std::to_string(kMaxCoordinateMm) +
+                     " mm from the origin; check the header's origin and spacing");
   if (!g.direction.allFinite() || std::abs(g.direction.determinant()) < 1e-6)
     throw InputError(what +
                      ": axis directions are degenerate (parallel or zero); cannot place "
@@ -318,9 +357,7 @@ LabelVolume read_label_volume(const std::filesystem::path& path) {
     volume = read_nifti(path);
   } else {
     // Unknown extension: sniff the first bytes.
-    std::error_code ec;
-    if (!std::filesystem::exists(path, ec))
-      throw InputError(what + ": file not found; check the path");
+    require_regular_file(path, what);
     std::ifstream in(path, std::ios::binary);
     char head[64] = {};
     in.read(head, sizeof head);
@@ -377,6 +414,7 @@ std::vector<LabelInfo> read_label_names(const std::filesystem::path& path) {
       const auto close = t.find('"', quote + 1);
       info.name =
           t.substr(quote + 1, close == std::string::npos ? std::string::npos : close - quote - 1);
+      check_utf8_name(info.name, what, "the name on line " + std::to_string(line_number));
       const std::vector<double> nums =
           parse_numbers(t.substr(tokens[0].size(), quote - tokens[0].size()), what,
                         "line " + std::to_string(line_number));
@@ -386,8 +424,10 @@ std::vector<LabelInfo> read_label_names(const std::filesystem::path& path) {
         throw InputError(what + ": line " + std::to_string(line_number) +
                          " has a label value but no name");
       info.name = tokens[1];
+      check_utf8_name(info.name, what, "the name on line " + std::to_string(line_number));
       for (std::size_t k = 2; k < tokens.size() && rgb.size() < 3; ++k)
-        rgb.push_back(parse_numbers(tokens[k], what, "line " + std::to_string(line_number))[0]);
+        for (double c : parse_numbers(tokens[k], what, "line " + std::to_string(line_number)))
+          if (rgb.size() < 3) rgb.push_back(c);  // "," holds no number: nothing to take
     }
     if (rgb.size() == 3) {
       const bool bytes = rgb[0] > 1.0 || rgb[1] > 1.0 || rgb[2] > 1.0;

@@ -12,6 +12,7 @@
 
 #include "fabrica/core/atomic_file.hpp"
 #include "fabrica/core/error.hpp"
+#include "fabrica/core/input_file.hpp"
 #include "mesh_io_internal.hpp"
 
 namespace fabrica::io {
@@ -136,34 +137,18 @@ const char* kKnownWrite = ".obj, .ply, .stl or .off";
 
 using FilePtr = std::unique_ptr<std::FILE, int (*)(std::FILE*)>;
 
-/// Opens the file for reading; InputError when missing, a folder, unreadable
-/// or empty.
+/// Opens the file for reading; InputError when missing, a folder, not a
+/// regular file (FIFO, device), unreadable or empty.
 FilePtr open_for_reading(const std::filesystem::path& path, const std::string& name) {
-  std::error_code ec;
-  const auto status = std::filesystem::status(path, ec);
-  if (ec || !std::filesystem::exists(status)) detail::fail(name, "file does not exist");
-  if (std::filesystem::is_directory(status)) detail::fail(name, "is a folder, not a mesh file");
+  if (require_regular_file(path, name) == 0) detail::fail(name, "file is empty");
   FilePtr file(std::fopen(path.c_str(), "rb"), &std::fclose);
   if (!file) detail::fail(name, std::string("cannot open: ") + std::strerror(errno));
-  const auto size = std::filesystem::file_size(path, ec);
-  if (!ec && size == 0) detail::fail(name, "file is empty");
   return file;
 }
 
 /// Reads the whole file (see open_for_reading for the errors).
 std::string read_whole_file(const std::filesystem::path& path, const std::string& name) {
-  FilePtr file = open_for_reading(path, name);
-  std::string data;
-  char chunk[1 << 16];
-  std::error_code ec;
-  const auto size = std::filesystem::file_size(path, ec);
-  if (!ec) data.reserve(static_cast<std::size_t>(size));
-  for (;;) {
-    const std::size_t got = std::fread(chunk, 1, sizeof chunk, file.get());
-    data.append(chunk, got);
-    if (got < sizeof chunk) break;
-  }
-  if (std::ferror(file.get())) detail::fail(name, "read error");
+  std::string data = read_input_file(path, name);
   if (data.empty()) detail::fail(name, "file is empty");
   return data;
 }

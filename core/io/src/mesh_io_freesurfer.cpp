@@ -162,6 +162,9 @@ void read_freesurfer(std::string_view data, const std::string& name, const ReadO
   const std::int32_t nv = load_int32_be(data.data() + pos);
   const std::int32_t nf = load_int32_be(data.data() + pos + 4);
   pos += 8;
+  if (nv > kMaxMeshElements || nf > kMaxMeshElements)
+    fail(name, "the header declares " + std::to_string(nv) + " vertices and " + std::to_string(nf) +
+                   " faces, more than the " + std::to_string(kMaxMeshElements) + " fabrica reads");
   if (nv < 0 || nf < 0)
     fail(name, "damaged FreeSurfer surface: negative counts (" + std::to_string(nv) +
                    " vertices, " + std::to_string(nf) + " faces)");

@@ -16,6 +16,10 @@
 
 namespace fabrica::io::detail {
 
+/// Most vertices or faces a mesh file may declare (docs/reliability.md): indices
+/// are 32-bit, and a header declaring more is refused before allocating.
+inline constexpr std::int64_t kMaxMeshElements = 1'000'000'000;
+
 /// Throws InputError("<file>: <problem>").
 [[noreturn]] void fail(const std::string& file, const std::string& problem);
 
@@ -204,6 +208,10 @@ void read_stl(std::string_view data, const std::string& name, const ReadOptions&
               LoadedMesh& out);
 void read_vtk_legacy(std::string_view data, const std::string& name, const ReadOptions& options,
                      LoadedMesh& out);
+/// Refuses a .vtp whose XML declares counts (points, cells, components,
+/// tuples, array byte counts) that are negative, not integers, or larger
+/// than the file's bytes can hold: VTK trusts them (InputError naming `name`).
+void check_vtp_declarations(std::string_view data, const std::string& name);
 void read_vtp(const std::filesystem::path& path, const std::string& name,
               const ReadOptions& options, LoadedMesh& out);
 

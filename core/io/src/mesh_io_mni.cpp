@@ -91,8 +91,8 @@ void read_mni_obj(std::string_view data, const std::string& name, const ReadOpti
                        std::string(c.rest_of_line().substr(0, 40)) + "'");
   };
   // Upper bound for counts: every value takes at least two characters.
-  const auto max_count = static_cast<std::int64_t>(
-      std::min<std::size_t>(data.size() / 2 + 1, std::numeric_limits<std::int32_t>::max()));
+  const auto max_count =
+      static_cast<std::int64_t>(std::min<std::size_t>(data.size() / 2 + 1, kMaxMeshElements));
 
   std::size_t objects = 0;
   std::vector<std::int32_t> polygon;

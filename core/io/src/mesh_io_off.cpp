@@ -78,7 +78,7 @@ void read_off(std::string_view data, const std::string& name, const ReadOptions&
       static_cast<std::uint64_t>(nv) > data.size() / 2 + 1)
     error_at(counts_at, "the header declares " + std::to_string(nv) +
                             " vertices, more than the file can hold");
-  if (static_cast<std::uint64_t>(nf) > data.size() / 2 + 1)
+  if (static_cast<std::uint64_t>(nf) > data.size() / 2 + 1 || nf > kMaxMeshElements)
     error_at(counts_at,
              "the header declares " + std::to_string(nf) + " faces, more than the file can hold");
   info.file_vertices = static_cast<std::size_t>(nv);

@@ -330,6 +330,10 @@ void read_ply(std::string_view data, const std::string& name, const ReadOptions&
       std::int64_t count = -1;
       if (e.name.empty() || !c.parse_integer(count, false) || count < 0)
         header_error(line, "expected 'element <name> <count>'");
+      if (count > kMaxMeshElements)
+        header_error(line, "the header declares " + std::to_string(count) + " '" + e.name +
+                               "' records, more than the " + std::to_string(kMaxMeshElements) +
+                               " fabrica reads");
       e.count = static_cast<std::uint64_t>(count);
       elements.push_back(std::move(e));
     } else if (key == "property") {

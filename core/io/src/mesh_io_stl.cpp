@@ -95,6 +95,9 @@ void read_stl(std::string_view data, const std::string& name, const ReadOptions&
     binary_size = 84 + 50 * declared;
   }
   if (data.size() >= 84 && data.size() == binary_size) {
+    if (declared > static_cast<std::uint64_t>(kMaxMeshElements))
+      fail(name, "the header declares " + std::to_string(declared) + " triangles, more than the " +
+                     std::to_string(kMaxMeshElements) + " fabrica reads");
     info.binary = true;
     info.tagged_space = find_space_tag(std::string_view(data.data(), 80));
     mesh.faces.resize(static_cast<std::size_t>(declared));

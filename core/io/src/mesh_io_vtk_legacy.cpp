@@ -222,6 +222,9 @@ class LegacyParser {
     std::int64_t n = -1;
     if (!c_.parse_integer(n) || !c_.token_ends_here() || n < 0)
       error(at, "expected a count after " + what);
+    if (n > kMaxMeshElements)
+      error(at, what + " declares " + std::to_string(n) + ", more than the " +
+                    std::to_string(kMaxMeshElements) + " fabrica reads");
     return n;
   }
   VtkType data_type(const char* at) {

@@ -46,9 +46,15 @@ struct Camera {
   double aspect() const { return static_cast<double>(width) / static_cast<double>(height); }
 };
 
+/// Largest image side in pixels any command draws (docs/reliability.md).
+inline constexpr int kMaxImageSide = 16384;
+/// Narrowest field of view (degrees): narrower ones project a mesh to pixel
+/// coordinates beyond what the image-space algorithms can index.
+inline constexpr double kMinFovDeg = 1e-3;
+
 /// Throws InputError (prefixed with `what`) when the camera cannot be used:
-/// eye == centre, zero or parallel up vector, field of view outside (0,180),
-/// non-positive image size, non-finite numbers.
+/// eye == centre, zero or parallel up vector, field of view outside
+/// [kMinFovDeg, 180), image size outside 1..kMaxImageSide, non-finite numbers.
 void validate_camera(const Camera& camera, const std::string& what = "camera");
 
 /// Pixel position and linear depth of a point.

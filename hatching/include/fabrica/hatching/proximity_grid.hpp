@@ -33,6 +33,12 @@ class ProximityGrid {
   /// for a non-positive size or a level outside [0, 40].
   ProximityGrid(int width, int height, int max_level);
 
+  /// Most cells (bytes of marks) a grid may hold: 256 MiB. The constructor
+  /// throws InputError for a depth needing more (about depth 25 at any size).
+  static constexpr std::size_t kMaxCells = std::size_t{1} << 28;
+  /// Cells a grid of this size and depth holds, without allocating them.
+  static std::size_t cell_count(int width, int height, int max_level);
+
   int width() const { return width_; }
   int height() const { return height_; }
   int max_level() const { return max_level_; }
@@ -75,6 +81,8 @@ class ProximityGrid {
     return level.marks[static_cast<std::size_t>(b) * level.nx + a] != 0;
   }
   void mark_segment_level(int level, const Vec2& a, const Vec2& b);
+  /// Within one image side of the image (where lattice indices fit an int).
+  bool near_image(const Vec2& pixel) const;
 
   int width_, height_, max_level_;
   double side_;
