@@ -13,6 +13,7 @@
 #include <string>
 
 #include "cli_common.hpp"
+#include "cli_main.hpp"
 #include "commands.hpp"
 #include "fabrica/core/atomic_file.hpp"
 #include "fabrica/core/error.hpp"
@@ -84,46 +85,22 @@ int main(int argc, char** argv) {
 #endif
   int threads = 0;
   add_common_options(app, threads);
-  if (argc < 2) {  // no command: the usage, on stderr, as a bad-arguments error
-    std::fputs(app.help().c_str(), stderr);
-    return 2;
-  }
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::CallForAllHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::CallForVersion& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    // One line: the "did you mean" for a misspelt command or option, else
-    // the parser's own message.
-    const std::string hint = fabrica::cli::parse_error_hint(app, argc, argv);
-    std::fprintf(stderr, "fabrica: %s (see fabrica --help)\n",
-                 hint.empty() ? e.what() : hint.c_str());
-    return 2;
-  }
-  try {
-    std::unique_ptr<tbb::global_control> parallelism;
-    if (threads > 0)
-      parallelism = std::make_unique<tbb::global_control>(
-          tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
-    // A command writes all its outputs or none (a batch commits per item).
-    fabrica::StagedOutputs staged;
-    for (const CLI::App* command : app.get_subcommands())
-      if (command->get_name() == "batch") staged.commit();
-    const int code = action ? action() : 0;
-    staged.commit();
-    return code;
-  } catch (const fabrica::Error& e) {
-    std::fprintf(stderr, "fabrica: %s\n", e.what());
-    return e.exit_code();
-  } catch (const std::bad_alloc&) {
-    std::fprintf(stderr, "fabrica: out of memory\n");
-    return 1;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "fabrica: internal error: %s\n", e.what());
-    return 1;
-  }
+  return fabrica::cli::parse_and_run(
+      app, argc, argv, "fabrica",
+      [&] {
+        std::unique_ptr<tbb::global_control> parallelism;
+        if (threads > 0)
+          parallelism = std::make_unique<tbb::global_control>(
+              tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+        // A command writes all its outputs or none (a batch commits per item).
+        fabrica::StagedOutputs staged;
+        for (const CLI::App* command : app.get_subcommands())
+          if (command->get_name() == "batch") staged.commit();
+        const int code = action ? action() : 0;
+        staged.commit();
+        return code;
+      },
+      // One line: the "did you mean" for a misspelt command or option, else
+      // the parser's own message.
+      [&] { return fabrica::cli::parse_error_hint(app, argc, argv); });
 }

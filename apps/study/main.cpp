@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <functional>
 
+#include "cli_main.hpp"
 #include "fabrica/core/atomic_file.hpp"
 #include "fabrica/core/error.hpp"
 #include "plan.hpp"
@@ -145,32 +146,6 @@ int main(int argc, char** argv) {
     };
   });
 
-  if (argc < 2) {
-    std::fputs(app.help().c_str(), stderr);
-    return 2;
-  }
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::CallForAllHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::CallForVersion& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    app.exit(e);
-    return 2;
-  }
-  try {
-    return action ? action() : 0;
-  } catch (const fabrica::Error& e) {
-    std::fprintf(stderr, "fabrica-study: %s\n", e.what());
-    return e.exit_code();
-  } catch (const std::bad_alloc&) {
-    std::fprintf(stderr, "fabrica-study: out of memory\n");
-    return 1;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "fabrica-study: internal error: %s\n", e.what());
-    return 1;
-  }
+  return fabrica::cli::parse_and_run(app, argc, argv, "fabrica-study",
+                                     [&] { return action ? action() : 0; });
 }
