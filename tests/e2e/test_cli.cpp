@@ -489,6 +489,21 @@ const std::vector<BadMesh>& bad_meshes() {
          write_bytes(d / "six.vtp", vtp_with("NumberOfPoints=\"4\"", "6", "ascii"));
          return d / "six.vtp";
        }},
+      {"vtp_huge_last_offset",  // fuzz_vtp finding 3 (as found): VTK allocated 5.9 GB
+       [](const fs::path& d) {
+         write_bytes(d / "offsets.vtp",
+                     "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"0.1\" "
+                     "byte_order=\"LittleEndian\" header_type=\"UInt32\">\n<PolyData>\n<Piece "
+                     "NumberOfPoints=\"4\" NumberOfPolys=\"4\">\n<Points>\n<DataArray "
+                     "type=\"Float32\" NumberOfComponents=\"3\" format=\"binary\">"
+                     "MAAAAAAAAAAAAAAAAA2\"AAAAgD8AAAAAAAAAAAAAAAAAAIA/AAAAAAAAAAAAAAAAAACAPw=="
+                     "</DataArray>\n</Points>\n<Polys>\n<DataArray type=\"Int32\" "
+                     "Name=\"connectivity\" format=\"binary\">MAAAAAAAAAACAAAAAQAAAAAAAAABAAAAAw"
+                     "AAAAAAAAADAAAAAgAAAAEAAAACAAAAAwAAAA==</DataArray>\n<DataArray "
+                     "type=\"Int32\" Name=\"offsets\" format=\"binary\">EAAAAAMAAAAGAAAACQAAA/"
+                     "VTKFi=</DataArray>\n</Polys>\n</Piece>\n</PolyData>\n</VTKFile>\n");
+         return d / "offsets.vtp";
+       }},
       {"vtp_huge_point_count",
        [](const fs::path& d) {
          write_bytes(d / "huge.vtp", vtp_with("NumberOfPoints=\"900000000\"", "3", "ascii"));

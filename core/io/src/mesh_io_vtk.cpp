@@ -17,7 +17,10 @@
 #include <vtkSmartPointer.h>
 #include <vtkXMLPolyDataReader.h>
 
+#include <algorithm>
+#include <array>
 #include <charconv>
+#include <cstdint>
 #include <cstring>
 #include <limits>
 #include <mutex>
@@ -28,6 +31,7 @@
 #include <vector>
 
 #include "fabrica/core/input_file.hpp"
+#include "inflate.hpp"
 #include "mesh_io_internal.hpp"
 
 namespace fabrica::io::detail {
@@ -282,10 +286,22 @@ class VtpChecker {
           bad("header_type \"" + std::string(header) + "\" (expected UInt32 or UInt64)");
         header_bytes_ = header == "UInt64" ? 8 : 4;
         compressed_ = attribute(tag, "compressor").has_value();
+        big_endian_ = attribute(tag, "byte_order").value_or("LittleEndian") == "BigEndian";
       } else if (tag.starts_with("Piece")) {
         for (const char* key : {"NumberOfPoints", "NumberOfVerts", "NumberOfLines",
                                 "NumberOfStrips", "NumberOfPolys"})
           if (const auto v = attribute(tag, key)) count(*v, key, 1.0);
+        for (std::size_t b = 0; b < kCellBlocks.size(); ++b) {
+          const auto v = attribute(tag, "NumberOf" + std::string(kCellBlocks[b]));
+          cells_[b] = v ? count(*v, "NumberOf" + std::string(kCellBlocks[b]), 1.0) : 0;
+        }
+      } else if (const auto b = cell_block(tag); b && !tag.starts_with('/')) {
+        block_ = b;
+        connectivity_values_.reset();
+        offsets_.reset();
+      } else if (b) {
+        check_offsets();
+        block_.reset();
       } else if (tag.starts_with("Points")) {
         in_points_ = true;
       } else if (tag.starts_with("/Points")) {
@@ -295,6 +311,7 @@ class VtpChecker {
         if (in_points_ && attribute(tag, "NumberOfComponents").value_or("1") != "3")
           bad("the points' DataArray must have NumberOfComponents=\"3\"");
         data_array(tag, xml, gt + 1);
+        if (block_) cell_array(tag, xml, gt + 1);
       }
     }
   }
@@ -379,8 +396,16 @@ class VtpChecker {
   std::uint64_t word(const std::string& bytes, std::size_t index) const {
     if ((index + 1) * header_bytes_ > bytes.size())
       bad("a binary DataArray is shorter than its header");
+    return unsigned_value(bytes.data() + index * header_bytes_, header_bytes_);
+  }
+
+  /// An unsigned integer of `size` bytes in the file's byte order.
+  std::uint64_t unsigned_value(const char* p, std::size_t size) const {
     std::uint64_t v = 0;
-    std::memcpy(&v, bytes.data() + index * header_bytes_, header_bytes_);  // little endian
+    for (std::size_t i = 0; i < size; ++i) {
+      const auto byte = static_cast<std::uint64_t>(static_cast<unsigned char>(p[i]));
+      v |= byte << (8 * (big_endian_ ? size - 1 - i : i));
+    }
     return v;
   }
 
@@ -404,8 +429,261 @@ class VtpChecker {
           " stored bytes can hold");
   }
 
+  // ---- The cell blocks' offsets (decoded here: VTK sizes the connectivity
+  // by the last offset, so a huge one made it allocate gigabytes).
+  static constexpr std::array<std::string_view, 4> kCellBlocks{"Verts", "Lines", "Strips", "Polys"};
+
+  /// The index in kCellBlocks of a start or end tag of a cell block.
+  static std::optional<std::size_t> cell_block(std::string_view tag) {
+    if (tag.starts_with('/')) tag.remove_prefix(1);
+    const std::string_view element = tag.substr(0, tag.find_first_of(" \t\r\n/"));
+    for (std::size_t b = 0; b < kCellBlocks.size(); ++b)
+      if (element == kCellBlocks[b]) return b;
+    return std::nullopt;
+  }
+
+  /// A DataArray of a cell block: the connectivity's number of values, the
+  /// first NumberOf<block> offsets.
+  void cell_array(std::string_view tag, std::string_view xml, std::size_t content) {
+    const auto array_name = attribute(tag, "Name");
+    if (array_name != "connectivity" && array_name != "offsets") return;
+    const std::string type(attribute(tag, "type").value_or(""));
+    const std::size_t size = type_size(type);
+    if (size == 0)
+      bad("the " + std::string(kCellBlocks[*block_]) + " " + std::string(*array_name) +
+          " have type \"" + type.substr(0, 40) + "\" (expected an integer or float type)");
+    const auto format = attribute(tag, "format").value_or("ascii");
+    std::string_view text;
+    bool base64 = true;
+    if (format == "binary") {
+      const std::size_t end = xml.find('<', content);
+      text =
+          xml.substr(content, end == std::string_view::npos ? xml.size() - content : end - content);
+    } else if (format == "appended") {
+      // data_array() checked that the offset is a number inside the data.
+      std::uint64_t offset = 0;
+      const std::string_view o = attribute(tag, "offset").value_or("0");
+      std::from_chars(o.data(), o.data() + o.size(), offset);
+      text = appended_.substr(static_cast<std::size_t>(offset));
+      base64 = appended_base64_;
+    } else {
+      const std::size_t end = xml.find('<', content);
+      text =
+          xml.substr(content, end == std::string_view::npos ? xml.size() - content : end - content);
+      if (array_name == "connectivity")
+        connectivity_values_ = ascii_count(text);
+      else
+        offsets_ = ascii_values(text, static_cast<std::size_t>(cells_[*block_]));
+      return;
+    }
+    if (array_name == "connectivity") {
+      std::uint64_t total = 0;
+      array_bytes(text, base64, 0, total);
+      connectivity_values_ = total / size;
+      return;
+    }
+    std::uint64_t total = 0;
+    const std::string bytes =
+        array_bytes(text, base64, static_cast<std::size_t>(cells_[*block_]) * size, total);
+    std::vector<double> values(bytes.size() / size);
+    for (std::size_t i = 0; i < values.size(); ++i)
+      values[i] = binary_value(bytes.data() + i * size, type);
+    offsets_ = std::move(values);
+  }
+
+  /// Bytes of one value of a DataArray `type`; 0 for a type that is no number.
+  static std::size_t type_size(std::string_view type) {
+    if (type == "Int8" || type == "UInt8") return 1;
+    if (type == "Int16" || type == "UInt16") return 2;
+    if (type == "Int32" || type == "UInt32" || type == "Float32") return 4;
+    if (type == "Int64" || type == "UInt64" || type == "Float64") return 8;
+    return 0;
+  }
+
+  double binary_value(const char* p, std::string_view type) const {
+    const std::size_t size = type_size(type);
+    const std::uint64_t u = unsigned_value(p, size);
+    if (type == "Float32") {
+      float f = 0;
+      const auto u32 = static_cast<std::uint32_t>(u);
+      std::memcpy(&f, &u32, 4);
+      return f;
+    }
+    if (type == "Float64") {
+      double d = 0;
+      std::memcpy(&d, &u, 8);
+      return d;
+    }
+    if (type.starts_with("UInt")) return static_cast<double>(u);
+    const std::uint64_t sign = std::uint64_t{1} << (8 * size - 1);
+    if (size < 8 && (u & sign)) return static_cast<double>(u) - 2.0 * static_cast<double>(sign);
+    return static_cast<double>(static_cast<std::int64_t>(u));
+  }
+
+  /// The number of whitespace-separated values of an ascii DataArray.
+  static std::uint64_t ascii_count(std::string_view text) {
+    std::uint64_t n = 0;
+    bool in_value = false;
+    for (const char c : text) {
+      const bool space = c == ' ' || c == '\t' || c == '\r' || c == '\n';
+      if (!space && !in_value) ++n;
+      in_value = !space;
+    }
+    return n;
+  }
+
+  /// Up to `limit` numbers of an ascii DataArray.
+  std::vector<double> ascii_values(std::string_view text, std::size_t limit) const {
+    std::vector<double> out;
+    std::size_t i = 0;
+    while (out.size() < limit) {
+      i = text.find_first_not_of(" \t\r\n", i);
+      if (i == std::string_view::npos) break;
+      std::size_t end = text.find_first_of(" \t\r\n", i);
+      if (end == std::string_view::npos) end = text.size();
+      double v = 0;
+      const auto r = std::from_chars(text.data() + i, text.data() + end, v);
+      if (r.ec == std::errc::invalid_argument || r.ptr != text.data() + end)
+        bad("the " + std::string(kCellBlocks[*block_]) + " cell arrays hold \"" +
+            std::string(text.substr(i, std::min<std::size_t>(end - i, 20))) +
+            "\", which is not a number");
+      out.push_back(v);
+      i = end;
+    }
+    return out;
+  }
+
+  /// Decodes base64 `text` from `pos` (whitespace skipped) until `want` more
+  /// bytes are out, a padded group ends the stream or the text ends; `pos`
+  /// moves past the last group read, whose bytes are all appended (up to 2
+  /// more than `want`), so that the next call continues the stream.
+  static void base64(std::string_view text, std::size_t& pos, std::size_t want, std::string& out) {
+    const std::size_t target = out.size() + want;
+    std::uint32_t group = 0;
+    int chars = 0, padding = 0;
+    while (out.size() < target && pos < text.size()) {
+      const char c = text[pos];
+      int v = -1;
+      if (c >= 'A' && c <= 'Z')
+        v = c - 'A';
+      else if (c >= 'a' && c <= 'z')
+        v = c - 'a' + 26;
+      else if (c >= '0' && c <= '9')
+        v = c - '0' + 52;
+      else if (c == '+')
+        v = 62;
+      else if (c == '/')
+        v = 63;
+      else if (c == '=')
+        v = 0, ++padding;
+      else if (c == ' ' || c == '\t' || c == '\r' || c == '\n') {
+        ++pos;
+        continue;
+      } else {
+        break;
+      }
+      ++pos;
+      group = (group << 6) | static_cast<std::uint32_t>(v);
+      if (++chars < 4) continue;
+      for (int k = 0; k < 3 - std::min(padding, 2); ++k)
+        out.push_back(static_cast<char>((group >> (16 - 8 * k)) & 0xFF));
+      if (padding > 0) break;
+      group = 0;
+      chars = 0;
+    }
+  }
+
+  /// `want` more bytes of an array's stored (encoded or raw) data.
+  static void take(std::string_view text, bool is_base64, std::size_t& pos, std::size_t want,
+                   std::string& out) {
+    if (is_base64) return base64(text, pos, want, out);
+    const std::string_view raw = text.substr(std::min(pos, text.size()), want);
+    out.append(raw);
+    pos += raw.size();
+  }
+
+  /// The first `want` bytes of a binary array's values (fewer when it holds
+  /// fewer), inflated when the file is compressed; `total` is the number of
+  /// value bytes its header declares. Allocates at most `want` bytes plus
+  /// the stored bytes read.
+  std::string array_bytes(std::string_view text, bool is_base64, std::size_t want,
+                          std::uint64_t& total) const {
+    std::size_t pos = 0;
+    std::string header;
+    if (!compressed_) {
+      take(text, is_base64, pos, header_bytes_ + want, header);
+      total = word(header, 0);
+      return header.substr(header_bytes_,
+                           static_cast<std::size_t>(std::min<std::uint64_t>(total, want)));
+    }
+    take(text, is_base64, pos, 3 * header_bytes_, header);
+    const std::uint64_t blocks = word(header, 0), block_size = word(header, 1),
+                        last_size = word(header, 2);
+    // check_header() bounded blocks by the stored bytes.
+    take(text, is_base64, pos, static_cast<std::size_t>(blocks) * header_bytes_, header);
+    if (blocks > 0) word(header, 3 + static_cast<std::size_t>(blocks) - 1);
+    total = blocks == 0 ? 0 : (blocks - 1) * block_size + (last_size ? last_size : block_size);
+    std::string out, stored;
+    std::size_t used = 0;  // stored bytes of the blocks before this one
+    for (std::uint64_t b = 0; b < blocks && out.size() < want; ++b) {
+      const std::uint64_t compressed = word(header, 3 + static_cast<std::size_t>(b));
+      if (used + compressed > stored.size())
+        take(text, is_base64, pos, static_cast<std::size_t>(used + compressed - stored.size()),
+             stored);
+      if (used + compressed > stored.size())
+        bad("a compressed DataArray holds fewer bytes than its header declares");
+      const std::uint64_t block = b + 1 == blocks && last_size ? last_size : block_size;
+      const std::size_t need =
+          static_cast<std::size_t>(std::min<std::uint64_t>(block, want - out.size()));
+      out += inflate_zlib_or_gzip(
+          std::string_view(stored).substr(used, static_cast<std::size_t>(compressed)), need,
+          InflateSize::at_least, [&](const std::string& problem) {
+            bad("a compressed DataArray of a cell block: " + problem);
+          });
+      used += static_cast<std::size_t>(compressed);
+    }
+    return out;
+  }
+
+  static std::string number(double v) {
+    char buffer[64];
+    const auto r = std::to_chars(buffer, buffer + sizeof buffer, v, std::chars_format::fixed, 0);
+    return std::string(buffer, r.ptr);
+  }
+
+  /// At the end of a cell block: its offsets must be NumberOf<block>
+  /// non-negative, non-decreasing values, the last no more than the
+  /// connectivity's number of values.
+  void check_offsets() const {
+    const std::size_t b = *block_;
+    const std::uint64_t n = cells_[b];
+    if (n == 0 || !offsets_) return;
+    const std::string what = "the " + std::string(kCellBlocks[b]) + " offsets";
+    if (offsets_->size() < n)
+      bad(what + " hold " + std::to_string(offsets_->size()) + " values but NumberOf" +
+          std::string(kCellBlocks[b]) + "=" + std::to_string(n));
+    double previous = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double v = (*offsets_)[i];
+      if (!(v >= 0)) bad(what + " hold " + number(v) + " at index " + std::to_string(i));
+      if (v < previous)
+        bad(what + " decrease from " + number(previous) + " to " + number(v) + " at index " +
+            std::to_string(i));
+      previous = v;
+    }
+    const std::uint64_t connectivity = connectivity_values_.value_or(0);
+    if (previous > static_cast<double>(connectivity))
+      bad(what + " end at " + number(previous) + " but the connectivity holds " +
+          std::to_string(connectivity) + " values");
+  }
+
   std::string_view data_;
   const std::string& name_;
+  std::array<std::uint64_t, 4> cells_{};  ///< NumberOfVerts, ...Lines, ...Strips, ...Polys
+  std::optional<std::size_t> block_;      ///< inside this cell block
+  std::optional<std::uint64_t> connectivity_values_;
+  std::optional<std::vector<double>> offsets_;
+  bool big_endian_ = false;
   std::string_view appended_;
   bool appended_base64_ = false;
   bool compressed_ = false;
