@@ -1,6 +1,6 @@
 // `fabrica render MESH_OR_SCENE [--camera FILE | --view NAME] [--style S]
 //  [--lines LIST] [--hybrid-ar] [--context MESH ...] [--size WxH]
-//  [--transparent] [--backend egl|osmesa] [--svg OUT.svg] -o OUT.png`:
+//  [--transparent] [--backend egl|osmesa] [--svg OUT.svg] [--pdf OUT.pdf] -o OUT.png`:
 // headless illustration (docs/rendering.md). A mesh is drawn as the focus
 // structure, each --context mesh as a ghosted context structure; a scene
 // JSON describes several structures with their roles and styles.
@@ -26,7 +26,8 @@ namespace fabrica::cli {
 namespace {
 
 struct RenderArgs {
-  std::string input, camera_file, view, style, lines, size, backend, output, svg, hidden, space;
+  std::string input, camera_file, view, style, lines, size, backend, output, svg, pdf, hidden,
+      space;
   std::string save_scene, save_camera, frame;
   std::vector<std::string> context;
   std::optional<double> tau, lambda, threshold, line_width, context_opacity;
@@ -41,10 +42,16 @@ int run_render(const RenderArgs& a) {
     throw InputError("-o " + a.output + ": the image must end in .png");
   if (!a.svg.empty() && lower(std::filesystem::path(a.svg).extension().string()) != ".svg")
     throw InputError("--svg " + a.svg + ": must end in .svg");
+  if (!a.pdf.empty() && lower(std::filesystem::path(a.pdf).extension().string()) != ".pdf")
+    throw InputError("--pdf " + a.pdf + ": must end in .pdf");
+  if (!a.pdf.empty() && !pdf_available())
+    throw Error(ErrorKind::unavailable, "--pdf " + a.pdf +
+                                            ": PDF output needs cairo; this fabrica was built "
+                                            "without it (write --svg instead)");
   if (!a.camera_file.empty() && !a.view.empty())
     throw InputError("give either --camera FILE or --view NAME, not both");
   // Every output's folder must exist before any is written (no half set of outputs).
-  for (const std::string& f : {a.output, a.svg, a.save_scene, a.save_camera}) {
+  for (const std::string& f : {a.output, a.svg, a.pdf, a.save_scene, a.save_camera}) {
     const auto parent = std::filesystem::path(f).parent_path();
     if (!f.empty() && !parent.empty() && !std::filesystem::is_directory(parent))
       throw OutputError(f + ": cannot write: folder " + parent.string() + " does not exist");
@@ -151,13 +158,13 @@ int run_render(const RenderArgs& a) {
   const render::RenderedScene picture = render::render_scene(*renderer, scene, camera, ro);
   render::write_png(picture.image, out_path);
 
-  // 5. Vector lines: focus lines hidden by opaque structures, context lines by every surface.
-  if (!a.svg.empty()) {
-    fabrica::LineStyle style;
-    if (!a.hidden.empty() && lower(a.hidden) == "dashed")
-      style.hidden = fabrica::HiddenLines::dashed;
-    write_svg(a.svg, render::vector_lines(scene, picture.scene, camera), camera, style);
-  }
+  // 5. Vector lines: one layer per structure in its line style, focus over
+  // context (render::write_scene_svg); focus lines hidden by opaque
+  // structures, context lines by every surface.
+  if (!a.svg.empty())
+    render::write_scene_svg(a.svg, scene, picture.scene, camera, ro.line_reference_size);
+  if (!a.pdf.empty())
+    render::write_scene_pdf(a.pdf, scene, picture.scene, camera, ro.line_reference_size);
   if (!a.save_scene.empty()) {
     render::SceneSpec saved = spec;
     saved.camera = camera;
@@ -215,7 +222,10 @@ void add_render_command(CLI::App& app, Action& action) {
   cmd->add_option("--backend", args->backend,
                   "Headless GL backend: egl or osmesa (default: egl, "
                   "then osmesa; or FABRICA_GL_BACKEND)");
-  cmd->add_option("--svg", args->svg, "Also write the object-space lines as vector SVG");
+  cmd->add_option("--svg", args->svg,
+                  "Also write the object-space lines as vector SVG (a layer per structure)");
+  cmd->add_option("--pdf", args->pdf,
+                  "Also write the object-space lines as vector PDF (each structure's colour)");
   cmd->add_option("--space", args->space, "Coordinate space of untagged meshes: lps or ras");
   cmd->add_option("--save-scene", args->save_scene, "Write the scene (with its camera) as JSON");
   cmd->add_option("--save-camera", args->save_camera, "Write the camera as JSON");

@@ -1,4 +1,7 @@
+#include <algorithm>
+#include <cstdio>
 #include <string>
+#include <vector>
 
 #include "fabrica/core/atomic_file.hpp"
 #include "fabrica/core/error.hpp"
@@ -36,27 +39,21 @@ void parse_color(const char* hex, double& r, double& g, double& b) {
 }  // namespace
 #endif
 
-void write_pdf(const std::filesystem::path& path, const LineSet& lines, const Camera& camera,
-               const LineStyle& style) {
 #ifdef FABRICA_HAVE_CAIRO
-  std::string data;
-  // One pixel = one PDF point (1/72 inch).
-  cairo_surface_t* surface =
-      cairo_pdf_surface_create_for_stream(append_to_string, &data, camera.width, camera.height);
-  // No creation date (cairo writes the current time): the same lines give
-  // the same bytes, on every run and at any thread count (issue 15).
-  cairo_pdf_surface_set_metadata(surface, CAIRO_PDF_METADATA_CREATE_DATE, "");
-  cairo_t* cr = cairo_create(surface);
-  cairo_set_line_cap(cr, CAIRO_LINE_CAP_ROUND);
-  cairo_set_line_join(cr, CAIRO_LINE_JOIN_ROUND);
-  const double scale = std::min(camera.width, camera.height) / std::max(style.reference_size, 1.0);
-  for (const auto& p : stroke_pieces(lines, camera, style)) {
+namespace {
+
+/// Strokes `pieces` on `cr`: in the family colour, or in `color` ("#rrggbb")
+/// when given; every opacity multiplied by `opacity`; hidden pieces dashed
+/// unless `hidden` is solid.
+void stroke_all(cairo_t* cr, const std::vector<StrokePiece>& pieces, HiddenLines hidden,
+                double dash_on, double dash_off, const char* color, double opacity) {
+  for (const auto& p : pieces) {
     double r, g, b;
-    parse_color(family_color(p.family), r, g, b);
-    cairo_set_source_rgba(cr, r, g, b, p.opacity);
+    parse_color(color ? color : family_color(p.family), r, g, b);
+    cairo_set_source_rgba(cr, r, g, b, p.opacity * opacity);
     cairo_set_line_width(cr, p.width);
-    if (p.hidden) {
-      const double dashes[2] = {4.0 * scale, 3.0 * scale};
+    if (p.hidden && hidden != HiddenLines::solid) {
+      const double dashes[2] = {dash_on, dash_off};
       cairo_set_dash(cr, dashes, 2, 0.0);
     } else {
       cairo_set_dash(cr, nullptr, 0, 0.0);
@@ -71,6 +68,22 @@ void write_pdf(const std::filesystem::path& path, const LineSet& lines, const Ca
     if (p.closed) cairo_close_path(cr);
     cairo_stroke(cr);
   }
+}
+
+/// A PDF page of the camera's size drawn by `draw(cr)`, written atomically.
+template <class Draw>
+void pdf_page(const std::filesystem::path& path, const Camera& camera, Draw draw) {
+  std::string data;
+  // One pixel = one PDF point (1/72 inch).
+  cairo_surface_t* surface =
+      cairo_pdf_surface_create_for_stream(append_to_string, &data, camera.width, camera.height);
+  // No creation date (cairo writes the current time): the same lines give
+  // the same bytes, on every run and at any thread count (issue 15).
+  cairo_pdf_surface_set_metadata(surface, CAIRO_PDF_METADATA_CREATE_DATE, "");
+  cairo_t* cr = cairo_create(surface);
+  cairo_set_line_cap(cr, CAIRO_LINE_CAP_ROUND);
+  cairo_set_line_join(cr, CAIRO_LINE_JOIN_ROUND);
+  draw(cr);
   cairo_destroy(cr);
   cairo_surface_finish(surface);
   const cairo_status_t status = cairo_surface_status(surface);
@@ -82,14 +95,54 @@ void write_pdf(const std::filesystem::path& path, const LineSet& lines, const Ca
       path,
       [&](std::ostream& out) { out.write(data.data(), static_cast<std::streamsize>(data.size())); },
       true);
-#else
-  (void)lines;
-  (void)camera;
-  (void)style;
+}
+
+}  // namespace
+#endif
+
+#ifndef FABRICA_HAVE_CAIRO
+namespace {
+[[noreturn]] void no_cairo(const std::filesystem::path& path) {
   throw Error(ErrorKind::unavailable,
               path.string() +
                   ": PDF output needs cairo; this fabrica was built without it "
                   "(install libcairo2-dev and rebuild, or write .svg)");
+}
+}  // namespace
+#endif
+
+void write_pdf(const std::filesystem::path& path, const LineSet& lines, const Camera& camera,
+               const LineStyle& style) {
+#ifdef FABRICA_HAVE_CAIRO
+  const double scale = std::min(camera.width, camera.height) / std::max(style.reference_size, 1.0);
+  pdf_page(path, camera, [&](cairo_t* cr) {
+    stroke_all(cr, stroke_pieces(lines, camera, style), style.hidden, 4.0 * scale, 3.0 * scale,
+               nullptr, 1.0);
+  });
+#else
+  (void)lines;
+  (void)camera;
+  (void)style;
+  no_cairo(path);
+#endif
+}
+
+void write_layered_pdf(const std::filesystem::path& path, const std::vector<LineLayer>& layers,
+                       const Camera& camera) {
+#ifdef FABRICA_HAVE_CAIRO
+  pdf_page(path, camera, [&](cairo_t* cr) {
+    for (const LineLayer& layer : layers) {
+      const double scale =
+          std::min(camera.width, camera.height) / std::max(layer.style.reference_size, 1.0);
+      stroke_all(cr, stroke_pieces(layer.lines, camera, layer.style), layer.style.hidden,
+                 layer.dash * scale, layer.dash * scale, layer.color.c_str(),
+                 std::clamp(layer.opacity, 0.0, 1.0));
+    }
+  });
+#else
+  (void)layers;
+  (void)camera;
+  no_cairo(path);
 #endif
 }
 

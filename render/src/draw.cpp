@@ -1,6 +1,9 @@
 #include "fabrica/render/draw.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
 #include <utility>
 
 #include "fabrica/core/error.hpp"
@@ -111,7 +114,13 @@ RenderedScene render_scene(const SceneSurfaces& scene, const Camera& camera,
   return render_scene(renderer, scene, camera, options);
 }
 
-LineSet vector_lines(const SceneSurfaces& scene, const Scene& drawn, const Camera& camera) {
+namespace {
+
+/// Each drawn structure's lines with CPU visibility: a focus (opaque)
+/// structure's lines hidden by the opaque structures, a ghosted one's by
+/// every surface.
+std::vector<LineSet> visible_lines(const SceneSurfaces& scene, const Scene& drawn,
+                                   const Camera& camera) {
   TriangleMesh opaque, all;
   auto append = [](TriangleMesh& dst, const TriangleMesh& src) {
     const auto base = static_cast<std::int32_t>(dst.positions.size());
@@ -124,14 +133,75 @@ LineSet vector_lines(const SceneSurfaces& scene, const Scene& drawn, const Camer
   }
   const DepthBuffer depth_all = render_depth(all, camera);
   const DepthBuffer depth_opaque = opaque.faces.empty() ? depth_all : render_depth(opaque, camera);
-  LineSet merged;
+  std::vector<LineSet> out;
   for (std::size_t i = 0; i < scene.surfaces.size(); ++i) {
     LineSet ls = drawn.structures[i].lines;
     compute_visibility(ls, *scene.surfaces[i], camera, {},
                        drawn.structures[i].style.opacity >= 0.999 ? &depth_opaque : &depth_all);
-    merged.polylines.insert(merged.polylines.end(), ls.polylines.begin(), ls.polylines.end());
+    out.push_back(std::move(ls));
   }
+  return out;
+}
+
+std::string hex_color(const Color& c) {
+  auto byte = [](float v) {
+    return static_cast<int>(std::lround(std::clamp(static_cast<double>(v), 0.0, 1.0) * 255.0));
+  };
+  char buf[8];
+  std::snprintf(buf, sizeof buf, "#%02x%02x%02x", byte(c.r), byte(c.g), byte(c.b));
+  return buf;
+}
+
+}  // namespace
+
+LineSet vector_lines(const SceneSurfaces& scene, const Scene& drawn, const Camera& camera) {
+  LineSet merged;
+  for (const LineSet& ls : visible_lines(scene, drawn, camera))
+    merged.polylines.insert(merged.polylines.end(), ls.polylines.begin(), ls.polylines.end());
   return merged;
+}
+
+std::vector<LineLayer> vector_layers(const SceneSurfaces& scene, const Scene& drawn,
+                                     const Camera& camera, double reference_size) {
+  std::vector<LineSet> lines = visible_lines(scene, drawn, camera);
+  std::vector<LineLayer> out;
+  for (Role role : {Role::context, Role::focus}) {
+    for (std::size_t i = 0; i < drawn.structures.size(); ++i) {
+      const Structure& st = drawn.structures[i];
+      if (st.role != role) continue;
+      const render::LineStyle& ls = st.style.lines;
+      LineLayer layer;
+      layer.name = st.name;
+      layer.role = to_string(st.role);
+      layer.color = hex_color(ls.color);
+      layer.opacity = std::clamp(static_cast<double>(ls.color.a), 0.0, 1.0);
+      layer.dash = ls.dash;
+      layer.style.width_px = ls.width;
+      layer.style.reference_size = reference_size;
+      layer.style.contour_factor = ls.contour_width_factor;
+      layer.style.width_from_strength = ls.width_by_strength;
+      layer.style.opacity_from_strength = ls.fade_by_strength;
+      layer.style.taper_fraction = ls.taper;
+      layer.style.hidden_opacity = ls.hidden_opacity;
+      // As the line shader: dashed or shown (solid) at the hidden opacity.
+      layer.style.hidden = ls.hidden == HiddenLines::dashed ? fabrica::HiddenLines::dashed
+                           : ls.hidden == HiddenLines::show ? fabrica::HiddenLines::solid
+                                                            : fabrica::HiddenLines::omit;
+      layer.lines = std::move(lines[i]);
+      out.push_back(std::move(layer));
+    }
+  }
+  return out;
+}
+
+void write_scene_svg(const std::filesystem::path& path, const SceneSurfaces& scene,
+                     const Scene& drawn, const Camera& camera, double reference_size) {
+  write_layered_svg(path, vector_layers(scene, drawn, camera, reference_size), camera);
+}
+
+void write_scene_pdf(const std::filesystem::path& path, const SceneSurfaces& scene,
+                     const Scene& drawn, const Camera& camera, double reference_size) {
+  write_layered_pdf(path, vector_layers(scene, drawn, camera, reference_size), camera);
 }
 
 }  // namespace fabrica::render

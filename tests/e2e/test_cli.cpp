@@ -27,6 +27,7 @@
 #include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <pugixml.hpp>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -1223,6 +1224,50 @@ TEST(Lines, SmoothWritesACompleteSvgAndShorterLinesOnTheSameCount) {
   EXPECT_EQ(bad.code, 2) << describe(bad);
   EXPECT_NE(bad.err.find("--smooth"), std::string::npos) << describe(bad);
   EXPECT_FALSE(fs::exists(dir / "x.svg"));
+}
+
+TEST(Render, SceneSvgKeepsAGroupPerStructure) {
+  // issue 17, item 4: the bundled focus-and-context scene as a layered SVG
+  // (and PDF): a group per structure in its line colour, focus over context.
+  if (!has_command("render")) GTEST_SKIP() << "no render command in this build";
+  const fs::path scene = fs::path(FABRICA_SOURCE_DIR) / "data" / "aneurysm-scene.json";
+  const fs::path dir = work_dir();
+  std::vector<std::string> args = {"render", scene.string(), "-o",    (dir / "a.png").string(),
+                                   "--size", "200x160",      "--svg", (dir / "a.svg").string(),
+                                   "-q"};
+  const Outcome r = run_fabrica(args);
+  if (r.code == 4) GTEST_SKIP() << "no headless GL: " << r.err;
+  ASSERT_EQ(r.code, 0) << describe(r);
+  pugi::xml_document doc;
+  ASSERT_TRUE(doc.load_file((dir / "a.svg").c_str()));
+  std::vector<std::array<std::string, 3>> groups;  // label, role, stroke
+  for (pugi::xml_node g : doc.child("svg").children("g")) {
+    groups.push_back({g.attribute("inkscape:label").value(), g.attribute("data-role").value(),
+                      g.attribute("stroke").value()});
+    std::set<std::string> families;
+    for (pugi::xml_node f : g.children("g")) {
+      families.insert(f.attribute("data-family").value());
+      EXPECT_FALSE(f.child("path").empty()) << groups.back()[0];
+    }
+    EXPECT_TRUE(families.count("contour")) << groups.back()[0];
+    if (groups.back()[1] == "context") EXPECT_EQ(families.size(), 1u);  // "lines": ["contour"]
+  }
+  // data/aneurysm-scene.json: the context wall (line_color 0.25 0.3 0.4, alpha 0.5) first,
+  // the focus aneurysm (default black lines) drawn over it.
+  using G = std::array<std::string, 3>;
+  EXPECT_EQ(groups, (std::vector<G>{G{"vessel wall", "context", "#404d66"},
+                                    G{"aneurysm", "focus", "#000000"}}));
+  EXPECT_EQ(std::string(doc.child("svg").child("g").attribute("stroke-opacity").value()), "0.50");
+  // A PDF beside it when this build has cairo, else exit 4 naming cairo and no PNG.
+  args.insert(args.end() - 1, {"--pdf", (dir / "b.pdf").string()});
+  args[3] = (dir / "b.png").string();
+  const Outcome pdf = run_fabrica(args);
+  if (pdf.code == 0) {
+    EXPECT_EQ(read_text(dir / "b.pdf").rfind("%PDF", 0), 0u);
+  } else {
+    EXPECT_NE(pdf.err.find("cairo"), std::string::npos) << describe(pdf);
+    EXPECT_FALSE(fs::exists(dir / "b.png"));
+  }
 }
 
 TEST(Render, SmoothFlagAndSceneKey) {

@@ -13,7 +13,9 @@
 
 namespace fabrica {
 
-enum class HiddenLines { omit, dashed };
+/// omit: hidden parts dropped; dashed: drawn dashed at hidden_opacity;
+/// solid: drawn solid at hidden_opacity (a scene's hidden "show").
+enum class HiddenLines { omit, dashed, solid };
 
 struct LineStyle {
   double width_px = 1.2;             ///< stroke width of interior lines at 1024 px

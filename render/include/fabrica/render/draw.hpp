@@ -20,6 +20,7 @@
 #include "fabrica/core/mesh.hpp"
 #include "fabrica/core/surface.hpp"
 #include "fabrica/lines/line_set.hpp"
+#include "fabrica/lines/writers.hpp"
 #include "fabrica/render/context.hpp"
 #include "fabrica/render/image.hpp"
 #include "fabrica/render/renderer.hpp"
@@ -86,5 +87,19 @@ RenderedScene render_scene(const SceneSurfaces& scene, const Camera& camera,
 /// the CPU: a focus (opaque) structure's lines are hidden by the opaque
 /// structures, a ghosted one's by every surface.
 LineSet vector_lines(const SceneSurfaces& scene, const Scene& drawn, const Camera& camera);
+
+/// The drawn scene as vector layers, one per structure: context structures
+/// first, then focus (drawn over them), each in scene order; its lines with
+/// CPU visibility as vector_lines computes it; stroke colour, opacity, width,
+/// contour factor, taper, strength fading and hidden lines (omit, dashed,
+/// show) from the structure's LineStyle; role "focus" or "context".
+/// `reference_size` is RenderOptions::line_reference_size.
+std::vector<LineLayer> vector_layers(const SceneSurfaces& scene, const Scene& drawn,
+                                     const Camera& camera, double reference_size = 1024.0);
+/// fabrica::write_layered_svg / write_layered_pdf of vector_layers().
+void write_scene_svg(const std::filesystem::path& path, const SceneSurfaces& scene,
+                     const Scene& drawn, const Camera& camera, double reference_size = 1024.0);
+void write_scene_pdf(const std::filesystem::path& path, const SceneSurfaces& scene,
+                     const Scene& drawn, const Camera& camera, double reference_size = 1024.0);
 
 }  // namespace fabrica::render
