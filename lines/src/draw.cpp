@@ -74,14 +74,19 @@ LineDrawer::LineDrawer(const Surface& surface, DrawLinesOptions options)
       extractor_(surface, options_.lines) {}
 
 LineDrawing LineDrawer::draw(const Camera& camera, const DepthBuffer* depth) {
-  const std::vector<SegmentSoup> soups = extractor_.extract(camera);
   LineDrawing drawing;
   drawing.feature_size = extractor_.feature_size();
-  for (const auto& s : soups) drawing.segments.emplace_back(s.family, s.segments.size());
-  ChainOptions chain;
-  chain.camera = camera;
-  chain.min_length_px = options_.min_length_px;
-  drawing.lines = chain_segments(soups, chain);
+  {
+    // The segment soups (the view's largest arrays: ~150 B a segment) are
+    // freed once chained, before smoothing and the depth raster allocate
+    // theirs, so the two do not add up in the peak memory.
+    const std::vector<SegmentSoup> soups = extractor_.extract(camera);
+    for (const auto& s : soups) drawing.segments.emplace_back(s.family, s.segments.size());
+    ChainOptions chain;
+    chain.camera = camera;
+    chain.min_length_px = options_.min_length_px;
+    drawing.lines = chain_segments(soups, chain);
+  }
   if (options_.smooth > 0) {  // on the surface, before visibility tests the positions
     LineSmoothingOptions so;
     so.iterations = options_.smooth;
