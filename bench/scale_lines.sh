@@ -7,6 +7,12 @@
 # loaded machine the wall time waits for the cores, the CPU time does not); the
 # minimum over ROUNDS runs per size. Prints one row per size and the bytes
 # per face above the binary's own footprint (`fabrica --version`).
+# With RTSC=path/to/rtsc_bench in the environment (optional tooling, see
+# docs/PERFORMANCE.md), rtsc's maximum resident set on the same mesh (as
+# OFF: its reader takes no double PLY) is printed beside it: one view of
+# the five families from 3 radii in front (-y, anterior in LPS) at the
+# bounding box's centre, feature size radius / 50, no chaining, hidden
+# lines or SVG.
 #
 #   bench/scale_lines.sh BUILD_DIR [MESH=data/aneurysm.off] [THREADS=1] [ROUNDS=3]
 #
@@ -51,14 +57,29 @@ base_kb="$(measure "$fabrica" --version | awk '{print $3}')"
 echo "# $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'); $(date -u '+%F %H:%M UTC');" \
   "load $(cut -d' ' -f1-3 /proc/loadavg); threads $threads; min of $rounds runs"
 echo "# binary alone (fabrica --version): $((base_kb / 1024)) MB"
-printf '%10s %10s %9s %9s %9s %11s\n' faces vertices wall_s cpu_s rss_MB "B/face>base"
+rtsc="${RTSC:-}"
+if [ -n "$rtsc" ] && [ ! -x "$rtsc" ]; then
+  echo "scale_lines: RTSC=$rtsc is not an executable" >&2
+  exit 2
+fi
+printf '%10s %10s %9s %9s %9s %11s%s\n' faces vertices wall_s cpu_s rss_MB "B/face>base" \
+  "${rtsc:+ rtsc_rss_MB}"
 for steps in 33 44 334 444 3344; do
   counts="$("$scale" "$mesh" "$tmp/m.ply" "$steps")"
   vertices="$(echo "$counts" | awk '{print $2}')" faces="$(echo "$counts" | awk '{print $4}')"
+  rtsc_mb=""
+  if [ -n "$rtsc" ]; then
+    "$scale" "$mesh" "$tmp/m.off" "$steps" >/dev/null
+    read -r cx cy cz r <<<"$(echo "$counts" | awk '{print $6, $7, $8, $10}')"
+    eye="$(awk -v x="$cx" -v y="$cy" -v z="$cz" -v r="$r" 'BEGIN {print x, y - 3 * r, z, r / 50}')"
+    # shellcheck disable=SC2086  # eye: four numbers
+    rtsc_mb="$(measure "$rtsc" "$tmp/m.off" $eye 1 1 1 | awk '{printf " %11.1f", $3 / 1024}')"
+  fi
   for ((r = 0; r < rounds; ++r)); do
     measure "$fabrica" lines "$tmp/m.ply" -o "$tmp/out.svg" --types reference \
       --threads "$threads" -q
   done | sort -g -k3 | awk -v f="$faces" -v v="$vertices" -v b="$base_kb" '
     NR == 1 || $1 < w {w = $1} NR == 1 || $2 < u {u = $2} NR == 1 || $3 < r {r = $3}
-    END {printf "%10d %10d %9.2f %9.2f %9.1f %11.0f\n", f, v, w, u, r / 1024, (r - b) * 1024 / f}'
+    END {printf "%10d %10d %9.2f %9.2f %9.1f %11.0f", f, v, w, u, r / 1024, (r - b) * 1024 / f}'
+  echo "$rtsc_mb"
 done

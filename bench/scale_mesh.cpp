@@ -6,7 +6,8 @@
 //      edge's two faces), four triangles per triangle;
 //   3  centroid split: a vertex at each triangle's centroid, three triangles.
 //   scale_mesh IN OUT STEPS     e.g. scale_mesh data/aneurysm.off big.ply 3344
-// OUT's format is chosen by extension (binary PLY is quickest to read).
+// OUT's format is chosen by extension (binary PLY is quickest to read). Prints
+// the vertex and face counts, the bounding box's centre and half diagonal.
 #include <cstdint>
 #include <cstdio>
 #include <exception>
@@ -84,7 +85,16 @@ int main(int argc, char** argv) {
       c == '4' ? split_midpoints(m) : split_centroids(m);
     }
     fabrica::io::write_mesh(m, argv[2]);
-    std::printf("vertices %zu faces %zu\n", m.positions.size(), m.faces.size());
+    // The bounding box's centre and half diagonal (for a camera looking at
+    // the mesh, e.g. rtsc_bench's eye in bench/scale_lines.sh).
+    Vec3 lo = m.positions[0], hi = lo;
+    for (const Vec3& p : m.positions) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+    const Vec3 c = 0.5 * (lo + hi);
+    std::printf("vertices %zu faces %zu centre %.9g %.9g %.9g radius %.9g\n", m.positions.size(),
+                m.faces.size(), c[0], c[1], c[2], 0.5 * (hi - lo).norm());
   } catch (const std::exception& e) {
     std::fprintf(stderr, "scale_mesh: %s\n", e.what());
     return 2;
