@@ -1,6 +1,7 @@
 #include "fabrica/lines/draw.hpp"
 
 #include <cmath>
+#include <memory>
 #include <string>
 
 #include "fabrica/core/error.hpp"
@@ -123,19 +124,18 @@ LineDrawing draw_lines(const Surface& surface, const Camera& camera,
   // segments are extracted, before chaining, smoothing and hidden-line
   // removal.
   validate(options);
+  // Built first, so that bad options are reported before anything is
+  // computed, as LineDrawer does (its precompute is filled on extraction).
+  auto extractor = std::make_unique<LineExtractor>(surface, options.lines);
+  const double feature_size = extractor->feature_size();
   DepthBuffer depth;
   if (options.visibility) {
-    validate_camera(camera);  // as the extractor would, before the raster reads it
+    validate_camera(camera);  // as the extraction would, before the raster reads it
     render_depth(surface.mesh(), camera, depth);
     depth.scratch = detail::RasterScratchSlot();
   }
-  std::vector<SegmentSoup> soups;
-  double feature_size = 0.0;
-  {
-    LineExtractor extractor(surface, options.lines);
-    soups = extractor.extract(camera);
-    feature_size = extractor.feature_size();
-  }
+  std::vector<SegmentSoup> soups = extractor->extract(camera);
+  extractor.reset();
   LineDrawing drawing = chain_soups(std::move(soups), feature_size, camera, options);
   smooth_and_hide(drawing, surface, camera, options, options.visibility ? &depth : nullptr);
   return drawing;
