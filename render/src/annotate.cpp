@@ -98,7 +98,7 @@ Grid make_grid(const SceneSurfaces& scene, const Camera& camera) {
 
 // Chamfer (3-4) distance of every pixel of a w × h label map to the edge of
 // its region (a pixel whose 4-neighbour has another label, or the edge of
-// the map); docs/algorithms.md §15.2.
+// the map); docs/algorithms.md §13 step 2.
 std::vector<float> region_depth(const std::vector<int>& labels, int w, int h) {
   const float big = 1e30f;
   std::vector<float> d(labels.size(), big);
@@ -402,11 +402,11 @@ Annotation annotate_scene(const SceneSurfaces& scene, const Camera& camera,
   }
   for (auto& it : corner_items) out.overlay.items.push_back(std::move(it));
 
-  // Labels: each anchored where its structure is shown, at the pixel
-  // deepest inside that region; the text at the nearest free place along 16
-  // rays from the anchor (distance first, then the rays in a fixed order:
-  // sideways before up and down), outside every silhouette, clear of the
-  // other texts and blocks, its leader crossing no other leader or text.
+  // Labels (docs/algorithms.md §13 step 3): each anchored where its structure is shown, at the
+  // pixel deepest inside that region; the text at the nearest free place along 16 rays from the
+  // anchor (distance first, then the rays in a fixed order: sideways before up and down), outside
+  // every silhouette, clear of the other texts and blocks, its leader crossing no other leader or
+  // text.
   if (options.labels) {
     const std::vector<float> inside = region_depth(grid.owner, grid.w, grid.h);
     // Where a structure is nowhere in front (a ghosted one behind another

@@ -2,7 +2,7 @@
 // punctuation drawn as polylines on a 4 x 6 grid, lower case as small
 // capitals. The annotation draws its text with it in PNG and PDF (no font
 // file, identical on every machine); the SVG carries real <text> fitted to
-// the same box (docs/rendering.md, docs/algorithms.md §15).
+// the same box (docs/rendering.md, docs/algorithms.md §13).
 #pragma once
 
 #include <string_view>

@@ -3,7 +3,7 @@
 // the patient axes, computed once and drawn identically into the PNG
 // (draw_annotation) and the SVG/PDF (as the vector overlay of
 // write_scene_svg / write_scene_pdf). docs/rendering.md#annotation,
-// docs/algorithms.md §15.
+// docs/algorithms.md §13.
 //
 //   const auto note = fabrica::render::annotate_scene(scene, camera, spec.annotation);
 //   fabrica::render::draw_annotation(picture.image, note.overlay);
