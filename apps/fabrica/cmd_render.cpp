@@ -1,6 +1,8 @@
 // `fabrica render MESH_OR_SCENE [--camera FILE | --view NAME] [--style S]
 //  [--lines LIST] [--hybrid-ar] [--context MESH ...] [--size WxH]
-//  [--transparent] [--backend egl|osmesa] [--svg OUT.svg] [--pdf OUT.pdf] -o OUT.png`:
+//  [--transparent] [--backend egl|osmesa] [--svg OUT.svg] [--pdf OUT.pdf]
+//  [--labels] [--legend] [--scale-bar] [--orientation-marker] [--annotate]
+//  [--font-size PX] -o OUT.png`:
 // headless illustration (docs/rendering.md). A mesh is drawn as the focus
 // structure, each --context mesh as a ghosted context structure; a scene
 // JSON describes several structures with their roles and styles.

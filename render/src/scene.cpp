@@ -423,6 +423,10 @@ SceneSpec scene_spec_from_json(const nlohmann::json& j, const std::filesystem::p
           st.show_label = l.get<bool>();
         } else if (l.is_string() && !l.get<std::string>().empty()) {
           st.label = l.get<std::string>();
+          if (std::any_of(st.label.begin(), st.label.end(),
+                          [](char c) { return static_cast<unsigned char>(c) < 0x20; }))
+            throw InputError(what + ": " + path +
+                             ".label must not contain control characters (tabs, new lines)");
         } else {
           throw InputError(what + ": " + path +
                            ".label must be a non-empty string or true/false (got " +

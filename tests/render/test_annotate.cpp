@@ -365,7 +365,8 @@ TEST(Annotate, SceneKeysAreValidatedStrictly) {
        "annotation.font_size must be between"},
       {R"({"structures": [{"mesh": "a.stl", "label": 3}]})", "structures[0].label must be"},
       {R"({"structures": [{"mesh": "a.stl", "label": ""}]})", "structures[0].label must be"},
-      {R"({"structures": [{"mesh": "a.stl", "lable": "x"}]})", "did you mean 'label'?"}};
+      {R"({"structures": [{"mesh": "a.stl", "lable": "x"}]})", "did you mean 'label'?"},
+      {R"({"structures": [{"mesh": "a.stl", "label": "a\nb"}]})", "control characters"}};
   for (const auto& [text, message] : bad) {
     try {
       parse_scene(text);
