@@ -369,14 +369,19 @@ Annotation annotate_scene(const SceneSurfaces& scene, const Camera& camera,
   // (scene order), "(focus)" after focus structures, and the scale bar's
   // depth for a perspective camera.
   if (options.legend) {
-    const double size = 0.85 * font, row = 1.45 * size, sw = 0.9 * size;
     std::vector<std::string> lines;
     for (const auto& s : scene.spec.structures)
       lines.push_back(display_name(s) + (s.role == Role::focus ? " (focus)" : ""));
     if (options.scale_bar && out.scale_at_focus_depth && out.scale_bar_mm > 0.0)
       lines.push_back("scale at focus depth (perspective)");
-    double tw = 0.0;
-    for (const auto& l : lines) tw = std::max(tw, detail::text_width(l, size));
+    // 0.85 font sizes, smaller when the legend would not fit the picture.
+    double tw1 = 0.0;  // widest line at size 1
+    for (const auto& l : lines) tw1 = std::max(tw1, detail::text_width(l, 1.0));
+    const double fit_h = (camera.height - 2.0 * margin) / (0.6 + 1.45 * lines.size());
+    const double fit_w = (camera.width - 2.0 * margin) / (2.6 + tw1);
+    const double size = std::max(1.0, std::min({0.85 * font, fit_h, fit_w}));
+    const double row = 1.45 * size, sw = 0.9 * size;
+    const double tw = tw1 * size;
     const double w = 0.6 * size + sw + 0.5 * size + tw + 0.6 * size;
     const double h = 0.6 * size + row * lines.size();
     const Box b = place_corner(w, h);

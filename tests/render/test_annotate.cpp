@@ -376,3 +376,24 @@ TEST(Annotate, SceneKeysAreValidatedStrictly) {
     }
   }
 }
+
+TEST(Annotate, LegendShrinksToFitASmallPicture) {
+  const fr::SceneSurfaces scene = three_spheres();
+  const Camera cam = camera_of(scene, fabrica::AnatomicalView::anterior, 120, 60);
+  fr::AnnotationSpec legend;
+  legend.legend = true;
+  legend.font_size = 200.0;  // 11.7 px here: 4 rows at 0.85 of it would be 64 px high
+  const Parsed svg = parse(svg_of(scene, cam, fr::annotate_scene(scene, cam, legend)));
+  int frames = 0;
+  for (const auto& p : svg.paths) {
+    if (p.role != "legend-frame") continue;
+    ++frames;
+    for (const Vec2& q : p.points) {
+      EXPECT_GE(q.x(), 0.0);
+      EXPECT_GE(q.y(), 0.0);
+      EXPECT_LE(q.x(), cam.width);
+      EXPECT_LE(q.y(), cam.height);
+    }
+  }
+  EXPECT_EQ(frames, 1);
+}
