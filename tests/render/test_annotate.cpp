@@ -381,7 +381,7 @@ TEST(Annotate, LegendShrinksToFitASmallPicture) {
   const fr::SceneSurfaces scene = three_spheres();
   const Camera cam = camera_of(scene, fabrica::AnatomicalView::anterior, 120, 60);
   fr::AnnotationSpec legend;
-  legend.legend = true;
+  legend.legend = legend.scale_bar = true;  // 4 rows: 3 structures and the depth note
   legend.font_size = 200.0;  // 11.7 px here: 4 rows at 0.85 of it would be 64 px high
   const Parsed svg = parse(svg_of(scene, cam, fr::annotate_scene(scene, cam, legend)));
   int frames = 0;
