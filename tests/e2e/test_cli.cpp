@@ -1625,3 +1625,51 @@ TEST(Hardening, EveryOutputKindIsTheSameAtAnyThreadCount) {
 }
 
 }  // namespace
+
+TEST(Render, AnnotationFlagsAndTheirErrors) {
+  // issue 17, item 5: --annotate draws labels, legend, scale bar and marker
+  // into the PNG and an "annotation" layer of real <text> into the SVG, the
+  // same bytes on every run; bad values and misspelt flags exit 2.
+  if (!has_command("render")) GTEST_SKIP() << "no render command in this build";
+  const fs::path scene = fs::path(FABRICA_SOURCE_DIR) / "data" / "aneurysm-scene.json";
+  const fs::path dir = work_dir();
+  auto args = [&](const std::string& stem) {
+    return std::vector<std::string>{
+        "render",     scene.string(), "-o",    (dir / (stem + ".png")).string(),
+        "--size",     "320x240",      "--svg", (dir / (stem + ".svg")).string(),
+        "--annotate", "--font-size",  "24",    "-q"};
+  };
+  const Outcome r = run_fabrica(args("a"));
+  if (r.code == 4) GTEST_SKIP() << "no headless GL: " << r.err;
+  ASSERT_EQ(r.code, 0) << describe(r);
+  ASSERT_EQ(run_fabrica(args("b")).code, 0);
+  EXPECT_EQ(read_text(dir / "a.png"), read_text(dir / "b.png"));
+  EXPECT_EQ(read_text(dir / "a.svg"), read_text(dir / "b.svg"));
+  pugi::xml_document doc;
+  ASSERT_TRUE(doc.load_file((dir / "a.svg").c_str()));
+  const pugi::xml_node layer = doc.child("svg").last_child();
+  EXPECT_EQ(std::string(layer.attribute("inkscape:label").value()), "annotation");
+  std::set<std::string> roles;
+  for (pugi::xml_node n : layer.children()) roles.insert(n.attribute("data-role").value());
+  for (const char* role : {"label", "leader", "legend-text", "legend-swatch", "scale-bar",
+                           "scale-bar-text", "orientation"})
+    EXPECT_TRUE(roles.count(role)) << role;
+  // Without the flags: no annotation layer, and the picture differs.
+  std::vector<std::string> plain = args("c");
+  plain.erase(plain.end() - 4, plain.end() - 1);
+  ASSERT_EQ(run_fabrica(plain).code, 0);
+  EXPECT_EQ(read_text(dir / "c.svg").find("annotation"), std::string::npos);
+  EXPECT_NE(read_text(dir / "a.png"), read_text(dir / "c.png"));
+  for (const auto& extra :
+       {std::vector<std::string>{"--font-size", "0"},
+        std::vector<std::string>{"--font-size", "big"}, std::vector<std::string>{"--scale-bars"}}) {
+    std::vector<std::string> bad = {"render", scene.string(), "-o", (dir / "d.png").string()};
+    bad.insert(bad.end(), extra.begin(), extra.end());
+    const Outcome o = run_fabrica(bad);
+    EXPECT_EQ(o.code, 2) << describe(o);
+    EXPECT_FALSE(fs::exists(dir / "d.png"));
+  }
+  const Outcome typo =
+      run_fabrica({"render", scene.string(), "-o", (dir / "d.png").string(), "--scale-bars"});
+  EXPECT_NE(typo.err.find("--scale-bar"), std::string::npos) << describe(typo);
+}
