@@ -384,15 +384,10 @@ class Worker {
       remove_temporaries(dir_ / rel);
       remove_temporaries(meta_path(rel));
     }
-    try {
-      for (const auto& run : runs) run_args(run.args);
-    } catch (...) {
-      for (const auto& rel : item.outputs) {
-        std::error_code ec;
-        fs::remove((dir_ / rel).parent_path(), ec);  // only when empty
-      }
-      throw;
-    }
+    // A failure leaves the folders made above; the parent removes the empty
+    // ones once every worker is done (remove_empty_folders_of_failed_items):
+    // removing them here raced with other workers' items writing there.
+    for (const auto& run : runs) run_args(run.args);
     for (const auto& rel : item.outputs) write_text(meta_path(rel), meta_text(rel));
     return "made";
   }
@@ -532,6 +527,25 @@ std::vector<std::size_t> chunk(const std::vector<std::size_t>& items, int w, int
 std::string describe_exit(int status) {
   if (WIFSIGNALED(status)) return "was killed by signal " + std::to_string(WTERMSIG(status));
   return "exited with code " + std::to_string(WEXITSTATUS(status));
+}
+
+/// Empty folders that failed items' outputs would have gone into, strictly
+/// inside `dir` (never `dir` itself), innermost first.
+void remove_empty_folders_of_failed_items(const fs::path& dir,
+                                          const std::map<std::size_t, Record>& records) {
+  const fs::path root = dir.lexically_normal();
+  for (const auto& [index, r] : records) {
+    if (r.status != "failed") continue;
+    for (const auto& rel : r.outputs) {
+      for (fs::path f = (root / rel).parent_path(); f != root && f.has_relative_path();
+           f = f.parent_path()) {
+        const auto inside = f.lexically_relative(root);
+        if (inside.empty() || *inside.begin() == "..") break;
+        std::error_code ec;
+        if (!fs::is_directory(f, ec) || !fs::is_empty(f, ec) || !fs::remove(f, ec)) break;
+      }
+    }
+  }
 }
 
 json report_json(const Plan& plan, const std::map<std::size_t, Record>& records, long shard_index,
@@ -685,6 +699,7 @@ int run_batch(const Options& o) {
   progress.tick(true);
   progress.clear();
   const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  remove_empty_folders_of_failed_items(o.dir, records);
   const fs::path report = o.dir / report_name(shard_index, shard_count);
   write_text(report, report_json(plan, records, shard_index, shard_count, seconds).dump(2) + "\n");
   const std::size_t failed = progress.failed(), skipped = progress.skipped();
