@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <numeric>
+#include <span>
 
 #include "fabrica/core/mesh.hpp"
 
@@ -70,43 +71,53 @@ Topology::Topology(const TriangleMesh& mesh) {
   vertex_neighbors_.resize(vertex_neighbor_offsets_.back());
   vertex_edges_.resize(vertex_neighbor_offsets_.back());
   edges_.resize(edge_offsets.back());
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, kGrain), [&](const auto& r) {
-    for (std::size_t v = r.begin(); v < r.end(); ++v) {
-      const auto* const first = candidates.data() + 2 * vertex_face_offsets_[v];
-      const auto* const last = first + neighbor_counts[v];
-      std::copy(first, last, vertex_neighbors_.begin() + vertex_neighbor_offsets_[v]);
-      const auto* const first_upper = last - upper_counts[v];
-      std::int32_t e = edge_offsets[v];
-      for (auto* it = first_upper; it != last; ++it, ++e)
-        edges_[e] = {static_cast<std::int32_t>(v), *it};
-    }
-  });
-  candidates = {};
-  // Edge ids of the lower neighbours come from the lower vertex's list.
-  auto find_edge = [&](std::int32_t a, std::int32_t b) -> std::int32_t {
-    if (a == b) return -1;
-    if (a > b) std::swap(a, b);
-    const auto nb = vertex_neighbors(a);
-    const auto it = std::lower_bound(nb.begin(), nb.end(), b);
-    const auto first_upper = std::upper_bound(nb.begin(), nb.end(), a);
-    return edge_offsets[a] + static_cast<std::int32_t>(it - first_upper);
+  face_edges_.resize(nf);
+  // Edge e = (a, b), a < b, is numbered edge_offsets[a] + the rank of b among
+  // a's upper neighbours: the lower vertex numbers its edges without a search.
+  // Each vertex writes its own lists, the edge ids of its lower neighbours
+  // (one search in the lower neighbour's sorted list, still in `candidates`),
+  // and the face edges it is the lower end of (or both ends: a degenerate
+  // face's edge, -1), so every output is written once, by one vertex.
+  auto sorted_neighbors = [&](std::size_t v) {
+    const auto* const first = candidates.data() + 2 * vertex_face_offsets_[v];
+    return std::span<const std::int32_t>(first, static_cast<std::size_t>(neighbor_counts[v]));
+  };
+  auto upper_rank = [&](std::size_t a, std::int32_t b) {
+    const auto nb = sorted_neighbors(a);
+    const auto first_upper = nb.end() - upper_counts[a];
+    return static_cast<std::int32_t>(std::lower_bound(first_upper, nb.end(), b) - first_upper);
   };
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, kGrain), [&](const auto& r) {
     for (std::size_t v = r.begin(); v < r.end(); ++v) {
-      const auto begin = vertex_neighbor_offsets_[v];
-      const auto end = vertex_neighbor_offsets_[v + 1];
-      for (auto i = begin; i < end; ++i)
-        vertex_edges_[i] = find_edge(static_cast<std::int32_t>(v), vertex_neighbors_[i]);
+      const auto vi = static_cast<std::int32_t>(v);
+      const auto nb = sorted_neighbors(v);
+      const auto out = static_cast<std::size_t>(vertex_neighbor_offsets_[v]);
+      std::copy(nb.begin(), nb.end(), vertex_neighbors_.begin() + static_cast<std::ptrdiff_t>(out));
+      const std::size_t lower = nb.size() - static_cast<std::size_t>(upper_counts[v]);
+      for (std::size_t i = 0; i < lower; ++i)
+        vertex_edges_[out + i] = edge_offsets[nb[i]] + upper_rank(nb[i], vi);
+      std::int32_t e = edge_offsets[v];
+      for (std::size_t i = lower; i < nb.size(); ++i, ++e) {
+        vertex_edges_[out + i] = e;
+        edges_[e] = {vi, nb[i]};
+      }
+      const auto fs = vertex_faces(v);
+      const auto cs = vertex_face_corners(v);
+      for (std::size_t j = 0; j < fs.size(); ++j) {
+        const auto f = static_cast<std::size_t>(fs[j]);
+        const int c = cs[j];
+        // The other corner k' of the edge opposite corner k touches v.
+        for (const int k : {(c + 2) % 3, (c + 1) % 3}) {
+          const auto w = mesh.faces[f][3 - k - c];
+          if (w == vi)
+            face_edges_[f][k] = -1;
+          else if (w > vi)
+            face_edges_[f][k] = edge_offsets[v] + upper_rank(v, w);
+        }
+      }
     }
   });
-
-  // Face -> edges, edge -> faces.
-  face_edges_.resize(nf);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nf, kGrain), [&](const auto& r) {
-    for (std::size_t f = r.begin(); f < r.end(); ++f)
-      for (int k = 0; k < 3; ++k)
-        face_edges_[f][k] = find_edge(mesh.faces[f][(k + 1) % 3], mesh.faces[f][(k + 2) % 3]);
-  });
+  candidates = {};
   std::vector<std::int32_t> edge_counts(edges_.size(), 0);
   for (const auto& fe : face_edges_)
     for (int k = 0; k < 3; ++k)
