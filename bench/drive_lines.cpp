@@ -15,6 +15,8 @@
 // statistics, bounding sphere); first_view_ms is a new LineExtractor's first
 // view (its view-independent line precompute included). Compare with
 // rtsc_bench's pre_with_adjfaces + view5 (bench/rtsc_side_by_side.sh).
+// With DRIVE_LINES_CALLGRIND=first in the environment, callgrind collects
+// the first-lines region (all first_reps of it) instead of the timed views.
 #include <tbb/global_control.h>
 #include <valgrind/callgrind.h>
 
@@ -74,9 +76,12 @@ int main(int argc, char** argv) {
   std::vector<double> pre_ms, first_ms;
   std::unique_ptr<Surface> surface_ptr;
   std::vector<SegmentSoup> soups;
+  const char* collect = std::getenv("DRIVE_LINES_CALLGRIND");
+  const bool collect_first = collect && std::string(collect) == "first";
   for (int r = 0; r < first_reps; ++r) {
     surface_ptr.reset();
     TriangleMesh copy = loaded;
+    if (collect_first) CALLGRIND_START_INSTRUMENTATION;
     const auto t0 = clock::now();
     surface_ptr = std::make_unique<Surface>(std::move(copy));
     surface_ptr->precompute();
@@ -84,6 +89,7 @@ int main(int argc, char** argv) {
     LineExtractor first(*surface_ptr, o);
     first.extract(c, soups);
     const auto t2 = clock::now();
+    if (collect_first) CALLGRIND_STOP_INSTRUMENTATION;
     pre_ms.push_back(ms_between(t0, t1));
     first_ms.push_back(ms_between(t1, t2));
   }
@@ -95,14 +101,14 @@ int main(int argc, char** argv) {
   ex.extract(c, soups);
   std::vector<double> ms;
   std::size_t segments = 0;
-  CALLGRIND_START_INSTRUMENTATION;
+  if (!collect_first) CALLGRIND_START_INSTRUMENTATION;
   for (int v = 0; v < views; ++v) {
     const auto t0 = std::chrono::steady_clock::now();
     ex.extract(c, soups);
     const auto t1 = std::chrono::steady_clock::now();
     ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
   }
-  CALLGRIND_STOP_INSTRUMENTATION;
+  if (!collect_first) CALLGRIND_STOP_INSTRUMENTATION;
   // FNV-1a over every field of every segment, in order, for the timed view
   // and four more (the eye turned about the vertical axis, and one
   // orthographic view): equal hashes mean bit-identical output.

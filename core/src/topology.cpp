@@ -4,8 +4,8 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <memory>
 #include <numeric>
-#include <span>
 
 #include "fabrica/core/mesh.hpp"
 
@@ -46,24 +46,32 @@ Topology::Topology(const TriangleMesh& mesh) {
       }
   }
 
-  // Vertex -> sorted unique neighbours. Each vertex's candidates (two per
-  // incident face) are sorted once in a scratch segment, then compacted.
-  std::vector<std::int32_t> candidates(2 * vertex_faces_.size());
+  // Vertex -> sorted unique neighbours, each vertex's list in a scratch
+  // segment of two slots per incident face (left uninitialised: the
+  // parallel pass touches it first).
+  const std::unique_ptr<std::int32_t[]> candidates(new std::int32_t[2 * vertex_faces_.size()]);
   std::vector<std::int32_t> neighbor_counts(nv), upper_counts(nv);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, kGrain), [&](const auto& r) {
     for (std::size_t v = r.begin(); v < r.end(); ++v) {
-      auto* const first = candidates.data() + 2 * vertex_face_offsets_[v];
-      auto* last = first;
+      // Insertion into a sorted list without repeats: each neighbour of an
+      // interior vertex comes twice, and the list is a handful long.
+      std::int32_t* const first = candidates.get() + 2 * vertex_face_offsets_[v];
+      const auto vi = static_cast<std::int32_t>(v);
+      std::int32_t n = 0, upper = 0;
       for (auto f : vertex_faces(v))
         for (int k = 0; k < 3; ++k) {
-          const auto w = mesh.faces[f][k];
-          if (static_cast<std::size_t>(w) != v) *last++ = w;
+          const std::int32_t w = mesh.faces[static_cast<std::size_t>(f)][k];
+          if (w == vi) continue;
+          std::int32_t j = n;
+          while (j > 0 && first[j - 1] > w) --j;
+          if (j > 0 && first[j - 1] == w) continue;
+          for (std::int32_t m = n; m > j; --m) first[m] = first[m - 1];
+          first[j] = w;
+          ++n;
+          upper += w > vi;
         }
-      std::sort(first, last);
-      last = std::unique(first, last);
-      neighbor_counts[v] = static_cast<std::int32_t>(last - first);
-      upper_counts[v] = static_cast<std::int32_t>(
-          last - std::upper_bound(first, last, static_cast<std::int32_t>(v)));
+      neighbor_counts[v] = n;
+      upper_counts[v] = upper;
     }
   });
   vertex_neighbor_offsets_ = offsets_from_counts(neighbor_counts);
@@ -79,45 +87,53 @@ Topology::Topology(const TriangleMesh& mesh) {
   // and the face edges it is the lower end of (or both ends: a degenerate
   // face's edge, -1), so every output is written once, by one vertex.
   auto sorted_neighbors = [&](std::size_t v) {
-    const auto* const first = candidates.data() + 2 * vertex_face_offsets_[v];
-    return std::span<const std::int32_t>(first, static_cast<std::size_t>(neighbor_counts[v]));
+    return candidates.get() + 2 * static_cast<std::size_t>(vertex_face_offsets_[v]);
   };
+  // Rank of b among a's upper neighbours (a handful: a branch-free count).
   auto upper_rank = [&](std::size_t a, std::int32_t b) {
-    const auto nb = sorted_neighbors(a);
-    const auto first_upper = nb.end() - upper_counts[a];
-    return static_cast<std::int32_t>(std::lower_bound(first_upper, nb.end(), b) - first_upper);
+    const std::int32_t* const last = sorted_neighbors(a) + neighbor_counts[a];
+    std::int32_t rank = 0;
+    for (const std::int32_t* p = last - upper_counts[a]; p != last; ++p) rank += *p < b;
+    return rank;
   };
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, kGrain), [&](const auto& r) {
     for (std::size_t v = r.begin(); v < r.end(); ++v) {
       const auto vi = static_cast<std::int32_t>(v);
-      const auto nb = sorted_neighbors(v);
+      const std::int32_t* const nb = sorted_neighbors(v);
+      const auto count = static_cast<std::size_t>(neighbor_counts[v]);
       const auto out = static_cast<std::size_t>(vertex_neighbor_offsets_[v]);
-      std::copy(nb.begin(), nb.end(), vertex_neighbors_.begin() + static_cast<std::ptrdiff_t>(out));
-      const std::size_t lower = nb.size() - static_cast<std::size_t>(upper_counts[v]);
+      std::copy(nb, nb + count, vertex_neighbors_.data() + out);
+      const std::size_t lower = count - static_cast<std::size_t>(upper_counts[v]);
       for (std::size_t i = 0; i < lower; ++i)
-        vertex_edges_[out + i] = edge_offsets[nb[i]] + upper_rank(nb[i], vi);
-      std::int32_t e = edge_offsets[v];
-      for (std::size_t i = lower; i < nb.size(); ++i, ++e) {
+        vertex_edges_[out + i] = edge_offsets[static_cast<std::size_t>(nb[i])] +
+                                 upper_rank(static_cast<std::size_t>(nb[i]), vi);
+      const std::int32_t first_edge = edge_offsets[v];
+      for (std::size_t i = lower; i < count; ++i) {
+        const auto e = first_edge + static_cast<std::int32_t>(i - lower);
         vertex_edges_[out + i] = e;
-        edges_[e] = {vi, nb[i]};
+        edges_[static_cast<std::size_t>(e)] = {vi, nb[i]};
       }
       const auto fs = vertex_faces(v);
       const auto cs = vertex_face_corners(v);
       for (std::size_t j = 0; j < fs.size(); ++j) {
         const auto f = static_cast<std::size_t>(fs[j]);
         const int c = cs[j];
-        // The other corner k' of the edge opposite corner k touches v.
-        for (const int k : {(c + 2) % 3, (c + 1) % 3}) {
-          const auto w = mesh.faces[f][3 - k - c];
-          if (w == vi)
-            face_edges_[f][k] = -1;
-          else if (w > vi)
-            face_edges_[f][k] = edge_offsets[v] + upper_rank(v, w);
-        }
+        // The edges opposite the two other corners k touch v; their other
+        // end is the corner that is neither c nor k.
+        const int k1 = c == 2 ? 0 : c + 1, k2 = c == 0 ? 2 : c - 1;
+        const auto w1 = mesh.faces[f][k2], w2 = mesh.faces[f][k1];
+        auto& fe = face_edges_[f];
+        if (w1 == vi)
+          fe[k1] = -1;
+        else if (w1 > vi)
+          fe[k1] = first_edge + upper_rank(v, w1);
+        if (w2 == vi)
+          fe[k2] = -1;
+        else if (w2 > vi)
+          fe[k2] = first_edge + upper_rank(v, w2);
       }
     }
   });
-  candidates = {};
   std::vector<std::int32_t> edge_counts(edges_.size(), 0);
   for (const auto& fe : face_edges_)
     for (int k = 0; k < 3; ++k)
