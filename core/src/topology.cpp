@@ -24,6 +24,7 @@ constexpr std::size_t kGrain = 4096;
 
 }  // namespace
 
+// docs/algorithms.md §1, "Adjacency".
 Topology::Topology(const TriangleMesh& mesh) {
   const std::size_t nv = mesh.positions.size();
   const std::size_t nf = mesh.faces.size();
@@ -46,30 +47,40 @@ Topology::Topology(const TriangleMesh& mesh) {
       }
   }
 
-  // Vertex -> sorted unique neighbours, each vertex's list in a scratch
-  // segment of two slots per incident face (left uninitialised: the
-  // parallel pass touches it first).
+  // Vertex -> the two other corners of each incident face (read once here,
+  // streamed afterwards), and sorted unique neighbours, each vertex's list
+  // in a scratch segment of two slots per incident face (left
+  // uninitialised: the parallel pass touches it first).
+  vertex_face_opposite_.resize(vertex_faces_.size());
   const std::unique_ptr<std::int32_t[]> candidates(new std::int32_t[2 * vertex_faces_.size()]);
   std::vector<std::int32_t> neighbor_counts(nv), upper_counts(nv);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, kGrain), [&](const auto& r) {
     for (std::size_t v = r.begin(); v < r.end(); ++v) {
-      // Insertion into a sorted list without repeats: each neighbour of an
-      // interior vertex comes twice, and the list is a handful long.
-      std::int32_t* const first = candidates.get() + 2 * vertex_face_offsets_[v];
+      const auto begin = static_cast<std::size_t>(vertex_face_offsets_[v]);
+      const auto end = static_cast<std::size_t>(vertex_face_offsets_[v + 1]);
+      std::int32_t* const first = candidates.get() + 2 * begin;
       const auto vi = static_cast<std::int32_t>(v);
       std::int32_t n = 0, upper = 0;
-      for (auto f : vertex_faces(v))
-        for (int k = 0; k < 3; ++k) {
-          const std::int32_t w = mesh.faces[static_cast<std::size_t>(f)][k];
-          if (w == vi) continue;
-          std::int32_t j = n;
-          while (j > 0 && first[j - 1] > w) --j;
-          if (j > 0 && first[j - 1] == w) continue;
-          for (std::int32_t m = n; m > j; --m) first[m] = first[m - 1];
-          first[j] = w;
-          ++n;
-          upper += w > vi;
-        }
+      // Insertion into a sorted list without repeats: each neighbour of an
+      // interior vertex comes twice, and the list is a handful long.
+      auto insert = [&](std::int32_t w) {
+        if (w == vi) return;
+        std::int32_t j = n;
+        while (j > 0 && first[j - 1] > w) --j;
+        if (j > 0 && first[j - 1] == w) return;
+        for (std::int32_t m = n; m > j; --m) first[m] = first[m - 1];
+        first[j] = w;
+        ++n;
+        upper += w > vi;
+      };
+      for (std::size_t i = begin; i < end; ++i) {
+        const Face& f = mesh.faces[static_cast<std::size_t>(vertex_faces_[i])];
+        const int c = vertex_face_corners_[i];
+        const std::array<std::int32_t, 2> o{f[c == 2 ? 0 : c + 1], f[c == 0 ? 2 : c - 1]};
+        vertex_face_opposite_[i] = o;
+        insert(o[0]);
+        insert(o[1]);
+      }
       neighbor_counts[v] = n;
       upper_counts[v] = upper;
     }
@@ -115,13 +126,14 @@ Topology::Topology(const TriangleMesh& mesh) {
       }
       const auto fs = vertex_faces(v);
       const auto cs = vertex_face_corners(v);
+      const auto os = vertex_face_opposite(v);
       for (std::size_t j = 0; j < fs.size(); ++j) {
         const auto f = static_cast<std::size_t>(fs[j]);
         const int c = cs[j];
         // The edges opposite the two other corners k touch v; their other
         // end is the corner that is neither c nor k.
         const int k1 = c == 2 ? 0 : c + 1, k2 = c == 0 ? 2 : c - 1;
-        const auto w1 = mesh.faces[f][k2], w2 = mesh.faces[f][k1];
+        const auto w1 = os[j][1], w2 = os[j][0];
         auto& fe = face_edges_[f];
         if (w1 == vi)
           fe[k1] = -1;

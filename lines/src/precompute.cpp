@@ -42,8 +42,8 @@ const std::vector<double>& LinePrecompute::abs_k1() const {
 
 const LinePrecompute::CornerRing& LinePrecompute::corner_ring() const {
   std::call_once(cache_->ring_once, [&] {
+    // A copy of Topology::vertex_face_opposite with its offsets.
     const Topology& topo = surface_->topology();
-    const auto& faces = surface_->faces();
     const std::size_t nv = surface_->vertex_count();
     CornerRing& r = cache_->ring;
     r.offset.resize(nv + 1);
@@ -52,14 +52,8 @@ const LinePrecompute::CornerRing& LinePrecompute::corner_ring() const {
       r.offset[i + 1] = r.offset[i] + static_cast<std::int32_t>(topo.vertex_faces(i).size());
     r.opposite.resize(static_cast<std::size_t>(r.offset[nv]));
     detail::parallel_range(nv, [&](std::size_t i) {
-      const auto fs = topo.vertex_faces(i);
-      const auto cs = topo.vertex_face_corners(i);
-      std::array<std::int32_t, 2>* o = r.opposite.data() + r.offset[i];
-      for (std::size_t j = 0; j < fs.size(); ++j) {
-        const Face& f = faces[static_cast<std::size_t>(fs[j])];
-        const int c = cs[j];
-        o[j] = {f[(c + 1) % 3], f[(c + 2) % 3]};
-      }
+      const auto o = topo.vertex_face_opposite(i);
+      std::copy(o.begin(), o.end(), r.opposite.begin() + r.offset[i]);
     });
   });
   return cache_->ring;
@@ -67,7 +61,18 @@ const LinePrecompute::CornerRing& LinePrecompute::corner_ring() const {
 
 const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
   std::call_once(cache_->tangent_ring_once, [&] {
-    const CornerRing& r = corner_ring();
+    // Topology::vertex_face_opposite, CSR like vertex_faces (corner_ring()
+    // without the copy).
+    const Topology& topo = surface_->topology();
+    struct {
+      std::vector<std::int32_t> offset;
+      const std::array<std::int32_t, 2>* opposite;
+    } r;
+    r.offset.resize(surface_->vertex_count() + 1);
+    r.offset[0] = 0;
+    for (std::size_t i = 0; i + 1 < r.offset.size(); ++i)
+      r.offset[i + 1] = r.offset[i] + static_cast<std::int32_t>(topo.vertex_faces(i).size());
+    r.opposite = r.offset.back() > 0 ? topo.vertex_face_opposite(0).data() : nullptr;
     const auto& pos = surface_->positions();
     const auto& curv = surface_->curvature();
     const std::size_t nv = surface_->vertex_count();
@@ -81,12 +86,12 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
     // face's second opposite corner to the face whose first one it is), and
     // for a fan the offsets of its ring, in fan order, into `fx`/`fy` (one
     // gather of the ring's positions; the second pass only copies them).
-    const std::size_t corners = r.opposite.size();
+    const auto corners = static_cast<std::size_t>(r.offset.back());
     std::vector<std::uint8_t> order(corners);
     std::vector<float> fx(corners), fy(corners);
     t.fan.assign(nv, 0);
     detail::parallel_range(nv, [&](std::size_t i) {
-      const auto* o = r.opposite.data() + r.offset[i];
+      const auto* o = r.opposite + r.offset[i];
       const std::int32_t k = r.offset[i + 1] - r.offset[i];
       if (k < 1 || k > 63) return;
       std::uint8_t* const rank = order.data() + r.offset[i];
@@ -133,7 +138,7 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
     t.y.assign(total + TangentRing::kPad, 0.0f);
     detail::parallel_range(nv, [&](std::size_t i) {
       const bool ok = curv.valid[i] != 0;
-      const auto* o = r.opposite.data() + r.offset[i];
+      const auto* o = r.opposite + r.offset[i];
       const std::int32_t k = r.offset[i + 1] - r.offset[i];
       const auto n = static_cast<std::size_t>(t.offset[i]);
       const auto c = static_cast<std::size_t>(r.offset[i]);

@@ -110,5 +110,17 @@ TEST(Topology, AdjacencyListsAgreeWithEdgesOnAnIrregularSoup) {
       const auto ef = t.edge_faces(static_cast<std::size_t>(t.face_edge(f, k)));
       EXPECT_TRUE(std::find(ef.begin(), ef.end(), static_cast<std::int32_t>(f)) != ef.end());
     }
+  for (std::size_t v = 0; v < t.vertex_count(); ++v) {
+    const auto fs = t.vertex_faces(v);
+    const auto cs = t.vertex_face_corners(v);
+    const auto os = t.vertex_face_opposite(v);
+    ASSERT_EQ(os.size(), fs.size());
+    for (std::size_t j = 0; j < fs.size(); ++j) {
+      const Face& f = m.faces[static_cast<std::size_t>(fs[j])];
+      EXPECT_EQ(f[cs[j]], static_cast<std::int32_t>(v));
+      EXPECT_EQ(os[j][0], f[(cs[j] + 1) % 3]);
+      EXPECT_EQ(os[j][1], f[(cs[j] + 2) % 3]);
+    }
+  }
   for (std::size_t v = 37; v < 40; ++v) EXPECT_TRUE(t.is_isolated_vertex(v));
 }

@@ -5,6 +5,7 @@
 // results never depend on thread count.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -35,6 +36,13 @@ class Topology {
   std::span<const std::uint8_t> vertex_face_corners(std::size_t v) const {
     return {vertex_face_corners_.data() + vertex_face_offsets_[v],
             vertex_face_corners_.data() + vertex_face_offsets_[v + 1]};
+  }
+  /// The two other corners (i1, i2) of each face of vertex_faces(v), same
+  /// order, in the face's corner order after v: i1 = f[(c+1)%3],
+  /// i2 = f[(c+2)%3] where c is v's corner.
+  std::span<const std::array<std::int32_t, 2>> vertex_face_opposite(std::size_t v) const {
+    return {vertex_face_opposite_.data() + vertex_face_offsets_[v],
+            vertex_face_opposite_.data() + vertex_face_offsets_[v + 1]};
   }
   /// Vertices joined to v by an edge, increasing index.
   std::span<const std::int32_t> vertex_neighbors(std::size_t v) const {
@@ -74,6 +82,7 @@ class Topology {
  private:
   std::vector<std::int32_t> vertex_face_offsets_, vertex_faces_;
   std::vector<std::uint8_t> vertex_face_corners_;
+  std::vector<std::array<std::int32_t, 2>> vertex_face_opposite_;
   std::vector<std::int32_t> vertex_neighbor_offsets_, vertex_neighbors_, vertex_edges_;
   std::vector<std::array<std::int32_t, 2>> edges_;
   std::vector<std::int32_t> edge_face_offsets_, edge_faces_;
