@@ -127,7 +127,10 @@ cpu="$(awk -F': *' '/^model name/ { n = $2 } /^cpu family/ { f = $2 } /^model\t/
 range="$(tr ' ' '\n' <<<"$scalings" | sed '/^$/d' | sort -g | sed -n '1p;$p' | tr '\n' ' ')"
 echo
 echo "CPU: $cpu ($(nproc) cores); $start; $clean clean rounds of $tries (interleaved: rtsc, fabrica 1T, fabrica 2T per mesh);"
-echo "calibration scaling (2 copies / 1) min/max: $range; load average before: $load_before, after: $load_after"
+echo "calibration scaling (2 copies / 1) min/max: $range(a round counts when >= $min_scaling before and after); load average before: $load_before, after: $load_after"
+if awk -v m="$min_scaling" 'BEGIN { exit !(m < 1.8) }'; then
+  echo "WARNING: --min-scaling $min_scaling is below 1.8: the cores were not checked free, these are loaded-machine figures"
+fi
 echo "fabrica: $(git -C "$(dirname "$0")" rev-parse --short HEAD 2>/dev/null || echo '?'), hashes: $(awk '$2 ~ /fabrica/ { print $1 "=" $6 }' "$raw" | sort -u | tr '\n' ' ')"
 echo
 # Medians and minima per mesh and program; first = pre + first view.
