@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <mutex>
 
 #include "fabrica/core/error.hpp"
@@ -87,14 +88,16 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
     // for a fan the offsets of its ring, in fan order, into `fx`/`fy` (one
     // gather of the ring's positions; the second pass only copies them).
     const auto corners = static_cast<std::size_t>(r.offset.back());
-    std::vector<std::uint8_t> order(corners);
-    std::vector<float> fx(corners), fy(corners);
+    // Left uninitialised (the parallel fan pass touches them first): the
+    // layout pass reads them only for fans, whose entries that pass wrote.
+    const std::unique_ptr<std::uint8_t[]> order(new std::uint8_t[corners]);
+    const std::unique_ptr<float[]> fx(new float[corners]), fy(new float[corners]);
     t.fan.assign(nv, 0);
     detail::parallel_range(nv, [&](std::size_t i) {
       const auto* o = r.opposite + r.offset[i];
       const std::int32_t k = r.offset[i + 1] - r.offset[i];
       if (k < 1 || k > 63) return;
-      std::uint8_t* const rank = order.data() + r.offset[i];
+      std::uint8_t* const rank = order.get() + r.offset[i];
       std::uint64_t used = 0;
       std::int32_t f = 0;
       for (std::int32_t j = 0; j < k; ++j) {
@@ -113,8 +116,8 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
       }
       if (f != 0) return;  // the chain does not close after k faces
       if (curv.valid[i]) {
-        float* const x = fx.data() + r.offset[i];
-        float* const y = fy.data() + r.offset[i];
+        float* const x = fx.get() + r.offset[i];
+        float* const y = fy.get() + r.offset[i];
         for (std::int32_t j = 0; j < k; ++j) {
           const std::int32_t v = o[rank[j]][0];
           x[j] = offset(i, v, 0);
@@ -153,12 +156,8 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
         t.vertex[n + static_cast<std::size_t>(k)] =
             o[order[c + static_cast<std::size_t>(k - 1)]][1];
         if (!ok) return;
-        std::copy(fx.begin() + static_cast<std::ptrdiff_t>(c),
-                  fx.begin() + static_cast<std::ptrdiff_t>(c) + k,
-                  t.x.begin() + static_cast<std::ptrdiff_t>(n));
-        std::copy(fy.begin() + static_cast<std::ptrdiff_t>(c),
-                  fy.begin() + static_cast<std::ptrdiff_t>(c) + k,
-                  t.y.begin() + static_cast<std::ptrdiff_t>(n));
+        std::copy(fx.get() + c, fx.get() + c + k, t.x.data() + n);
+        std::copy(fy.get() + c, fy.get() + c + k, t.y.data() + n);
         t.x[n + static_cast<std::size_t>(k)] = fx[c];
         t.y[n + static_cast<std::size_t>(k)] = fy[c];
         return;
