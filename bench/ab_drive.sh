@@ -39,7 +39,7 @@ for ((r = 0; r < rounds; ++r)); do
   for b in "$old" "$new"; do
     line="$("$b/bench/drive_lines" "$views" "$threads" "$set" | tail -1)"
     # views V threads T segments S hash H median M ms p10 P ms
-    echo "$b $(echo "$line" | awk '{print $8, $(NF-1)}')" >>"$tmp"
+    echo "$b $(echo "$line" | awk '{ for (i = 1; i < NF; ++i) f[$i] = $(i + 1); print f["hash"], f["p10"] }')" >>"$tmp"
   done
 done
 for b in "$old" "$new"; do

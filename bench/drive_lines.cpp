@@ -5,9 +5,18 @@
 // collected, so the instruction count per view can be read off directly.
 // It also prints a hash of every field of every segment of the last view:
 // an output-preserving change keeps it.
-//   drive_lines [views=50] [threads=2] [set=rtsc|light]
+//   drive_lines [views=50] [threads=2] [set=rtsc|light] [view=igea_v1|bunny_v1] [first_reps=3]
 // (rtsc: contour, suggestive, apparent, ridge, valley; light: PELs and
-// Laplacian lines with the headlight)
+// Laplacian lines with the headlight; views: bench/igea_view.hpp)
+// The time to the first lines comes first, load excluded, as the median of
+// first_reps fresh starts on a copy of the loaded mesh: precompute_ms is the
+// Surface and everything Surface::precompute() computes (topology,
+// normals, areas, curvature, derivative tensor, feature size, edge
+// statistics, bounding sphere); first_view_ms is a new LineExtractor's first
+// view (its view-independent line precompute included). Compare with
+// rtsc_bench's pre_with_adjfaces + view5 (bench/rtsc_side_by_side.sh).
+// With DRIVE_LINES_CALLGRIND=first in the environment, callgrind collects
+// the first-lines region (all first_reps of it) instead of the timed views.
 #include <tbb/global_control.h>
 #include <valgrind/callgrind.h>
 
@@ -17,6 +26,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -33,11 +43,20 @@ int main(int argc, char** argv) {
   }
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
                             static_cast<std::size_t>(threads));
-  const auto surface_ptr = bench::load_igea();
-  const Surface& surface = *surface_ptr;
-  const Camera c = bench::igea_v1_camera();
   LineOptions o;
   const std::string set = argc > 3 ? argv[3] : "rtsc";
+  const std::string view_name = argc > 4 ? argv[4] : "igea_v1";
+  const int first_reps = argc > 5 ? std::atoi(argv[5]) : 3;
+  const bench::ReferenceView* view = bench::find_reference_view(view_name);
+  if (!view) {
+    std::fprintf(stderr, "drive_lines: the view is igea_v1 or bunny_v1 (got '%s')\n",
+                 view_name.c_str());
+    return 2;
+  }
+  if (first_reps < 1) {
+    std::fprintf(stderr, "drive_lines: FIRST_REPS must be a positive integer\n");
+    return 2;
+  }
   if (set == "light") {
     o.families = {LineFamily::pel, LineFamily::laplacian};
   } else if (set == "rtsc") {
@@ -46,21 +65,50 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "drive_lines: the set is rtsc or light (got '%s')\n", set.c_str());
     return 2;
   }
-  o.feature_size = bench::kIgeaV1FeatureSize;
-  LineExtractor ex(surface, o);
+  o.feature_size = view->feature_size;
+  const Camera c = bench::reference_camera(*view);
+  const TriangleMesh loaded = bench::load_prepared_mesh(view->mesh);
+  // Time to the first lines, on fresh Surfaces (the mesh copy not timed).
+  using clock = std::chrono::steady_clock;
+  auto ms_between = [](clock::time_point a, clock::time_point b) {
+    return std::chrono::duration<double, std::milli>(b - a).count();
+  };
+  std::vector<double> pre_ms, first_ms;
+  std::unique_ptr<Surface> surface_ptr;
   std::vector<SegmentSoup> soups;
+  const char* collect = std::getenv("DRIVE_LINES_CALLGRIND");
+  const bool collect_first = collect && std::string(collect) == "first";
+  for (int r = 0; r < first_reps; ++r) {
+    surface_ptr.reset();
+    TriangleMesh copy = loaded;
+    if (collect_first) CALLGRIND_START_INSTRUMENTATION;
+    const auto t0 = clock::now();
+    surface_ptr = std::make_unique<Surface>(std::move(copy));
+    surface_ptr->precompute();
+    const auto t1 = clock::now();
+    LineExtractor first(*surface_ptr, o);
+    first.extract(c, soups);
+    const auto t2 = clock::now();
+    if (collect_first) CALLGRIND_STOP_INSTRUMENTATION;
+    pre_ms.push_back(ms_between(t0, t1));
+    first_ms.push_back(ms_between(t1, t2));
+  }
+  std::sort(pre_ms.begin(), pre_ms.end());
+  std::sort(first_ms.begin(), first_ms.end());
+  const Surface& surface = *surface_ptr;
+  LineExtractor ex(surface, o);
   ex.extract(c, soups);
   ex.extract(c, soups);
   std::vector<double> ms;
   std::size_t segments = 0;
-  CALLGRIND_START_INSTRUMENTATION;
+  if (!collect_first) CALLGRIND_START_INSTRUMENTATION;
   for (int v = 0; v < views; ++v) {
     const auto t0 = std::chrono::steady_clock::now();
     ex.extract(c, soups);
     const auto t1 = std::chrono::steady_clock::now();
     ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
   }
-  CALLGRIND_STOP_INSTRUMENTATION;
+  if (!collect_first) CALLGRIND_STOP_INSTRUMENTATION;
   // FNV-1a over every field of every segment, in order, for the timed view
   // and four more (the eye turned about the vertical axis, and one
   // orthographic view): equal hashes mean bit-identical output.
@@ -96,8 +144,10 @@ int main(int argc, char** argv) {
     mix_soups();
   }
   std::sort(ms.begin(), ms.end());
-  std::printf("views %d threads %d segments %zu hash %016llx median %.2f ms p10 %.2f ms\n", views,
-              threads, segments, static_cast<unsigned long long>(hash), ms[ms.size() / 2],
-              ms[ms.size() / 10]);
+  std::printf(
+      "views %d threads %d segments %zu hash %016llx median %.2f ms p10 %.2f ms precompute_ms %.2f "
+      "first_view_ms %.2f\n",
+      views, threads, segments, static_cast<unsigned long long>(hash), ms[ms.size() / 2],
+      ms[ms.size() / 10], pre_ms[pre_ms.size() / 2], first_ms[first_ms.size() / 2]);
   return 0;
 }

@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <memory>
 #include <numeric>
 
 #include "fabrica/core/mesh.hpp"
@@ -23,6 +24,7 @@ constexpr std::size_t kGrain = 4096;
 
 }  // namespace
 
+// docs/algorithms.md §1, "Adjacency".
 Topology::Topology(const TriangleMesh& mesh) {
   const std::size_t nv = mesh.positions.size();
   const std::size_t nf = mesh.faces.size();
@@ -45,24 +47,42 @@ Topology::Topology(const TriangleMesh& mesh) {
       }
   }
 
-  // Vertex -> sorted unique neighbours. Each vertex's candidates (two per
-  // incident face) are sorted once in a scratch segment, then compacted.
-  std::vector<std::int32_t> candidates(2 * vertex_faces_.size());
+  // Vertex -> the two other corners of each incident face (read once here,
+  // streamed afterwards), and sorted unique neighbours, each vertex's list
+  // in a scratch segment of two slots per incident face (left
+  // uninitialised: the parallel pass touches it first).
+  vertex_face_opposite_.resize(vertex_faces_.size());
+  const std::unique_ptr<std::int32_t[]> candidates(new std::int32_t[2 * vertex_faces_.size()]);
   std::vector<std::int32_t> neighbor_counts(nv), upper_counts(nv);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, kGrain), [&](const auto& r) {
     for (std::size_t v = r.begin(); v < r.end(); ++v) {
-      auto* const first = candidates.data() + 2 * vertex_face_offsets_[v];
-      auto* last = first;
-      for (auto f : vertex_faces(v))
-        for (int k = 0; k < 3; ++k) {
-          const auto w = mesh.faces[f][k];
-          if (static_cast<std::size_t>(w) != v) *last++ = w;
-        }
-      std::sort(first, last);
-      last = std::unique(first, last);
-      neighbor_counts[v] = static_cast<std::int32_t>(last - first);
-      upper_counts[v] = static_cast<std::int32_t>(
-          last - std::upper_bound(first, last, static_cast<std::int32_t>(v)));
+      const auto begin = static_cast<std::size_t>(vertex_face_offsets_[v]);
+      const auto end = static_cast<std::size_t>(vertex_face_offsets_[v + 1]);
+      std::int32_t* const first = candidates.get() + 2 * begin;
+      const auto vi = static_cast<std::int32_t>(v);
+      std::int32_t n = 0, upper = 0;
+      // Insertion into a sorted list without repeats: each neighbour of an
+      // interior vertex comes twice, and the list is a handful long.
+      auto insert = [&](std::int32_t w) {
+        if (w == vi) return;
+        std::int32_t j = n;
+        while (j > 0 && first[j - 1] > w) --j;
+        if (j > 0 && first[j - 1] == w) return;
+        for (std::int32_t m = n; m > j; --m) first[m] = first[m - 1];
+        first[j] = w;
+        ++n;
+        upper += w > vi;
+      };
+      for (std::size_t i = begin; i < end; ++i) {
+        const Face& f = mesh.faces[static_cast<std::size_t>(vertex_faces_[i])];
+        const int c = vertex_face_corners_[i];
+        const std::array<std::int32_t, 2> o{f[c == 2 ? 0 : c + 1], f[c == 0 ? 2 : c - 1]};
+        vertex_face_opposite_[i] = o;
+        insert(o[0]);
+        insert(o[1]);
+      }
+      neighbor_counts[v] = n;
+      upper_counts[v] = upper;
     }
   });
   vertex_neighbor_offsets_ = offsets_from_counts(neighbor_counts);
@@ -70,42 +90,61 @@ Topology::Topology(const TriangleMesh& mesh) {
   vertex_neighbors_.resize(vertex_neighbor_offsets_.back());
   vertex_edges_.resize(vertex_neighbor_offsets_.back());
   edges_.resize(edge_offsets.back());
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, kGrain), [&](const auto& r) {
-    for (std::size_t v = r.begin(); v < r.end(); ++v) {
-      const auto* const first = candidates.data() + 2 * vertex_face_offsets_[v];
-      const auto* const last = first + neighbor_counts[v];
-      std::copy(first, last, vertex_neighbors_.begin() + vertex_neighbor_offsets_[v]);
-      const auto* const first_upper = last - upper_counts[v];
-      std::int32_t e = edge_offsets[v];
-      for (auto* it = first_upper; it != last; ++it, ++e)
-        edges_[e] = {static_cast<std::int32_t>(v), *it};
-    }
-  });
-  candidates = {};
-  // Edge ids of the lower neighbours come from the lower vertex's list.
-  auto find_edge = [&](std::int32_t a, std::int32_t b) -> std::int32_t {
-    if (a == b) return -1;
-    if (a > b) std::swap(a, b);
-    const auto nb = vertex_neighbors(a);
-    const auto it = std::lower_bound(nb.begin(), nb.end(), b);
-    const auto first_upper = std::upper_bound(nb.begin(), nb.end(), a);
-    return edge_offsets[a] + static_cast<std::int32_t>(it - first_upper);
+  face_edges_.resize(nf);
+  // Edge e = (a, b), a < b, is numbered edge_offsets[a] + the rank of b among
+  // a's upper neighbours: the lower vertex numbers its edges without a search.
+  // Each vertex writes its own lists, the edge ids of its lower neighbours
+  // (one search in the lower neighbour's sorted list, still in `candidates`),
+  // and the face edges it is the lower end of (or both ends: a degenerate
+  // face's edge, -1), so every output is written once, by one vertex.
+  auto sorted_neighbors = [&](std::size_t v) {
+    return candidates.get() + 2 * static_cast<std::size_t>(vertex_face_offsets_[v]);
+  };
+  // Rank of b among a's upper neighbours (a handful: a branch-free count).
+  auto upper_rank = [&](std::size_t a, std::int32_t b) {
+    const std::int32_t* const last = sorted_neighbors(a) + neighbor_counts[a];
+    std::int32_t rank = 0;
+    for (const std::int32_t* p = last - upper_counts[a]; p != last; ++p) rank += *p < b;
+    return rank;
   };
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, kGrain), [&](const auto& r) {
     for (std::size_t v = r.begin(); v < r.end(); ++v) {
-      const auto begin = vertex_neighbor_offsets_[v];
-      const auto end = vertex_neighbor_offsets_[v + 1];
-      for (auto i = begin; i < end; ++i)
-        vertex_edges_[i] = find_edge(static_cast<std::int32_t>(v), vertex_neighbors_[i]);
+      const auto vi = static_cast<std::int32_t>(v);
+      const std::int32_t* const nb = sorted_neighbors(v);
+      const auto count = static_cast<std::size_t>(neighbor_counts[v]);
+      const auto out = static_cast<std::size_t>(vertex_neighbor_offsets_[v]);
+      std::copy(nb, nb + count, vertex_neighbors_.data() + out);
+      const std::size_t lower = count - static_cast<std::size_t>(upper_counts[v]);
+      for (std::size_t i = 0; i < lower; ++i)
+        vertex_edges_[out + i] = edge_offsets[static_cast<std::size_t>(nb[i])] +
+                                 upper_rank(static_cast<std::size_t>(nb[i]), vi);
+      const std::int32_t first_edge = edge_offsets[v];
+      for (std::size_t i = lower; i < count; ++i) {
+        const auto e = first_edge + static_cast<std::int32_t>(i - lower);
+        vertex_edges_[out + i] = e;
+        edges_[static_cast<std::size_t>(e)] = {vi, nb[i]};
+      }
+      const auto fs = vertex_faces(v);
+      const auto cs = vertex_face_corners(v);
+      const auto os = vertex_face_opposite(v);
+      for (std::size_t j = 0; j < fs.size(); ++j) {
+        const auto f = static_cast<std::size_t>(fs[j]);
+        const int c = cs[j];
+        // The edges opposite the two other corners k touch v; their other
+        // end is the corner that is neither c nor k.
+        const int k1 = c == 2 ? 0 : c + 1, k2 = c == 0 ? 2 : c - 1;
+        const auto w1 = os[j][1], w2 = os[j][0];
+        auto& fe = face_edges_[f];
+        if (w1 == vi)
+          fe[k1] = -1;
+        else if (w1 > vi)
+          fe[k1] = first_edge + upper_rank(v, w1);
+        if (w2 == vi)
+          fe[k2] = -1;
+        else if (w2 > vi)
+          fe[k2] = first_edge + upper_rank(v, w2);
+      }
     }
-  });
-
-  // Face -> edges, edge -> faces.
-  face_edges_.resize(nf);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nf, kGrain), [&](const auto& r) {
-    for (std::size_t f = r.begin(); f < r.end(); ++f)
-      for (int k = 0; k < 3; ++k)
-        face_edges_[f][k] = find_edge(mesh.faces[f][(k + 1) % 3], mesh.faces[f][(k + 2) % 3]);
   });
   std::vector<std::int32_t> edge_counts(edges_.size(), 0);
   for (const auto& fe : face_edges_)

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <mutex>
 
 #include "fabrica/core/error.hpp"
@@ -42,8 +43,8 @@ const std::vector<double>& LinePrecompute::abs_k1() const {
 
 const LinePrecompute::CornerRing& LinePrecompute::corner_ring() const {
   std::call_once(cache_->ring_once, [&] {
+    // A copy of Topology::vertex_face_opposite with its offsets.
     const Topology& topo = surface_->topology();
-    const auto& faces = surface_->faces();
     const std::size_t nv = surface_->vertex_count();
     CornerRing& r = cache_->ring;
     r.offset.resize(nv + 1);
@@ -52,14 +53,8 @@ const LinePrecompute::CornerRing& LinePrecompute::corner_ring() const {
       r.offset[i + 1] = r.offset[i] + static_cast<std::int32_t>(topo.vertex_faces(i).size());
     r.opposite.resize(static_cast<std::size_t>(r.offset[nv]));
     detail::parallel_range(nv, [&](std::size_t i) {
-      const auto fs = topo.vertex_faces(i);
-      const auto cs = topo.vertex_face_corners(i);
-      std::array<std::int32_t, 2>* o = r.opposite.data() + r.offset[i];
-      for (std::size_t j = 0; j < fs.size(); ++j) {
-        const Face& f = faces[static_cast<std::size_t>(fs[j])];
-        const int c = cs[j];
-        o[j] = {f[(c + 1) % 3], f[(c + 2) % 3]};
-      }
+      const auto o = topo.vertex_face_opposite(i);
+      std::copy(o.begin(), o.end(), r.opposite.begin() + r.offset[i]);
     });
   });
   return cache_->ring;
@@ -67,7 +62,18 @@ const LinePrecompute::CornerRing& LinePrecompute::corner_ring() const {
 
 const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
   std::call_once(cache_->tangent_ring_once, [&] {
-    const CornerRing& r = corner_ring();
+    // Topology::vertex_face_opposite, CSR like vertex_faces (corner_ring()
+    // without the copy).
+    const Topology& topo = surface_->topology();
+    struct {
+      std::vector<std::int32_t> offset;
+      const std::array<std::int32_t, 2>* opposite;
+    } r;
+    r.offset.resize(surface_->vertex_count() + 1);
+    r.offset[0] = 0;
+    for (std::size_t i = 0; i + 1 < r.offset.size(); ++i)
+      r.offset[i + 1] = r.offset[i] + static_cast<std::int32_t>(topo.vertex_faces(i).size());
+    r.opposite = r.offset.back() > 0 ? topo.vertex_face_opposite(0).data() : nullptr;
     const auto& pos = surface_->positions();
     const auto& curv = surface_->curvature();
     const std::size_t nv = surface_->vertex_count();
@@ -78,22 +84,30 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
       return static_cast<float>(d.dot(axis ? curv.e2[i] : curv.e1[i]));
     };
     // Fan order first: rank of each fan face (the chain that follows each
-    // face's second opposite corner to the face whose first one it is).
-    std::vector<std::uint8_t> order(r.opposite.size());
+    // face's second opposite corner to the face whose first one it is), and
+    // for a fan the offsets of its ring, in fan order, into `fx`/`fy` (one
+    // gather of the ring's positions; the second pass only copies them).
+    const auto corners = static_cast<std::size_t>(r.offset.back());
+    // Left uninitialised (the parallel fan pass touches them first): the
+    // layout pass reads them only for fans, whose entries that pass wrote.
+    const std::unique_ptr<std::uint8_t[]> order(new std::uint8_t[corners]);
+    const std::unique_ptr<float[]> fx(new float[corners]), fy(new float[corners]);
     t.fan.assign(nv, 0);
     detail::parallel_range(nv, [&](std::size_t i) {
-      const auto* o = r.opposite.data() + r.offset[i];
+      const auto* o = r.opposite + r.offset[i];
       const std::int32_t k = r.offset[i + 1] - r.offset[i];
       if (k < 1 || k > 63) return;
+      std::uint8_t* const rank = order.get() + r.offset[i];
       std::uint64_t used = 0;
       std::int32_t f = 0;
       for (std::int32_t j = 0; j < k; ++j) {
         if (used >> f & 1) return;
         used |= std::uint64_t{1} << f;
-        order[static_cast<std::size_t>(r.offset[i] + j)] = static_cast<std::uint8_t>(f);
+        rank[j] = static_cast<std::uint8_t>(f);
+        const std::int32_t want = o[f][1];
         std::int32_t next = -1;
         for (std::int32_t g = 0; g < k; ++g) {
-          if (o[g][0] != o[f][1]) continue;
+          if (o[g][0] != want) continue;
           if (next >= 0) return;  // not a fan: a corner opens two faces
           next = g;
         }
@@ -101,10 +115,16 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
         f = next;
       }
       if (f != 0) return;  // the chain does not close after k faces
-      if (curv.valid[i])
-        for (std::int32_t g = 0; g < k; ++g)
-          if (!std::isfinite(offset(i, o[g][0], 0)) || !std::isfinite(offset(i, o[g][0], 1)))
-            return;
+      if (curv.valid[i]) {
+        float* const x = fx.get() + r.offset[i];
+        float* const y = fy.get() + r.offset[i];
+        for (std::int32_t j = 0; j < k; ++j) {
+          const std::int32_t v = o[rank[j]][0];
+          x[j] = offset(i, v, 0);
+          y[j] = offset(i, v, 1);
+          if (!std::isfinite(x[j]) || !std::isfinite(y[j])) return;
+        }
+      }
       t.fan[i] = 1;
     });
     t.offset.resize(nv + 1);
@@ -121,25 +141,34 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
     t.y.assign(total + TangentRing::kPad, 0.0f);
     detail::parallel_range(nv, [&](std::size_t i) {
       const bool ok = curv.valid[i] != 0;
-      auto put = [&](std::int32_t n, std::int32_t v) {
-        const auto s = static_cast<std::size_t>(n);
-        t.vertex[s] = v;
+      const auto* o = r.opposite + r.offset[i];
+      const std::int32_t k = r.offset[i + 1] - r.offset[i];
+      const auto n = static_cast<std::size_t>(t.offset[i]);
+      const auto c = static_cast<std::size_t>(r.offset[i]);
+      if (t.fan[i]) {
+        // n_0 .. n_{k-1} in fan order, then n_0 again (the last face's
+        // second opposite corner).
+        for (std::int32_t j = 0; j < k; ++j) {
+          const std::uint8_t f = order[c + static_cast<std::size_t>(j)];
+          t.rank[n + static_cast<std::size_t>(j)] = f;
+          t.vertex[n + static_cast<std::size_t>(j)] = o[f][0];
+        }
+        t.vertex[n + static_cast<std::size_t>(k)] =
+            o[order[c + static_cast<std::size_t>(k - 1)]][1];
         if (!ok) return;
+        std::copy(fx.get() + c, fx.get() + c + k, t.x.data() + n);
+        std::copy(fy.get() + c, fy.get() + c + k, t.y.data() + n);
+        t.x[n + static_cast<std::size_t>(k)] = fx[c];
+        t.y[n + static_cast<std::size_t>(k)] = fy[c];
+        return;
+      }
+      for (std::int32_t j = 0; j < 2 * k; ++j) {
+        const std::int32_t v = o[j / 2][j % 2];
+        const auto s = n + static_cast<std::size_t>(j);
+        t.vertex[s] = v;
+        if (!ok) continue;
         t.x[s] = offset(i, v, 0);
         t.y[s] = offset(i, v, 1);
-      };
-      const auto* o = r.opposite.data() + r.offset[i];
-      const std::int32_t k = r.offset[i + 1] - r.offset[i], n = t.offset[i];
-      for (std::int32_t j = 0; j < k; ++j) {
-        if (t.fan[i]) {
-          const std::uint8_t f = order[static_cast<std::size_t>(r.offset[i] + j)];
-          t.rank[static_cast<std::size_t>(n + j)] = f;
-          put(n + j, o[f][0]);
-          if (j == k - 1) put(n + k, o[f][1]);  // n_0 again
-        } else {
-          put(n + 2 * j, o[j][0]);
-          put(n + 2 * j + 1, o[j][1]);
-        }
       }
     });
   });

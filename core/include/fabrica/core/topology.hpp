@@ -5,8 +5,13 @@
 // results never depend on thread count.
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <memory>
+#include <new>
 #include <span>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "fabrica/core/types.hpp"
@@ -14,6 +19,38 @@
 namespace fabrica {
 
 struct TriangleMesh;
+
+namespace detail {
+/// An allocator whose resize() leaves new elements default-initialised
+/// (trivial types: not zeroed), for arrays a parallel pass fills anyway:
+/// no serial zeroing pass over fresh memory.
+template <class T>
+struct DefaultInitAllocator : std::allocator<T> {
+  using value_type = T;
+  DefaultInitAllocator() = default;
+  template <class U>
+  DefaultInitAllocator(const DefaultInitAllocator<U>&) noexcept {}
+  template <class U>
+  struct rebind {
+    using other = DefaultInitAllocator<U>;
+  };
+  template <class U>
+  void construct(U* p) noexcept(std::is_nothrow_default_constructible_v<U>) {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
+template <class T, class U>
+bool operator==(const DefaultInitAllocator<T>&, const DefaultInitAllocator<U>&) noexcept {
+  return true;
+}
+/// A vector whose resize() does not zero (see DefaultInitAllocator).
+template <class T>
+using FilledVector = std::vector<T, DefaultInitAllocator<T>>;
+}  // namespace detail
 
 class Topology {
  public:
@@ -35,6 +72,13 @@ class Topology {
   std::span<const std::uint8_t> vertex_face_corners(std::size_t v) const {
     return {vertex_face_corners_.data() + vertex_face_offsets_[v],
             vertex_face_corners_.data() + vertex_face_offsets_[v + 1]};
+  }
+  /// The two other corners (i1, i2) of each face of vertex_faces(v), same
+  /// order, in the face's corner order after v: i1 = f[(c+1)%3],
+  /// i2 = f[(c+2)%3] where c is v's corner.
+  std::span<const std::array<std::int32_t, 2>> vertex_face_opposite(std::size_t v) const {
+    return {vertex_face_opposite_.data() + vertex_face_offsets_[v],
+            vertex_face_opposite_.data() + vertex_face_offsets_[v + 1]};
   }
   /// Vertices joined to v by an edge, increasing index.
   std::span<const std::int32_t> vertex_neighbors(std::size_t v) const {
@@ -72,12 +116,17 @@ class Topology {
   bool is_isolated_vertex(std::size_t v) const { return vertex_faces(v).empty(); }
 
  private:
-  std::vector<std::int32_t> vertex_face_offsets_, vertex_faces_;
-  std::vector<std::uint8_t> vertex_face_corners_;
-  std::vector<std::int32_t> vertex_neighbor_offsets_, vertex_neighbors_, vertex_edges_;
-  std::vector<std::array<std::int32_t, 2>> edges_;
-  std::vector<std::int32_t> edge_face_offsets_, edge_faces_;
-  std::vector<std::array<std::int32_t, 3>> face_edges_;
+  // Arrays that the constructor fills completely are not zeroed first.
+  std::vector<std::int32_t> vertex_face_offsets_;
+  detail::FilledVector<std::int32_t> vertex_faces_;
+  detail::FilledVector<std::uint8_t> vertex_face_corners_;
+  detail::FilledVector<std::array<std::int32_t, 2>> vertex_face_opposite_;
+  std::vector<std::int32_t> vertex_neighbor_offsets_;
+  detail::FilledVector<std::int32_t> vertex_neighbors_, vertex_edges_;
+  detail::FilledVector<std::array<std::int32_t, 2>> edges_;
+  std::vector<std::int32_t> edge_face_offsets_;
+  detail::FilledVector<std::int32_t> edge_faces_;
+  detail::FilledVector<std::array<std::int32_t, 3>> face_edges_;
   std::vector<std::uint8_t> boundary_vertex_;
 };
 
