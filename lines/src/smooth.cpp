@@ -12,7 +12,7 @@
 #include <utility>
 
 #include "fabrica/core/error.hpp"
-#include "fabrica/core/surface_curve.hpp"
+#include "fabrica/core/curve_smoothing.hpp"
 
 namespace fabrica {
 
