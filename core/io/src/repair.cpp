@@ -15,9 +15,7 @@ namespace fabrica::io {
 
 namespace {
 
-std::string plural(std::size_t n, const char* one, const char* many) {
-  return std::to_string(n) + " " + (n == 1 ? one : many);
-}
+using detail::plural;
 
 // Representative (first occurrence) of every vertex: bit-equal positions.
 std::vector<std::int32_t> exact_representatives(const std::vector<Vec3>& pos) {

@@ -70,8 +70,9 @@ struct DepthBuffer {
 };
 
 /// Rasterises every triangle of `mesh` seen by `camera` (width x height
-/// from the camera) with perspective-correct depth. Triangles with a corner
-/// behind the near plane are skipped. A pixel is covered when its centre
+/// from the camera) with perspective-correct depth. In a perspective view
+/// triangles with a corner on or behind the eye plane are skipped (no near
+/// clipping); an orthographic view draws every triangle. A pixel is covered when its centre
 /// has no negative barycentric weight (shared edges: both triangles); the
 /// buffer holds the minimum depth, bit-identical at any thread count and to
 /// a plain loop over every triangle and every pixel of its box (the binning
