@@ -665,6 +665,58 @@ INSTANTIATE_TEST_SUITE_P(Meshes, BadInput,
                            return std::get<0>(info.param) + "_" + std::get<1>(info.param);
                          });
 
+// Every malformed-file kind as an input of one batch, beside a good mesh: the
+// batch goes past each bad item (failed, with the reader's one-line reason
+// naming the file), makes the good one, writes nothing for the bad ones and
+// exits 5 — never a signal, never a hang (a FIFO among the inputs).
+TEST(BadInputBatch, EveryBadMeshIsAFailedItemWithTheReasonAndTheGoodOneIsMade) {
+  if (!has_command("batch")) GTEST_SKIP() << "no batch command in this build";
+  const fs::path dir = work_dir();
+  const fs::path in_dir = dir / "in", out_dir = dir / "out";
+  nlohmann::json inputs = nlohmann::json::array();
+  std::vector<fs::path> bad;
+  for (const auto& name : bad_mesh_names()) {
+    const fs::path case_dir = in_dir / name;  // one folder each: some cases share file names
+    fs::create_directories(case_dir);
+    bad.push_back(bad_mesh(name).make(case_dir));
+    inputs.push_back({{"mesh", fs::relative(bad.back(), dir).string()}});
+  }
+  write_bytes(dir / "good.obj", kTetraObj);
+  inputs.push_back({{"mesh", "good.obj"}});
+  const nlohmann::json manifest{
+      {"inputs", inputs},
+      {"views", {"anterior"}},
+      {"styles",
+       {{{"name", "l"}, {"command", "lines"}, {"types", {"contour"}}, {"formats", {"svg"}}}}},
+      {"size", {64, 64}},
+      {"output", "{index}-{style}.{ext}"}};
+  write_bytes(dir / "manifest.json", manifest.dump(2));
+  const Outcome r = run_fabrica(
+      {"batch", (dir / "manifest.json").string(), "-o", out_dir.string(), "--jobs", "2", "--quiet"},
+      std::chrono::seconds(300));
+  ASSERT_LT(r.code, 128) << "killed by a signal\n" << describe(r);
+  ASSERT_EQ(r.code, 5) << describe(r);
+  const auto report = nlohmann::json::parse(read_text(out_dir / "batch-report.json"));
+  ASSERT_EQ(report["items"].size(), bad.size() + 1);
+  EXPECT_EQ(report["summary"]["failed"], bad.size());
+  EXPECT_EQ(report["summary"]["made"], 1);
+  for (std::size_t k = 0; k < report["items"].size(); ++k) {
+    const auto& item = report["items"][k];
+    if (k == bad.size()) {
+      EXPECT_EQ(item["status"], "made") << item.dump();
+      continue;
+    }
+    EXPECT_EQ(item["status"], "failed") << item.dump();
+    const std::string reason = item.value("reason", "");
+    EXPECT_NE(reason.find(bad[k].filename().string()), std::string::npos)
+        << "the reason does not name the file\n"
+        << item.dump();
+    EXPECT_EQ(reason.find('\n'), std::string::npos) << item.dump();
+    for (const auto& o : item["outputs"])
+      EXPECT_FALSE(fs::exists(out_dir / o.get<std::string>())) << o;
+  }
+}
+
 // ------------------------------------------------------ awkward meshes
 // Valid files with defects the commands must survive (exit 0, finite output).
 
