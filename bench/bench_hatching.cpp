@@ -15,8 +15,8 @@
 #include <utility>
 
 #include "fabrica/core/camera.hpp"
+#include "fabrica/core/depth_raster.hpp"
 #include "fabrica/core/surface.hpp"
-#include "fabrica/hatching/depth_buffer.hpp"
 #include "fabrica/hatching/hatching.hpp"
 #include "fabrica/hatching/intensity_ridges.hpp"
 #include "fabrica/io/mesh_io.hpp"
@@ -119,7 +119,7 @@ void BM_Stage(benchmark::State& state) {
       auto f = fabrica::hatching::compute_intensity_field(*l.surface, l.camera);
       benchmark::DoNotOptimize(f.face_gradient.data());
     } else if (stage == 1) {
-      auto d = fabrica::hatching::rasterize_depth(l.surface->mesh(), l.camera);
+      auto d = fabrica::render_depth(l.surface->mesh(), l.camera, /*faces=*/true);
       benchmark::DoNotOptimize(&d);
     } else {
       auto r = fabrica::hatching::detect_intensity_ridges(*l.surface, field);

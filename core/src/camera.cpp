@@ -9,6 +9,7 @@
 #include "fabrica/core/atomic_file.hpp"
 #include "fabrica/core/error.hpp"
 #include "fabrica/core/input_file.hpp"
+#include "fabrica/core/projector.hpp"
 
 namespace fabrica {
 
@@ -35,14 +36,18 @@ Vec3 Camera::right() const {
   return r.normalized();
 }
 
-Vec3 Camera::true_up() const { return right().cross(forward()).normalized(); }
+Vec3 Camera::true_up() const {
+  return right().cross(forward()).normalized();
+}
 
 void validate_camera(const Camera& c, const std::string& what) {
   if (!c.eye.allFinite() || !c.center.allFinite() || !c.up.allFinite() || !std::isfinite(c.fov_deg))
     throw InputError(what + ": eye, center, up and fov_deg must be finite numbers");
   const double distance = (c.center - c.eye).norm();
-  if (!(distance > 0.0)) throw InputError(what + ": eye and center are the same point; move the eye");
-  if (!(c.up.norm() > 0.0)) throw InputError(what + ": up vector is zero; give a direction such as [0,1,0]");
+  if (!(distance > 0.0))
+    throw InputError(what + ": eye and center are the same point; move the eye");
+  if (!(c.up.norm() > 0.0))
+    throw InputError(what + ": up vector is zero; give a direction such as [0,1,0]");
   const Vec3 f = (c.center - c.eye) / distance;
   if (f.cross(c.up.normalized()).norm() < 1e-6)
     throw InputError(what + ": up vector is parallel to the viewing direction; choose another up");
@@ -56,21 +61,7 @@ void validate_camera(const Camera& c, const std::string& what) {
 }
 
 ProjectedPoint project(const Camera& c, const Vec3& p) {
-  const Vec3 f = c.forward(), r = c.right(), u = c.true_up();
-  const Vec3 d = p - c.eye;
-  const double depth = d.dot(f);
-  const double half_h = std::tan(0.5 * c.fov_deg * kDegToRad);
-  double x, y;
-  if (c.projection == Projection::perspective) {
-    x = d.dot(r) / (depth * half_h);
-    y = d.dot(u) / (depth * half_h);
-  } else {
-    const double h = (c.center - c.eye).norm() * half_h;
-    x = d.dot(r) / h;
-    y = d.dot(u) / h;
-  }
-  x /= c.aspect();
-  return {Vec2(0.5 * (x + 1.0) * c.width, 0.5 * (1.0 - y) * c.height), depth};
+  return Projector(c)(p);
 }
 
 Eigen::Matrix4d view_matrix(const Camera& c) {
@@ -105,7 +96,8 @@ Eigen::Matrix4d projection_matrix(const Camera& c, double n, double f) {
   return m;
 }
 
-std::pair<double, double> clip_planes(const Camera& c, const Vec3& sphere_center, double sphere_radius) {
+std::pair<double, double> clip_planes(const Camera& c, const Vec3& sphere_center,
+                                      double sphere_radius) {
   const double center_depth = (sphere_center - c.eye).dot(c.forward());
   double n = c.near_plane > 0 ? c.near_plane : center_depth - 1.01 * sphere_radius;
   double f = c.far_plane > 0 ? c.far_plane : center_depth + 1.01 * sphere_radius;
@@ -131,7 +123,8 @@ Camera camera_from_json(const nlohmann::json& j, const std::string& what) {
       else if (p.rfind("orthographic", 0) == 0)
         c.projection = Projection::orthographic;
       else
-        throw InputError(what + ": projection must be \"perspective\" or \"orthographic\" (got \"" + p + "\")");
+        throw InputError(what + ": projection must be \"perspective\" or \"orthographic\" (got \"" +
+                         p + "\")");
     }
     if (j.contains("width")) c.width = j.at("width").get<int>();
     if (j.contains("height")) c.height = j.at("height").get<int>();
@@ -173,7 +166,8 @@ Camera read_camera(const std::filesystem::path& path) {
 }
 
 void write_camera(const Camera& camera, const std::filesystem::path& path) {
-  write_file_atomically(path, [&](std::ostream& out) { out << camera_to_json(camera).dump(2) << '\n'; });
+  write_file_atomically(path,
+                        [&](std::ostream& out) { out << camera_to_json(camera).dump(2) << '\n'; });
 }
 
 std::optional<AnatomicalView> parse_anatomical_view(std::string_view name) {
@@ -188,31 +182,57 @@ std::optional<AnatomicalView> parse_anatomical_view(std::string_view name) {
 
 const char* to_string(AnatomicalView view) {
   switch (view) {
-    case AnatomicalView::anterior: return "anterior";
-    case AnatomicalView::posterior: return "posterior";
-    case AnatomicalView::left: return "left";
-    case AnatomicalView::right: return "right";
-    case AnatomicalView::superior: return "superior";
-    case AnatomicalView::inferior: return "inferior";
+    case AnatomicalView::anterior:
+      return "anterior";
+    case AnatomicalView::posterior:
+      return "posterior";
+    case AnatomicalView::left:
+      return "left";
+    case AnatomicalView::right:
+      return "right";
+    case AnatomicalView::superior:
+      return "superior";
+    case AnatomicalView::inferior:
+      return "inferior";
   }
   return "anterior";
 }
 
-Camera anatomical_camera(AnatomicalView view, const BoundingBox& box, Space space, int width, int height,
-                         double fov_deg) {
+Camera anatomical_camera(AnatomicalView view, const BoundingBox& box, Space space, int width,
+                         int height, double fov_deg) {
   // Direction from the centre to the camera, and view-up, in RAS.
   Vec3 dir = Vec3::UnitY(), up = Vec3::UnitZ();
   switch (view) {
-    case AnatomicalView::right: dir = {1, 0, 0}; up = {0, 0, 1}; break;
-    case AnatomicalView::left: dir = {-1, 0, 0}; up = {0, 0, 1}; break;
-    case AnatomicalView::anterior: dir = {0, 1, 0}; up = {0, 0, 1}; break;
-    case AnatomicalView::posterior: dir = {0, -1, 0}; up = {0, 0, 1}; break;
-    case AnatomicalView::superior: dir = {0, 0, 1}; up = {0, 1, 0}; break;
-    case AnatomicalView::inferior: dir = {0, 0, -1}; up = {0, 1, 0}; break;
+    case AnatomicalView::right:
+      dir = {1, 0, 0};
+      up = {0, 0, 1};
+      break;
+    case AnatomicalView::left:
+      dir = {-1, 0, 0};
+      up = {0, 0, 1};
+      break;
+    case AnatomicalView::anterior:
+      dir = {0, 1, 0};
+      up = {0, 0, 1};
+      break;
+    case AnatomicalView::posterior:
+      dir = {0, -1, 0};
+      up = {0, 0, 1};
+      break;
+    case AnatomicalView::superior:
+      dir = {0, 0, 1};
+      up = {0, 1, 0};
+      break;
+    case AnatomicalView::inferior:
+      dir = {0, 0, -1};
+      up = {0, 1, 0};
+      break;
   }
   if (space == Space::lps) {
-    dir.x() = -dir.x(); dir.y() = -dir.y();
-    up.x() = -up.x(); up.y() = -up.y();
+    dir.x() = -dir.x();
+    dir.y() = -dir.y();
+    up.x() = -up.x();
+    up.y() = -up.y();
   }
   const double radius = std::max(0.5 * box.diagonal(), 1e-9);
   // Fit the sphere in the narrower of the two fields of view, 5% margin.

@@ -7,8 +7,9 @@
 #include <optional>
 #include <string>
 
+#include "fabrica/core/depth_raster.hpp"
 #include "fabrica/core/error.hpp"
-#include "fabrica/hatching/depth_buffer.hpp"
+#include "fabrica/core/projector.hpp"
 #include "fabrica/hatching/proximity_grid.hpp"
 
 namespace fabrica::hatching {
@@ -73,8 +74,7 @@ struct TraceState {
 class Tracer {
  public:
   Tracer(const Surface& surface, const IntensityField& field, const HatchingOptions& options,
-         const ImageProjector& projector, const DepthBuffer& depth, ProximityGrid& grid,
-         int grid_depth)
+         const Projector& projector, const DepthBuffer& depth, ProximityGrid& grid, int grid_depth)
       : surface_(surface),
         field_(field),
         options_(options),
@@ -279,7 +279,7 @@ class Tracer {
   const Surface& surface_;
   const IntensityField& field_;
   const HatchingOptions& options_;
-  const ImageProjector& projector_;
+  const Projector& projector_;
   const DepthBuffer& depth_;
   ProximityGrid& grid_;
   const Topology& topology_;
@@ -340,8 +340,8 @@ StrokeSet hatch(const Surface& surface, const Camera& camera, const IntensityFie
   result.seed_depth = seed_depth;
   if (surface.face_count() == 0) return result;
 
-  const ImageProjector projector(camera);
-  const DepthBuffer depth = rasterize_depth(surface.mesh(), camera);
+  const Projector projector(camera);
+  const DepthBuffer depth = render_depth(surface.mesh(), camera, /*faces=*/true);
   ProximityGrid grid(camera.width, camera.height, grid_depth);
   Tracer tracer(surface, field, options, projector, depth, grid, grid_depth);
 

@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <limits>
 
-#include "projector.hpp"
+#include "fabrica/core/projector.hpp"
 
 namespace fabrica {
 
@@ -140,7 +140,7 @@ double projected_length(const Polyline& pl, const Camera& camera) {
   double sum = 0.0;
   const std::size_t n = pl.vertices.size();
   if (n < 2) return 0.0;
-  const detail::Projector project(camera);
+  const Projector project(camera);
   Vec2 prev = project(pl.vertices[0].position).pixel;
   const Vec2 first = prev;
   for (std::size_t i = 1; i < n; ++i) {
@@ -202,7 +202,7 @@ std::vector<Polyline> chain_segments(const SegmentSoup& soup, const ChainOptions
 
   // 2. Filter and build the polylines (parallel over chains; each chain's
   //    result depends only on itself), then keep them in chain order.
-  std::optional<detail::Projector> projector;
+  std::optional<Projector> projector;
   if (options.min_length_px > 0.0 && options.camera) projector.emplace(*options.camera);
   std::vector<Polyline> built(chains);
   std::vector<std::uint8_t> keep(chains, 0);

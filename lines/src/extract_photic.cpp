@@ -28,6 +28,21 @@ void require_support(const ViewFields& fields, double threshold, bool cull, cons
                     " and light_cull_backfaces = " + (cull ? "true" : "false"));
 }
 
+// The zero set of `values` on the lit faces (fields.light_faces), with
+// back-face culling when `cull`; the threshold t on |∇f| (fade (m - t)/m) is
+// applied as the segments are made.
+SegmentSoup lit_zero_crossings(const Surface& surface, const ViewFields& fields, LineFamily family,
+                               std::span<const double> values, ScalarCrossingOptions o, bool cull,
+                               double t) {
+  SegmentSoup soup;
+  soup.family = family;
+  if (cull) o.cull = fields.ndotv;
+  if (fields.light_faces.empty()) return soup;  // no face can carry a kept line
+  o.faces = fields.light_faces;
+  detail::scalar_zero_crossings(surface, values, o, fields.light_gradient_norm, t, soup.segments);
+  return soup;
+}
+
 }  // namespace
 
 namespace detail {
@@ -62,18 +77,10 @@ SegmentSoup extract_pels(const Surface& surface, const ViewFields& fields, doubl
   detail::require_non_negative(options.threshold, LineFamily::pel, "threshold");
   const double t = options.threshold / feature_size;
   require_support(fields, t, options.cull_backfaces, "PELs");
-  SegmentSoup soup;
-  soup.family = LineFamily::pel;
   ScalarCrossingOptions o;
   o.test_num = fields.pel_maximum;  // -D_w D_w |∇f| > 0: a maximum of the gradient magnitude
-  if (options.cull_backfaces) o.cull = fields.ndotv;
-  if (fields.light_faces.empty()) return soup;  // no face can carry a kept line
-  o.faces = fields.light_faces;
-  // The threshold on |∇f| (fade (m - t)/m) is applied as the segments are
-  // made.
-  detail::scalar_zero_crossings(surface, fields.pel_h, o, fields.light_gradient_norm, t,
-                                soup.segments);
-  return soup;
+  return lit_zero_crossings(surface, fields, LineFamily::pel, fields.pel_h, o,
+                            options.cull_backfaces, t);
 }
 
 SegmentSoup extract_laplacian_lines(const Surface& surface, const ViewFields& fields,
@@ -85,17 +92,8 @@ SegmentSoup extract_laplacian_lines(const Surface& surface, const ViewFields& fi
   detail::require_non_negative(options.threshold, LineFamily::laplacian, "threshold");
   const double t = options.threshold / feature_size;
   require_support(fields, t, options.cull_backfaces, "Laplacian lines");
-  SegmentSoup soup;
-  soup.family = LineFamily::laplacian;
-  ScalarCrossingOptions o;
-  if (options.cull_backfaces) o.cull = fields.ndotv;
-  if (fields.light_faces.empty()) return soup;  // no face can carry a kept line
-  o.faces = fields.light_faces;
-  // The threshold on |∇f| (fade (m - t)/m) is applied as the segments are
-  // made.
-  detail::scalar_zero_crossings(surface, fields.light_laplacian, o, fields.light_gradient_norm, t,
-                                soup.segments);
-  return soup;
+  return lit_zero_crossings(surface, fields, LineFamily::laplacian, fields.light_laplacian, {},
+                            options.cull_backfaces, t);
 }
 
 }  // namespace fabrica

@@ -8,11 +8,12 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <utility>
 
+#include "fabrica/core/curve_smoothing.hpp"
 #include "fabrica/core/error.hpp"
-#include "fabrica/core/surface_curve.hpp"
 
 namespace fabrica {
 
@@ -145,6 +146,17 @@ double path_length(const std::vector<LineVertex>& v, bool closed) {
   return sum;
 }
 
+/// The core smoother's result, or nothing when it rejects the curve.
+std::optional<CurveSmoothingResult> try_smooth(const TriangleMesh& mesh, const Topology& topology,
+                                               const SurfaceCurve& curve,
+                                               const CurveSmoothingOptions& core) {
+  try {
+    return smooth_surface_curve(mesh, topology, curve, core);
+  } catch (const InputError&) {
+    return std::nullopt;
+  }
+}
+
 /// Smooths one run of an open curve between two fixed points (old indices
 /// `run`, in order) and appends its points, without the last one, to `out`.
 /// Returns false if the core rejected the run.
@@ -160,13 +172,9 @@ bool smooth_run(const TriangleMesh& mesh, const Topology& topology, const Polyli
   curve.closed = false;
   curve.points.reserve(run.size());
   for (const std::size_t i : run) curve.points.push_back(pl.vertices[i].anchor);
-  CurveSmoothingResult r;
-  try {
-    r = smooth_surface_curve(mesh, topology, curve, core);
-  } catch (const InputError&) {
-    return false;
-  }
-  const auto& pts = r.curve.points;
+  const std::optional<CurveSmoothingResult> r = try_smooth(mesh, topology, curve, core);
+  if (!r) return false;
+  const auto& pts = r->curve.points;
   if (pts.size() < 2) return false;
   std::vector<const LineVertex*> old;
   old.reserve(run.size());
@@ -202,14 +210,10 @@ bool smooth_loop(const TriangleMesh& mesh, const Topology& topology, const Polyl
   SurfaceCurve curve;
   curve.closed = true;
   for (const auto& v : pl.vertices) curve.points.push_back(v.anchor);
-  CurveSmoothingResult r;
-  try {
-    r = smooth_surface_curve(mesh, topology, curve, core);
-  } catch (const InputError&) {
-    return false;
-  }
-  const auto& pts = r.curve.points;
-  if (r.collapsed || pts.size() < 3) {
+  const std::optional<CurveSmoothingResult> r = try_smooth(mesh, topology, curve, core);
+  if (!r) return false;
+  const auto& pts = r->curve.points;
+  if (r->collapsed || pts.size() < 3) {
     collapsed = true;
     return false;
   }

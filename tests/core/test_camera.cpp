@@ -6,6 +6,7 @@
 
 #include "fabrica/core/camera.hpp"
 #include "fabrica/core/error.hpp"
+#include "fabrica/core/projector.hpp"
 #include "test_support.hpp"
 
 using namespace fabrica;
@@ -34,7 +35,8 @@ TEST(Camera, ProjectsCentreToImageCentreAndAxesTheRightWay) {
     EXPECT_NEAR(centre.pixel.y(), 300.0, 1e-9);
     EXPECT_NEAR(centre.depth, 10.0, 1e-12);
     EXPECT_GT(project(c, c.center + Vec3(1, 0, 0)).pixel.x(), 400.0);  // world +x is image right
-    EXPECT_LT(project(c, c.center + Vec3(0, 1, 0)).pixel.y(), 300.0);  // world +y is image up (y down)
+    EXPECT_LT(project(c, c.center + Vec3(0, 1, 0)).pixel.y(),
+              300.0);  // world +y is image up (y down)
   }
 }
 
@@ -61,6 +63,33 @@ TEST(Camera, MatricesAgreeWithProject) {
       EXPECT_GT(ndc.z(), -1.0);
       EXPECT_LT(ndc.z(), 1.0);
     }
+  }
+}
+
+TEST(Camera, ProjectorRaysAndPixelSizesInvertTheProjection) {
+  // The viewing ray through a pixel projects back onto that pixel at every
+  // depth along it, and one pixel at depth d spans pixel_size(d) mm.
+  for (auto projection : {Projection::perspective, Projection::orthographic}) {
+    const Camera c = test_camera(projection);
+    const Projector projector(c);
+    for (const Vec2& pixel : {Vec2(400.0, 300.0), Vec2(12.5, 580.25), Vec2(799.0, 0.5)}) {
+      Vec3 origin, direction;
+      projector.ray(pixel, origin, direction);
+      EXPECT_NEAR(direction.norm(), 1.0, 1e-12);
+      for (const double t : {3.0, 10.0, 25.0}) {
+        const ProjectedPoint q = projector(origin + t * direction);
+        EXPECT_NEAR(q.pixel.x(), pixel.x(), 1e-9);
+        EXPECT_NEAR(q.pixel.y(), pixel.y(), 1e-9);
+        const ProjectedPoint p = project(c, origin + t * direction);
+        EXPECT_EQ(p.pixel, q.pixel);
+        EXPECT_EQ(p.depth, q.depth);
+      }
+    }
+    // Half the view height (10 mm * tan 20 deg at the centre) over 300 rows.
+    const double size = projector.pixel_size(10.0);
+    EXPECT_NEAR(size, 2.0 * 10.0 * std::tan(20.0 * M_PI / 180.0) / 600.0, 1e-12);
+    const double dy = project(c, c.center + Vec3(0, size, 0)).pixel.y() - 300.0;
+    EXPECT_NEAR(dy, -1.0, 1e-9);
   }
 }
 

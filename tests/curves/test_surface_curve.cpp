@@ -8,6 +8,7 @@
 
 #include "curve_test_helpers.hpp"
 #include "fabrica/core/error.hpp"
+#include "fabrica/core/curve_smoothing.hpp"
 #include "fabrica/core/surface_curve.hpp"
 #include "fabrica/core/topology.hpp"
 #include "test_support.hpp"

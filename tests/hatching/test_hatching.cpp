@@ -13,9 +13,10 @@
 #include <sstream>
 #include <vector>
 
+#include "fabrica/core/depth_raster.hpp"
 #include "fabrica/core/error.hpp"
+#include "fabrica/core/projector.hpp"
 #include "fabrica/core/surface.hpp"
-#include "fabrica/hatching/depth_buffer.hpp"
 #include "fabrica/hatching/hatching.hpp"
 #include "fabrica/hatching/intensity_ridges.hpp"
 #include "fabrica/hatching/svg_writer.hpp"
@@ -83,8 +84,8 @@ std::vector<std::uint8_t> ink_image(const StrokeSet& strokes) {
 /// Per pixel: the intensity of the visible surface point, or NaN (background / back-facing).
 std::vector<double> intensity_image(const Surface& surface, const Camera& camera,
                                     const IntensityField& field) {
-  const DepthBuffer depth = rasterize_depth(surface.mesh(), camera);
-  const ImageProjector projector(camera);
+  const DepthBuffer depth = render_depth(surface.mesh(), camera, /*faces=*/true);
+  const Projector projector(camera);
   std::vector<double> image(depth.face.size(), std::numeric_limits<double>::quiet_NaN());
   for (int j = 0; j < camera.height; ++j) {
     for (int i = 0; i < camera.width; ++i) {
@@ -438,7 +439,7 @@ TEST(HatchingOcclusion, NoStrokeOnHiddenSurface) {
   const Surface surface(std::move(two));
   const Camera camera = orthographic_camera(Vec3(0.6, 0.2, -1.5), Vec3::UnitZ(), 5.0, 240, 240);
   const StrokeSet strokes = hatch(surface, camera);
-  const DepthBuffer depth = rasterize_depth(surface.mesh(), camera);
+  const DepthBuffer depth = render_depth(surface.mesh(), camera, /*faces=*/true);
   const double tolerance = surface.mean_edge_length();
   std::size_t on_back = 0;
   for (const Stroke& s : strokes.strokes) {

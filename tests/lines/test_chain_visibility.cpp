@@ -56,12 +56,16 @@ TriangleMesh merged(const TriangleMesh& a, const TriangleMesh& b) {
 }
 
 // Every triangle, every pixel of its (unclipped) box, the weights and the
-// depth by the documented formula; min kept.
-std::vector<float> brute_force_depth(const TriangleMesh& mesh, const Camera& camera) {
+// depth by the documented formula; min kept. With `faces`, the face of the
+// minimum per pixel (the lower index on equal depth), -1 where empty.
+std::vector<float> brute_force_depth(const TriangleMesh& mesh, const Camera& camera,
+                                     std::vector<std::int32_t>* faces = nullptr) {
   const float inf = std::numeric_limits<float>::infinity();
   std::vector<float> out(static_cast<std::size_t>(camera.width) * camera.height, inf);
+  if (faces) faces->assign(out.size(), -1);
   const bool perspective = camera.projection == Projection::perspective;
-  for (const Face& t : mesh.faces) {
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
+    const Face& t = mesh.faces[f];
     ProjectedPoint q[3];
     for (int k = 0; k < 3; ++k) q[k] = project(camera, mesh.positions[t[k]]);
     if (perspective && (q[0].depth <= 1e-9 || q[1].depth <= 1e-9 || q[2].depth <= 1e-9)) continue;
@@ -91,8 +95,10 @@ std::vector<float> brute_force_depth(const TriangleMesh& mesh, const Camera& cam
         const double d = perspective
                              ? 1.0 / (w[0] / q[0].depth + w[1] / q[1].depth + w[2] / q[2].depth)
                              : w[0] * q[0].depth + w[1] * q[1].depth + w[2] * q[2].depth;
-        float& dst = out[static_cast<std::size_t>(y) * camera.width + x];
-        dst = std::min(dst, static_cast<float>(d));
+        const std::size_t at = static_cast<std::size_t>(y) * camera.width + x;
+        const float z = static_cast<float>(d);
+        if (faces && z < out[at]) (*faces)[at] = static_cast<std::int32_t>(f);
+        out[at] = std::min(out[at], z);
       }
   }
   return out;
@@ -144,10 +150,34 @@ TEST(DepthRaster, BitIdenticalToBruteForceOnClosedOpenAndClippedScenes) {
     EXPECT_EQ(count_differences(fresh.depth, expected), 0u) << "case " << i;
     render_depth(*c.mesh, c.camera, reused);
     EXPECT_EQ(count_differences(reused.depth, expected), 0u) << "case " << i << " (reused)";
+    EXPECT_TRUE(reused.face.empty());
+    // With faces (hatching's seeds and occlusion): the same depths, and the
+    // face of the nearest triangle at every pixel. Faces are visited in
+    // index order by the brute force, so `z < depth` keeps the lower index
+    // on ties, as the rasteriser promises.
+    std::vector<std::int32_t> expected_faces;
+    brute_force_depth(*c.mesh, c.camera, &expected_faces);
+    render_depth(*c.mesh, c.camera, reused, /*faces=*/true);
+    EXPECT_EQ(count_differences(reused.depth, expected), 0u) << "case " << i << " (faces)";
+    EXPECT_EQ(reused.face, expected_faces) << "case " << i;
+    std::size_t seen = 0;
+    for (int y = 0; y < c.camera.height; ++y)
+      for (int x = 0; x < c.camera.width; ++x) {
+        const Vec2 centre(x + 0.5, y + 0.5);
+        const std::int32_t f = reused.face_at(centre);
+        EXPECT_EQ(f >= 0, std::isfinite(reused.depth_at(centre)));
+        seen += f >= 0;
+      }
+    EXPECT_EQ(seen, finite_pixels(expected)) << "case " << i;
+    EXPECT_EQ(reused.face_at(Vec2(-0.5, 1.0)), -1);
+    EXPECT_EQ(reused.depth_at(Vec2(c.camera.width + 1.0, 1.0)),
+              std::numeric_limits<float>::infinity());
     {
       tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
       const DepthBuffer serial = render_depth(*c.mesh, c.camera);
       EXPECT_EQ(count_differences(serial.depth, expected), 0u) << "case " << i << " (1 thread)";
+      const DepthBuffer serial_faces = render_depth(*c.mesh, c.camera, /*faces=*/true);
+      EXPECT_EQ(serial_faces.face, expected_faces) << "case " << i << " (1 thread, faces)";
     }
   }
 }

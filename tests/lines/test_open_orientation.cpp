@@ -121,8 +121,8 @@ TEST(OpenOrientation, CutInwardAortaIsTurnedOutwardAndReported) {
 
   // --keep-orientation keeps the file's (inward) orientation.
   TriangleMesh kept = inward;
-  io::PrepareOptions keep;
-  keep.keep_orientation = true;
+  PrepareOptions keep;
+  keep.orient = false;
   const auto kept_report = io::prepare_for_lines(kept, keep);
   EXPECT_EQ(kept_report.flipped_faces, 0u);
   EXPECT_EQ(kept.faces, inward.faces);

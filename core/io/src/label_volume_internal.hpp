@@ -31,6 +31,13 @@ const char* to_string(ElementType type);
 /// Whole file as bytes; InputError naming `what` when it cannot be read.
 std::string read_file_bytes(const std::filesystem::path& path, const std::string& what);
 
+/// Drops what precedes the samples in `data`: `skip` bytes (0: none), or
+/// with skip == -1 all but the last `needed` bytes (MetaImage HeaderSize,
+/// NRRD byte skip). Throws InputError prefixed with `what`, ending with
+/// `past_end` when skip exceeds the data.
+void skip_to_samples(std::string_view& data, long long skip, std::size_t needed,
+                     const std::string& what, const char* past_end);
+
 /// Inflates a zlib or gzip stream (auto-detected; concatenated gzip members
 /// are followed) and returns at most `expected` bytes. InputError when the
 /// stream is corrupt or yields fewer bytes than `expected`.

@@ -183,16 +183,9 @@ LabelVolume read_metaimage(const std::filesystem::path& path) {
     data = detached;
   }
   const std::size_t needed = g.voxel_count() * element_size(layout.type);
-  if (header_size == -1 && !compressed && binary) {
-    if (data.size() < needed)
-      throw InputError(what + ": voxel data holds " + std::to_string(data.size()) +
-                       " bytes but the header describes " + std::to_string(needed));
-    data = data.substr(data.size() - needed);
-  } else if (header_size > 0) {
-    if (static_cast<std::size_t>(header_size) > data.size())
-      throw InputError(what + ": HeaderSize runs past the end of the data");
-    data.remove_prefix(static_cast<std::size_t>(header_size));
-  }
+  // HeaderSize = -1 (data at the end) only means something for raw binary data.
+  skip_to_samples(data, header_size == -1 && (compressed || !binary) ? 0 : header_size, needed,
+                  what, "HeaderSize runs past the end of the data");
   if (!binary) {
     decode_text_samples(data, layout, volume, what);
   } else if (compressed) {

@@ -348,16 +348,7 @@ LabelVolume read_nrrd(const std::filesystem::path& path) {
   const std::size_t needed = g.voxel_count() * layout.layer_count * esize;
   std::string inflated;
   if (encoding == "raw") {
-    if (byte_skip == -1) {
-      if (data.size() < needed)
-        throw InputError(what + ": voxel data holds " + std::to_string(data.size()) +
-                         " bytes but the header describes " + std::to_string(needed));
-      data = data.substr(data.size() - needed);
-    } else if (byte_skip > 0) {
-      if (static_cast<std::size_t>(byte_skip) > data.size())
-        throw InputError(what + ": 'byte skip' runs past the data");
-      data.remove_prefix(static_cast<std::size_t>(byte_skip));
-    }
+    skip_to_samples(data, byte_skip, needed, what, "'byte skip' runs past the data");
     decode_samples(data, layout, volume, what);
   } else if (encoding == "gzip" || encoding == "gz") {
     const std::size_t skip = byte_skip > 0 ? static_cast<std::size_t>(byte_skip) : 0;

@@ -20,6 +20,19 @@
 namespace fabrica::io {
 namespace volume_detail {
 
+void skip_to_samples(std::string_view& data, long long skip, std::size_t needed,
+                     const std::string& what, const char* past_end) {
+  if (skip == -1) {
+    if (data.size() < needed)
+      throw InputError(what + ": voxel data holds " + std::to_string(data.size()) +
+                       " bytes but the header describes " + std::to_string(needed));
+    data = data.substr(data.size() - needed);
+  } else if (skip > 0) {
+    if (static_cast<std::size_t>(skip) > data.size()) throw InputError(what + ": " + past_end);
+    data.remove_prefix(static_cast<std::size_t>(skip));
+  }
+}
+
 std::size_t element_size(ElementType type) {
   switch (type) {
     case ElementType::int8:

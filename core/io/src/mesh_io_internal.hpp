@@ -106,15 +106,21 @@ struct TextCursor {
   }
   bool token_ends_here() const { return p >= end || is_blank(*p) || *p == '#'; }
 
-  /// Parses a number at the cursor (after leading whitespace, crossing lines
-  /// when `cross_lines`), which must end at whitespace; false otherwise.
-  bool parse_double(double& value, bool cross_lines = false) {
+  /// Skips the whitespace before a number (crossing lines when
+  /// `cross_lines`) and returns where its digits start (after a '+').
+  const char* number_start(bool cross_lines) {
     if (cross_lines)
       skip_blanks();
     else
       skip_spaces();
     const char* s = p;
     if (s < end && *s == '+') ++s;
+    return s;
+  }
+  /// Parses a number at the cursor (after leading whitespace, crossing lines
+  /// when `cross_lines`), which must end at whitespace; false otherwise.
+  bool parse_double(double& value, bool cross_lines = false) {
+    const char* s = number_start(cross_lines);
     const auto r = std::from_chars(s, end, value);
     if (r.ec != std::errc() && r.ec != std::errc::result_out_of_range) return false;
     if (r.ec == std::errc::result_out_of_range) return false;
@@ -123,12 +129,7 @@ struct TextCursor {
   }
   /// Parses an integer; stops at any non-digit (callers check what follows).
   bool parse_integer(std::int64_t& value, bool cross_lines = false) {
-    if (cross_lines)
-      skip_blanks();
-    else
-      skip_spaces();
-    const char* s = p;
-    if (s < end && *s == '+') ++s;
+    const char* s = number_start(cross_lines);
     const auto r = std::from_chars(s, end, value);
     if (r.ec != std::errc()) return false;
     p = r.ptr;
@@ -195,6 +196,15 @@ void put_le(TextWriter& w, T value) {
 }
 
 std::string space_tag(const TriangleMesh& mesh);  // "SPACE=LPS" / "SPACE=RAS"
+
+/// The vertex lines "x y z" and the face lines "3 i j k" shared by ASCII OFF
+/// and ASCII PLY.
+inline void write_ascii_vertices_and_faces(TextWriter& w, const TriangleMesh& mesh) {
+  for (const Vec3& p : mesh.positions)
+    w.number(p.x()).text(" ").number(p.y()).text(" ").number(p.z()).text("\n");
+  for (const Face& f : mesh.faces)
+    w.text("3 ").integer(f[0]).text(" ").integer(f[1]).text(" ").integer(f[2]).text("\n");
+}
 
 // Readers: fill out.mesh (positions, faces) and out.info (format, binary,
 // counts, tagged_space, notes, file_normals). `name` is used in messages.

@@ -146,10 +146,7 @@ void write_off(const TriangleMesh& mesh, std::ostream& out, const WriteOptions& 
       .text(" ")
       .integer(static_cast<std::int64_t>(mesh.face_count()))
       .text(" 0\n");
-  for (const Vec3& p : mesh.positions)
-    w.number(p.x()).text(" ").number(p.y()).text(" ").number(p.z()).text("\n");
-  for (const Face& f : mesh.faces)
-    w.text("3 ").integer(f[0]).text(" ").integer(f[1]).text(" ").integer(f[2]).text("\n");
+  write_ascii_vertices_and_faces(w, mesh);
   w.flush();
 }
 

@@ -97,44 +97,34 @@ struct BinarySource {
     if constexpr (Swap) v = byte_swapped(v);
     return v;
   }
-  double scalar(PlyType t) {
+  /// The next value of type t, converted to R.
+  template <typename R>
+  R value(PlyType t) {
     switch (t) {
       case PlyType::i8:
-        return load<std::int8_t>();
+        return static_cast<R>(load<std::int8_t>());
       case PlyType::u8:
-        return load<std::uint8_t>();
+        return static_cast<R>(load<std::uint8_t>());
       case PlyType::i16:
-        return load<std::int16_t>();
+        return static_cast<R>(load<std::int16_t>());
       case PlyType::u16:
-        return load<std::uint16_t>();
+        return static_cast<R>(load<std::uint16_t>());
       case PlyType::i32:
-        return load<std::int32_t>();
+        return static_cast<R>(load<std::int32_t>());
       case PlyType::u32:
-        return load<std::uint32_t>();
+        return static_cast<R>(load<std::uint32_t>());
       case PlyType::f32:
-        return load<float>();
+        return static_cast<R>(load<float>());
       case PlyType::f64:
-        return load<double>();
+        return static_cast<R>(load<double>());
     }
     return 0;
   }
+  double scalar(PlyType t) { return value<double>(t); }
   std::int64_t integer(PlyType t) {
-    switch (t) {
-      case PlyType::i8:
-        return load<std::int8_t>();
-      case PlyType::u8:
-        return load<std::uint8_t>();
-      case PlyType::i16:
-        return load<std::int16_t>();
-      case PlyType::u16:
-        return load<std::uint16_t>();
-      case PlyType::i32:
-        return load<std::int32_t>();
-      case PlyType::u32:
-        return load<std::uint32_t>();
-      default:
-        throw BadValue{"a list of floating-point numbers where integers are needed"};
-    }
+    if (!is_integer_type(t))
+      throw BadValue{"a list of floating-point numbers where integers are needed"};
+    return value<std::int64_t>(t);
   }
   void skip(PlyType t, std::uint64_t n) {
     const std::uint64_t bytes = n * type_size(t);
@@ -498,10 +488,7 @@ void write_ply(const TriangleMesh& mesh, std::ostream& out, const WriteOptions& 
       put_le(w, f[2]);
     }
   } else {
-    for (const Vec3& p : mesh.positions)
-      w.number(p.x()).text(" ").number(p.y()).text(" ").number(p.z()).text("\n");
-    for (const Face& f : mesh.faces)
-      w.text("3 ").integer(f[0]).text(" ").integer(f[1]).text(" ").integer(f[2]).text("\n");
+    write_ascii_vertices_and_faces(w, mesh);
   }
   w.flush();
 }

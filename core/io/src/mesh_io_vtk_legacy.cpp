@@ -8,6 +8,7 @@
 #include <cstring>
 #include <limits>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "mesh_io_internal.hpp"
@@ -235,17 +236,26 @@ class LegacyParser {
     return *type;
   }
 
-  /// Reads n values of `type`; the cursor is on the line of the keyword.
-  std::vector<double> read_values(const char* at, std::uint64_t n, VtkType type) {
-    std::vector<double> values;
+  /// Reads n values of `type` as T (double, or std::int64_t for counts and
+  /// indices, which must be integers); the cursor is on the line of the
+  /// keyword.
+  template <typename T>
+  std::vector<T> read_array(const char* at, std::uint64_t n, VtkType type) {
+    constexpr bool integers = std::is_same_v<T, std::int64_t>;
+    std::vector<T> values;
     if (binary_) {
       c_.skip_line();
       const std::uint64_t bytes = n * vtk_type_size(type);
       if (static_cast<std::uint64_t>(c_.end - c_.p) < bytes)
         error(at, "file ends inside the binary data (truncated file or wrong count)");
       values.resize(static_cast<std::size_t>(n));
-      for (std::size_t i = 0; i < values.size(); ++i)
-        values[i] = load_value(c_.p + i * vtk_type_size(type), type);
+      for (std::size_t i = 0; i < values.size(); ++i) {
+        const char* const data = c_.p + i * vtk_type_size(type);
+        if constexpr (integers)
+          values[i] = load_integer(data, type);
+        else
+          values[i] = load_value(data, type);
+      }
       c_.p += bytes;
       return values;
     }
@@ -259,38 +269,20 @@ class LegacyParser {
         error(at, "file ends after " + std::to_string(i) + " of " + std::to_string(n) +
                       " values (truncated file or wrong count)");
       const char* v = c_.p;
-      if (!c_.parse_double(values[i], true)) error(v, "expected a number");
+      if constexpr (integers) {
+        if (!c_.parse_integer(values[i], true) || !c_.token_ends_here())
+          error(v, "expected an integer");
+      } else {
+        if (!c_.parse_double(values[i], true)) error(v, "expected a number");
+      }
     }
     return values;
   }
-
+  std::vector<double> read_values(const char* at, std::uint64_t n, VtkType type) {
+    return read_array<double>(at, n, type);
+  }
   std::vector<std::int64_t> read_integers(const char* at, std::uint64_t n, VtkType type) {
-    std::vector<std::int64_t> ints;
-    if (binary_) {
-      c_.skip_line();
-      const std::uint64_t bytes = n * vtk_type_size(type);
-      if (static_cast<std::uint64_t>(c_.end - c_.p) < bytes)
-        error(at, "file ends inside the binary data (truncated file or wrong count)");
-      ints.resize(static_cast<std::size_t>(n));
-      for (std::size_t i = 0; i < ints.size(); ++i)
-        ints[i] = load_integer(c_.p + i * vtk_type_size(type), type);
-      c_.p += bytes;
-      return ints;
-    }
-    if (n > static_cast<std::uint64_t>(c_.end - c_.p) / 2 + 1)
-      error(at, "the count " + std::to_string(n) +
-                    " is larger than the file can hold (truncated file or wrong count)");
-    ints.resize(static_cast<std::size_t>(n));
-    for (std::size_t i = 0; i < ints.size(); ++i) {
-      c_.skip_blanks();
-      if (c_.at_end())
-        error(at, "file ends after " + std::to_string(i) + " of " + std::to_string(n) +
-                      " values (truncated file or wrong count)");
-      const char* v = c_.p;
-      if (!c_.parse_integer(ints[i], true) || !c_.token_ends_here())
-        error(v, "expected an integer");
-    }
-    return ints;
+    return read_array<std::int64_t>(at, n, type);
   }
 
   /// Cells of a VERTICES/LINES/POLYGONS/TRIANGLE_STRIPS section, both layouts.

@@ -15,9 +15,7 @@ namespace fabrica::io {
 
 namespace {
 
-std::string plural(std::size_t n, const char* one, const char* many) {
-  return std::to_string(n) + " " + (n == 1 ? one : many);
-}
+using detail::plural;
 
 // Representative (first occurrence) of every vertex: bit-equal positions.
 std::vector<std::int32_t> exact_representatives(const std::vector<Vec3>& pos) {
@@ -416,7 +414,7 @@ RepairReport repair_mesh(TriangleMesh& mesh, const RepairOptions& o) {
   return report;
 }
 
-RepairReport prepare_for_lines(TriangleMesh& mesh, const PrepareOptions& options) {
+RepairReport prepare_for_lines(TriangleMesh& mesh, const fabrica::PrepareOptions& options) {
   RepairOptions o;
   o.weld = true;
   o.weld_tolerance = 0.0;
@@ -424,8 +422,8 @@ RepairReport prepare_for_lines(TriangleMesh& mesh, const PrepareOptions& options
   o.remove_duplicates = false;
   o.split_nonmanifold_vertices = false;
   o.split_nonmanifold_edges = false;
-  o.orient = !options.keep_orientation;
-  o.outward = !options.keep_orientation;
+  o.orient = options.orient;
+  o.outward = options.orient;
   return repair_mesh(mesh, o);
 }
 

@@ -18,23 +18,9 @@ namespace {
 
 constexpr std::size_t kGrain = 4096;
 
-std::int32_t find_root(std::vector<std::int32_t>& parent, std::int32_t i) {
-  while (parent[i] != i) {
-    parent[i] = parent[parent[i]];
-    i = parent[i];
-  }
-  return i;
-}
-
-void unite(std::vector<std::int32_t>& parent, std::int32_t a, std::int32_t b) {
-  a = find_root(parent, a);
-  b = find_root(parent, b);
-  if (a != b) parent[std::max(a, b)] = std::min(a, b);
-}
-
-std::string plural(std::size_t n, const char* one, const char* many) {
-  return std::to_string(n) + " " + (n == 1 ? one : many);
-}
+using detail::find_root;
+using detail::plural;
+using detail::unite;
 
 std::string edge_name(const Topology& topology, std::size_t e) {
   const auto& ed = topology.edge(e);

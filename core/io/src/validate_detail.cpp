@@ -10,8 +10,6 @@
 
 namespace fabrica::io::detail {
 
-namespace {
-
 std::int32_t find_root(std::vector<std::int32_t>& parent, std::int32_t i) {
   while (parent[i] != i) {
     parent[i] = parent[parent[i]];
@@ -27,6 +25,12 @@ void unite(std::vector<std::int32_t>& parent, std::int32_t a, std::int32_t b) {
   if (a < b) std::swap(a, b);
   parent[a] = b;  // the lower index becomes the root: deterministic labels
 }
+
+std::string plural(std::size_t n, const char* one, const char* many) {
+  return std::to_string(n) + " " + (n == 1 ? one : many);
+}
+
+namespace {
 
 // The common case, fast: walk around v from its first face through two-face
 // edges in both directions; one fan when the walk meets every face of v.

@@ -12,6 +12,16 @@
 
 namespace fabrica::io::detail {
 
+/// Union-find over indices 0..n-1 (parent[i] == i at the start): the root
+/// of i's set, with path halving.
+std::int32_t find_root(std::vector<std::int32_t>& parent, std::int32_t i);
+/// Joins the sets of a and b; the lower root index becomes the root, so the
+/// labels do not depend on the order of the unions.
+void unite(std::vector<std::int32_t>& parent, std::int32_t a, std::int32_t b);
+
+/// "1 face", "3 faces".
+std::string plural(std::size_t n, const char* one, const char* many);
+
 /// Area below this fraction of (mean edge length)^2 counts as zero.
 inline constexpr double kDegenerateAreaFraction = 1e-12;
 

@@ -15,61 +15,12 @@
 // order independent).
 #pragma once
 
-#include <memory>
-#include <vector>
-
 #include "fabrica/core/camera.hpp"
+#include "fabrica/core/depth_raster.hpp"
 #include "fabrica/core/surface.hpp"
 #include "fabrica/lines/line_set.hpp"
 
 namespace fabrica {
-
-namespace detail {
-struct RasterScratch;
-/// render_depth's working memory (projected corners, binned triangles),
-/// kept between calls on the same DepthBuffer; copies start empty.
-class RasterScratchSlot {
- public:
-  RasterScratchSlot();
-  ~RasterScratchSlot();
-  RasterScratchSlot(const RasterScratchSlot&);
-  RasterScratchSlot& operator=(const RasterScratchSlot&);
-  RasterScratchSlot(RasterScratchSlot&&) noexcept;
-  RasterScratchSlot& operator=(RasterScratchSlot&&) noexcept;
-  RasterScratch& get();
-
- private:
-  std::unique_ptr<RasterScratch> scratch_;
-};
-}  // namespace detail
-
-/// Linear eye depth per pixel (row-major, y down); +infinity where empty.
-struct DepthBuffer {
-  int width = 0, height = 0;
-  std::vector<float> depth;
-  float at(int x, int y) const { return depth[static_cast<std::size_t>(y) * width + x]; }
-  /// Minimum over the 3x3 pixels around (x, y), clamped to the image;
-  /// +infinity outside the image.
-  float min3x3(double x, double y) const;
-  /// Maximum over the same window (+infinity where any pixel is empty).
-  float max3x3(double x, double y) const;
-  /// render_depth's working memory, reused when the buffer is rendered again.
-  detail::RasterScratchSlot scratch;
-};
-
-/// Rasterises every triangle of `mesh` seen by `camera` (width x height
-/// from the camera) with perspective-correct depth. Triangles with a corner
-/// behind the near plane are skipped. A pixel is covered when its centre
-/// has no negative barycentric weight (shared edges: both triangles); the
-/// buffer holds the minimum depth, bit-identical at any thread count and to
-/// a plain loop over every triangle and every pixel of its box (the binning
-/// and the skipping of hidden back faces in visibility.cpp change nothing).
-DepthBuffer render_depth(const TriangleMesh& mesh, const Camera& camera);
-/// The same into `out`, reusing its storage and working memory (no
-/// allocation when the mesh and image sizes are unchanged: keep one
-/// DepthBuffer per view for redraws). Throws InputError when a side of the
-/// image exceeds 32000 pixels.
-void render_depth(const TriangleMesh& mesh, const Camera& camera, DepthBuffer& out);
 
 struct VisibilityOptions {
   /// Depth tolerance in mm; <= 0 uses half the median edge length.

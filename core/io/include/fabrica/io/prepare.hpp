@@ -20,14 +20,7 @@
 
 namespace fabrica {
 
-struct PrepareOptions {
-  /// Coordinate space overriding the file's tag (`--space lps|ras`).
-  std::optional<Space> space;
-  /// Orient consistently and outward (io::prepare_for_lines). Off keeps the
-  /// file's orientation (`--keep-orientation`; `fabrica geometry`, which
-  /// reports the file as stored).
-  bool orient = true;
-};
+// PrepareOptions (space, orient) is declared in fabrica/io/repair.hpp.
 
 struct PreparedMesh {
   TriangleMesh mesh;

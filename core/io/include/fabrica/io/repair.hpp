@@ -38,10 +38,29 @@
 #include <cstddef>
 #include <cstdint>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "fabrica/core/mesh.hpp"
+
+namespace fabrica {
+
+/// How a mesh is prepared for drawing: by prepare_mesh (fabrica/io/prepare.hpp),
+/// which every drawing command, the viewer, the batch runner and the Python
+/// module use, and by io::prepare_for_lines below.
+struct PrepareOptions {
+  /// Coordinate space overriding the file's tag (`--space lps|ras`); used
+  /// when reading (prepare_mesh), not by io::prepare_for_lines.
+  std::optional<Space> space;
+  /// Orient consistently and outward (`--keep-orientation` turns it off).
+  /// prepare_mesh with `orient` off keeps the mesh as read (`fabrica
+  /// geometry` reports the file as stored); io::prepare_for_lines with it
+  /// off only welds exact duplicates.
+  bool orient = true;
+};
+
+}  // namespace fabrica
 
 namespace fabrica::io {
 
@@ -89,16 +108,17 @@ struct RepairReport {
 /// finite.
 RepairReport repair_mesh(TriangleMesh& mesh, const RepairOptions& options = {});
 
-struct PrepareOptions {
-  /// Keep the file's orientation: weld only, flip no face (--keep-orientation).
-  bool keep_orientation = false;
-};
+/// The former io::PrepareOptions (`keep_orientation = true` is now
+/// `orient = false`); the one options type is fabrica::PrepareOptions below.
+using PrepareOptions = fabrica::PrepareOptions;
 
 /// What the line engine needs by default: weld exact duplicates, orient
-/// consistently and outward per piece, closed or open (step 6). Removes no
+/// consistently and outward per piece, closed or open (step 6); with
+/// `options.orient` false it only welds (the file's orientation is kept).
+/// `options.space` is not used here (it is a reading option). Removes no
 /// face and adds no vertex, so face f stays face f and vertex i stays vertex
 /// i. The report's `changes` say what was flipped and why.
-RepairReport prepare_for_lines(TriangleMesh& mesh, const PrepareOptions& options = {});
+RepairReport prepare_for_lines(TriangleMesh& mesh, const fabrica::PrepareOptions& options = {});
 
 /// The report as a JSON object (without face_origin).
 nlohmann::json to_json(const RepairReport& report);

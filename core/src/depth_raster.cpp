@@ -1,0 +1,387 @@
+// The CPU depth rasteriser; see the header.
+#include "fabrica/core/depth_raster.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <string>
+#include <type_traits>
+
+#include "fabrica/core/error.hpp"
+#include "fabrica/core/projector.hpp"
+
+namespace fabrica {
+
+namespace {
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+}  // namespace
+
+float DepthBuffer::min3x3(double x, double y) const {
+  const int cx = static_cast<int>(std::floor(x)), cy = static_cast<int>(std::floor(y));
+  float m = kInf;
+  for (int yy = std::max(cy - 1, 0); yy <= std::min(cy + 1, height - 1); ++yy)
+    for (int xx = std::max(cx - 1, 0); xx <= std::min(cx + 1, width - 1); ++xx)
+      m = std::min(m, at(xx, yy));
+  return m;
+}
+
+float DepthBuffer::max3x3(double x, double y) const {
+  const int cx = static_cast<int>(std::floor(x)), cy = static_cast<int>(std::floor(y));
+  float m = -kInf;
+  for (int yy = cy - 1; yy <= cy + 1; ++yy)
+    for (int xx = cx - 1; xx <= cx + 1; ++xx) {
+      if (xx < 0 || yy < 0 || xx >= width || yy >= height) return kInf;
+      m = std::max(m, at(xx, yy));
+    }
+  return m;
+}
+
+namespace {
+
+// Projected corner: pixel position, linear depth, and the pixel centres on
+// either side of it: lo = the first centre at or after the coordinate, hi =
+// the last centre at or before it (per axis; coordinates clamped to just
+// outside the image). A triangle's box covers the centres from the minimum
+// lo to the maximum hi of its corners (the maps are monotonic).
+struct Corner {
+  double x, y, z;
+  std::int16_t x_lo, x_hi, y_lo, y_hi;
+  bool valid;  // finite, and in front of the near limit (perspective)
+};
+
+// floor(v) for v well inside the int range (std::floor is a library call
+// without SSE4.1).
+inline int floor_int(double v) {
+  const int i = static_cast<int>(v);
+  return i - (static_cast<double>(i) > v ? 1 : 0);
+}
+
+// First pixel centre (c + 0.5) at or after v and last at or before v, for
+// v clamped to [-2, size + 1]. Exact: no rounding of v - 0.5.
+inline void centres_around(double v, int size, std::int16_t& lo, std::int16_t& hi) {
+  v = std::min(std::max(v, -2.0), static_cast<double>(size) + 1.0);
+  const int f = floor_int(v);
+  lo = static_cast<std::int16_t>(f + (f + 0.5 < v ? 1 : 0));
+  hi = static_cast<std::int16_t>(f - (f + 0.5 > v ? 1 : 0));
+}
+
+// A triangle in a band's list: its doubled signed area in pixels, its face,
+// a lower bound of any depth it can write (-inf: none known), and the pixel
+// centres of its bounding box (clipped to the image).
+struct Binned {
+  double area;
+  std::int32_t face;
+  float bound;
+  std::int16_t x0, x1, y0, y1;
+};
+
+constexpr int kBand = 32;              // rows per band
+constexpr std::size_t kChunk = 16384;  // faces per binning chunk
+constexpr int kMaxSide = 32000;        // pixel indices (and size + 1) fit in int16
+
+}  // namespace
+
+namespace detail {
+
+// render_depth's working memory, kept in the DepthBuffer between calls.
+struct RasterScratch {
+  // Grow-only storage left uninitialised (every element used is written
+  // first, in the parallel loops), so a fresh buffer pays no serial zeroing.
+  template <class T>
+  struct Array {
+    std::unique_ptr<T[]> data;
+    std::size_t capacity = 0;
+    void resize(std::size_t n) {
+      if (n > capacity) {
+        data.reset(new T[n]);
+        capacity = n;
+      }
+    }
+    T& operator[](std::size_t i) { return data[i]; }
+  };
+  static_assert(std::is_trivially_default_constructible_v<Corner> &&
+                std::is_trivially_default_constructible_v<Binned>);
+  Array<Corner> corners;
+  Array<Binned> per_face;            // face -1: covers no pixel centre
+  std::vector<std::uint32_t> count;  // [chunk][group][band], then offsets
+  Array<Binned> binned;              // by (group, band, chunk, face)
+};
+
+RasterScratchSlot::RasterScratchSlot() = default;
+RasterScratchSlot::~RasterScratchSlot() = default;
+RasterScratchSlot::RasterScratchSlot(const RasterScratchSlot&) {}
+RasterScratchSlot& RasterScratchSlot::operator=(const RasterScratchSlot&) {
+  return *this;
+}
+RasterScratchSlot::RasterScratchSlot(RasterScratchSlot&&) noexcept = default;
+RasterScratchSlot& RasterScratchSlot::operator=(RasterScratchSlot&&) noexcept = default;
+RasterScratch& RasterScratchSlot::get() {
+  if (!scratch_) scratch_ = std::make_unique<RasterScratch>();
+  return *scratch_;
+}
+
+}  // namespace detail
+
+// Depth raster. Per pixel the coverage test and the depth are evaluated
+// exactly as the original scalar rasteriser did (same double operations in
+// the same order), so the buffer is bit-identical to it; what changed is
+// which triangles and pixels are visited:
+//  * only pixel centres inside a triangle's bounding box are tested;
+//  * triangles are binned into 32-row bands per fixed chunk of faces (count,
+//    then fill; both in parallel over chunks) and the bands are rasterised
+//    in parallel;
+//  * in each band the triangles facing the camera in the image (negative
+//    signed area: counter-clockwise in a y-up view) are drawn first, then the
+//    others, each of which is skipped when every pixel of its box already
+//    holds a depth at or below a guaranteed lower bound of any depth it
+//    could write. The buffer keeps the minimum, which does not depend on the
+//    order (positive depths), so skipping changes nothing; on a closed or
+//    nearly closed surface almost all back faces are skipped this way.
+void render_depth(const TriangleMesh& mesh, const Camera& camera, DepthBuffer& buf, bool faces) {
+  if (camera.width <= 0 || camera.height <= 0 || camera.width > kMaxSide ||
+      camera.height > kMaxSide)
+    throw InputError("depth buffer: image size " + std::to_string(camera.width) + "x" +
+                     std::to_string(camera.height) + " is not between 1 and " +
+                     std::to_string(kMaxSide) + " pixels per side; choose a smaller size");
+  buf.width = camera.width;
+  buf.height = camera.height;
+  buf.depth.resize(static_cast<std::size_t>(buf.width) * static_cast<std::size_t>(buf.height));
+  if (faces)
+    buf.face.resize(buf.depth.size());
+  else
+    buf.face.clear();
+  detail::RasterScratch& scratch = buf.scratch.get();
+  const std::size_t nv = mesh.positions.size();
+  const std::size_t nf = mesh.faces.size();
+  auto& proj = scratch.corners;
+  proj.resize(nv);
+  const Projector project(camera);
+  const bool perspective = camera.projection == Projection::perspective;
+  const double near_eps = 1e-9;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 2048), [&](const auto& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      const ProjectedPoint pp = project(mesh.positions[i]);
+      Corner& c = proj[i];
+      c.x = pp.pixel.x();
+      c.y = pp.pixel.y();
+      c.z = pp.depth;
+      c.valid = std::isfinite(c.x) && std::isfinite(c.y) && std::isfinite(c.z) &&
+                !(perspective && c.z <= near_eps);
+      if (c.valid) {
+        centres_around(c.x, buf.width, c.x_lo, c.x_hi);
+        centres_around(c.y, buf.height, c.y_lo, c.y_hi);
+      }
+    }
+  });
+  const int W = buf.width;
+  const std::size_t nb = static_cast<std::size_t>((buf.height + kBand - 1) / kBand);
+  const std::size_t chunks = (nf + kChunk - 1) / kChunk;
+  // The triangle of face f when it covers a pixel centre: its entry and
+  // group (0: negative area).
+  auto setup = [&](std::size_t f, Binned& e, std::size_t& g) {
+    const Face& t = mesh.faces[f];
+    const Corner &a = proj[t[0]], &b = proj[t[1]], &c = proj[t[2]];
+    if (!(a.valid && b.valid && c.valid)) return false;
+    e.x0 = std::max<std::int16_t>(std::min({a.x_lo, b.x_lo, c.x_lo}), 0);
+    e.x1 = std::min<std::int16_t>(std::max({a.x_hi, b.x_hi, c.x_hi}),
+                                  static_cast<std::int16_t>(buf.width - 1));
+    if (e.x0 > e.x1) return false;
+    e.y0 = std::max<std::int16_t>(std::min({a.y_lo, b.y_lo, c.y_lo}), 0);
+    e.y1 = std::min<std::int16_t>(std::max({a.y_hi, b.y_hi, c.y_hi}),
+                                  static_cast<std::int16_t>(buf.height - 1));
+    if (e.y0 > e.y1) return false;
+    e.area = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
+    if (e.area == 0.0 || e.area != e.area) return false;
+    e.face = static_cast<std::int32_t>(f);
+    e.bound = -kInf;
+    g = e.area < 0.0 ? 0 : 1;
+    if (g == 1) {
+      // Any depth written is >= zmin (1 - 1e-6) when the barycentric
+      // weights are accurate: their error is below about
+      // 1e-14 (s + 1)^2 / |area| for a box of side s (products of
+      // coordinate differences <= s (s + 1), a few roundings each), so the
+      // sum of the weights is within 1e-7 of 1 where (s + 1)^2 <= 3e6 |area|.
+      // Slivers and non-positive depths get no bound (never skipped).
+      // Rounding to float is monotonic; one more step down keeps the bound
+      // below the stored depth.
+      const double zmin = std::min({a.z, b.z, c.z});
+      const double side = std::max(e.x1 - e.x0, e.y1 - e.y0) + 2.0;
+      if (zmin > 0.0 && (side + 1.0) * (side + 1.0) <= 3e6 * std::abs(e.area)) {
+        const float z = static_cast<float>(zmin * (1.0 - 1e-6));
+        if (z > 0.0f && z < kInf)  // the next float below z
+          e.bound = std::bit_cast<float>(std::bit_cast<std::uint32_t>(z) - 1u);
+      }
+    }
+    return true;
+  };
+  // count[(c * 2 + g) * nb + band]: entries of chunk c, group g in the band.
+  std::vector<std::uint32_t>& count = scratch.count;
+  count.assign(chunks * 2 * nb, 0);
+  auto& per_face = scratch.per_face;
+  per_face.resize(nf);
+  tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
+    std::uint32_t* cnt = count.data() + c * 2 * nb;
+    std::size_t g;
+    for (std::size_t f = c * kChunk; f < std::min(nf, (c + 1) * kChunk); ++f) {
+      Binned& e = per_face[f];
+      if (setup(f, e, g)) {
+        for (int k = e.y0 / kBand; k <= e.y1 / kBand; ++k)
+          ++cnt[g * nb + static_cast<std::size_t>(k)];
+      } else {
+        e.face = -1;
+      }
+    }
+  });
+  // Offsets in (group, band, chunk) order: each band's entries of a group
+  // are contiguous and in face order.
+  std::uint32_t total = 0;
+  for (std::size_t g = 0; g < 2; ++g)
+    for (std::size_t k = 0; k < nb; ++k)
+      for (std::size_t c = 0; c < chunks; ++c) {
+        std::uint32_t& n = count[(c * 2 + g) * nb + k];
+        const std::uint32_t here = n;
+        n = total;
+        total += here;
+      }
+  // Start of (group, band): the offset of its first chunk; the end is the
+  // start of the next (group, band), or `total`.
+  auto range_start = [&](std::size_t g, std::size_t k) {
+    return count[g * nb + k];  // chunk 0
+  };
+  std::vector<std::uint32_t> starts(2 * nb + 1);
+  for (std::size_t g = 0; g < 2; ++g)
+    for (std::size_t k = 0; k < nb; ++k) starts[g * nb + k] = range_start(g, k);
+  starts[2 * nb] = total;
+  auto& binned = scratch.binned;
+  binned.resize(total);
+  tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
+    std::uint32_t* cursor = count.data() + c * 2 * nb;
+    for (std::size_t f = c * kChunk; f < std::min(nf, (c + 1) * kChunk); ++f) {
+      const Binned& e = per_face[f];
+      if (e.face < 0) continue;
+      const std::size_t g = e.area < 0.0 ? 0 : 1;
+      for (int k = e.y0 / kBand; k <= e.y1 / kBand; ++k)
+        binned[cursor[g * nb + static_cast<std::size_t>(k)]++] = e;
+    }
+  });
+  tbb::parallel_for(std::size_t{0}, nb, [&](std::size_t band) {
+    const int y_lo = static_cast<int>(band) * kBand;
+    const int y_hi = std::min(buf.height, y_lo + kBand) - 1;
+    float* const image = buf.depth.data();
+    std::int32_t* const seen = buf.face.data();
+    std::fill(image + static_cast<std::size_t>(y_lo) * W,
+              image + static_cast<std::size_t>(y_hi + 1) * W, kInf);
+    if (faces)
+      std::fill(seen + static_cast<std::size_t>(y_lo) * W,
+                seen + static_cast<std::size_t>(y_hi + 1) * W, -1);
+    // with_faces: std::true_type to keep the face seen at each pixel
+    // too (the nearer depth wins, ties to the lower face index).
+    auto draw = [&](const Binned& e, auto with_faces) {
+      const int ya = std::max<int>(y_lo, e.y0), yb = std::min<int>(y_hi, e.y1);
+      if (e.bound > -kInf) {
+        // Hidden when the farthest pixel of the box is at or below the
+        // bound (the buffer never holds NaN). Boxes up to 4 wide (almost
+        // all) take four clamped reads per row and no branches.
+        float far = -kInf;
+        if (e.x1 - e.x0 < 4) {
+          const int c1 = std::min(e.x0 + 1, static_cast<int>(e.x1));
+          const int c2 = std::min(e.x0 + 2, static_cast<int>(e.x1));
+          const int c3 = std::min(e.x0 + 3, static_cast<int>(e.x1));
+          for (int y = ya; y <= yb; ++y) {
+            const float* row = image + static_cast<std::size_t>(y) * W;
+            far = std::max({far, row[e.x0], row[c1], row[c2], row[c3]});
+          }
+        } else {
+          for (int y = ya; y <= yb && far <= e.bound; ++y) {
+            const float* row = image + static_cast<std::size_t>(y) * W;
+            for (int x = e.x0; x <= e.x1; ++x) far = std::max(far, row[x]);
+          }
+        }
+        if (far <= e.bound) return;
+      }
+      const Face& t = mesh.faces[static_cast<std::size_t>(e.face)];
+      const Corner* p[3] = {&proj[t[0]], &proj[t[1]], &proj[t[2]]};
+      const double inv_area = 1.0 / e.area;
+      // Edge k runs from corner k+1 to corner k+2; its barycentric
+      // weight at (px, py) is ((bx - ax)(py - ay) - (by - ay)(px - ax))
+      // / area, evaluated term by term as the original (same bits). The
+      // weight is negative exactly when the numerator's sign differs
+      // from the area's (the product cannot underflow at pixel scale),
+      // so uncovered pixels are rejected before the multiplications.
+      double ax[3], ay[3], ex[3], ey[3];
+      for (int k = 0; k < 3; ++k) {
+        const Corner& ca = *p[(k + 1) % 3];
+        const Corner& cb = *p[(k + 2) % 3];
+        ax[k] = ca.x;
+        ay[k] = ca.y;
+        ex[k] = cb.x - ca.x;
+        ey[k] = cb.y - ca.y;
+      }
+      const double z0 = p[0]->z, z1 = p[1]->z, z2 = p[2]->z;
+      const bool positive = e.area > 0.0;
+      // Per row, up to 64 columns at a time: the coverage of every pixel
+      // first (no branches), then the depth of the covered ones.
+      double num[64][3];
+      for (int y = ya; y <= yb; ++y) {
+        const double py = y + 0.5;
+        double ry[3];
+        for (int k = 0; k < 3; ++k) ry[k] = ex[k] * (py - ay[k]);
+        float* const row = image + static_cast<std::size_t>(y) * W;
+        for (int xs = e.x0; xs <= e.x1; xs += 64) {
+          const int n = std::min<int>(e.x1 - xs + 1, 64);
+          std::uint64_t mask = 0;
+          for (int i = 0; i < n; ++i) {
+            const double px = (xs + i) + 0.5;
+            double* const m = num[i];
+            m[0] = ry[0] - ey[0] * (px - ax[0]);
+            m[1] = ry[1] - ey[1] * (px - ax[1]);
+            m[2] = ry[2] - ey[2] * (px - ax[2]);
+            const bool in = positive ? (!(m[0] < 0.0) & !(m[1] < 0.0) & !(m[2] < 0.0))
+                                     : (!(m[0] > 0.0) & !(m[1] > 0.0) & !(m[2] > 0.0));
+            mask |= static_cast<std::uint64_t>(in) << i;
+          }
+          while (mask != 0) {
+            const int i = std::countr_zero(mask);
+            mask &= mask - 1;
+            const double* const m = num[i];
+            const double w0 = m[0] * inv_area, w1 = m[1] * inv_area, w2 = m[2] * inv_area;
+            const double d =
+                perspective ? 1.0 / (w0 / z0 + w1 / z1 + w2 / z2) : w0 * z0 + w1 * z1 + w2 * z2;
+            float& dst = row[xs + i];
+            if constexpr (decltype(with_faces)::value) {
+              const float z = static_cast<float>(d);
+              std::int32_t& id = seen[static_cast<std::size_t>(y) * W + xs + i];
+              if (z < dst || (z == dst && e.face < id)) {
+                dst = z;
+                id = e.face;
+              }
+            } else {
+              dst = std::min(dst, static_cast<float>(d));
+            }
+          }
+        }
+      }
+    };
+    for (std::size_t g = 0; g < 2; ++g)
+      for (std::uint32_t i = starts[g * nb + band]; i < starts[g * nb + band + 1]; ++i)
+        if (faces)
+          draw(binned[i], std::true_type{});
+        else
+          draw(binned[i], std::false_type{});
+  });
+}
+
+DepthBuffer render_depth(const TriangleMesh& mesh, const Camera& camera, bool faces) {
+  DepthBuffer buf;
+  render_depth(mesh, camera, buf, faces);
+  return buf;
+}
+
+}  // namespace fabrica
