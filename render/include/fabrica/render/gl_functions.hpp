@@ -49,6 +49,7 @@ namespace fabrica::render {
   X(PFNGLBINDTEXTUREPROC, BindTexture)                           \
   X(PFNGLTEXIMAGE2DPROC, TexImage2D)                             \
   X(PFNGLTEXPARAMETERIPROC, TexParameteri)                       \
+  X(PFNGLTEXBUFFERPROC, TexBuffer)                               \
   X(PFNGLACTIVETEXTUREPROC, ActiveTexture)                       \
   X(PFNGLGENFRAMEBUFFERSPROC, GenFramebuffers)                   \
   X(PFNGLDELETEFRAMEBUFFERSPROC, DeleteFramebuffers)             \

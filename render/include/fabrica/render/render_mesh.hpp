@@ -23,7 +23,10 @@ struct RenderMesh {
   std::vector<std::uint32_t> indices;  ///< 3 per triangle
   std::vector<float> k1, k2;           ///< optional: 1 per vertex
   std::vector<float> e1, e2;           ///< optional: 3 per vertex
-  Vec3 center = Vec3::Zero();          ///< bounding sphere
+  /// Optional, for surface LIC (lic.hpp, lic_field): 4 per triangle, the unit
+  /// maximal-curvature direction and the feature mask in [0, 1].
+  std::vector<float> lic_field;
+  Vec3 center = Vec3::Zero();  ///< bounding sphere
   double radius = 0.0;
   double mean_edge_length = 0.0;
   double feature_size = 0.0;  ///< rtsc feature size (0 = unknown)
@@ -31,6 +34,9 @@ struct RenderMesh {
   std::size_t vertex_count() const { return positions.size() / 3; }
   std::size_t triangle_count() const { return indices.size() / 3; }
   bool has_curvature() const { return k1.size() == vertex_count() && vertex_count() > 0; }
+  bool has_lic_field() const {
+    return lic_field.size() == 4 * triangle_count() && triangle_count() > 0;
+  }
 };
 
 /// From a mesh and unit vertex normals (one per vertex). Throws InputError if
