@@ -231,7 +231,7 @@ ContourMargin compute_contour_margin(const Surface& surface, const Camera& camer
       margin.facing[v] = facing;
       const bool inside = facing >= 0.0 && facing < epsilon;
       margin.mask[v] = inside;
-      margin.strength[v] = inside ? 1.0 - facing / epsilon : 0.0;
+      margin.strength[v] = std::clamp(1.0 - facing / epsilon, 0.0, 1.0);
     }
   });
   return margin;

@@ -37,8 +37,9 @@
 //     border, 1 where |s| reaches twice the threshold.
 // (c) Contour margin, per view: facing_i = n_i · v_i (v towards the eye,
 //     Camera::view_vector), inside when 0 ≤ facing < ε; strength
-//     1 − facing/ε (1 at the contour, 0 at the margin's inner border), 0
-//     outside. Linear inside a face like φ.
+//     clamp(1 − facing/ε, 0, 1): 1 at the contour (and on back faces, so
+//     that it interpolates well up to the contour), 0 from the margin's inner
+//     border on. Linear inside a face like φ.
 //
 // All functions run in parallel and give the same result at any thread
 // count. They throw InputError for out-of-range options.
@@ -98,7 +99,7 @@ FeatureRegions compute_feature_regions(const Surface& surface,
 struct ContourMargin {
   double epsilon = 0.0;
   std::vector<double> facing;      ///< n_i · v_i
-  std::vector<double> strength;    ///< 1 − facing/ε inside, 0 outside
+  std::vector<double> strength;    ///< clamp(1 − facing/ε, 0, 1)
   std::vector<std::uint8_t> mask;  ///< 0 ≤ facing < ε
 };
 
