@@ -149,6 +149,16 @@ CurvatureField compute_curvature_field(const Surface& surface,
     }
   }
 
+  // Pieces without any reliable face (a sphere): the z axis projected into
+  // each face (x near the poles), smooth but for two poles.
+  for (std::size_t f = 0; f < nf; ++f) {
+    if (filled[f]) continue;
+    const Vec3& n = surface.face_normals()[f];
+    Vec3 d = Vec3::UnitZ() - n.z() * n;
+    if (d.norm() < 0.3) d = Vec3::UnitX() - n.x() * n;
+    field.face_direction[f] = d.normalized();
+  }
+
   // Sign alignment: breadth-first from the lowest unvisited face.
   std::vector<std::uint8_t> visited(nf, 0);
   std::vector<std::size_t> queue;

@@ -17,6 +17,10 @@ constexpr int kMaxZeroSteps = 64;          // consecutive zero-length steps (ver
 /// Relative size below which a rate of change counts as round-off (a
 /// direction parallel to an edge).
 constexpr double kParallelTol = 1e-9;
+/// Line fields: a stroke that moves less than a pixel while crossing this
+/// many faces is circling (e.g. between faces whose directions run along
+/// their shared edge) and ends as an extremum.
+constexpr std::size_t kProgressSteps = 256;
 /// A region function this far below zero still counts as inside (round-off
 /// at a point where a stroke stopped or crossed an edge).
 constexpr double kRegionTol = 1e-12;
@@ -98,7 +102,12 @@ StrokeEnd Tracer::trace(const TraceState& start, double sign, double max_length,
   const auto& facing = *field_.facing;
   const auto& directions = *field_.face_direction;
   Vec3 g = sign * directions[static_cast<std::size_t>(face)];
+  Vec2 checkpoint = pixel;
   for (std::size_t step = 0; step < kMaxSteps; ++step) {
+    if (field_.line_field && step > 0 && step % kProgressSteps == 0) {
+      if ((pixel - checkpoint).norm() < 1.0) return StrokeEnd::extremum;
+      checkpoint = pixel;
+    }
     const std::size_t f = static_cast<std::size_t>(face);
     Vec3 db;
     for (int k = 0; k < 3; ++k) db[k] = barycentric_gradient(surface_, f, k).dot(g);

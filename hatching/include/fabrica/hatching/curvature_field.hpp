@@ -18,11 +18,11 @@
 //     within 60° of each other). Unreliable faces (umbilic regions, e.g. a
 //     whole sphere, or flat ones) get a direction filled in from reliable
 //     neighbours, ring by ring; a connected piece without any reliable face
-//     keeps its own (arbitrary but defined) average. Signs are then aligned by
-//     breadth-first propagation over the face graph from the lowest-index face
-//     of each connected piece, neighbours in corner order: a neighbour is
-//     flipped when its direction makes an obtuse angle with the face it is
-//     reached from. A line field need not be orientable (it can turn half
+//     (a sphere) gets the world z axis projected into each face (the x axis
+//     where the face is within ~17° of facing ±z), smooth but for the poles. Signs are then aligned
+//     by breadth-first propagation over the face graph from the lowest-index face of each connected
+//     piece, neighbours in corner order: a neighbour is flipped when its direction makes an obtuse
+//     angle with the face it is reached from. A line field need not be orientable (it can turn half
 //     round an umbilic), so a few edges may still join opposite signs
 //     (`seam_edges`); tracers choose the sign per face by continuity.
 //     Directions are unit vectors in the face plane, zero only on degenerate
