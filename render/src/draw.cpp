@@ -75,7 +75,7 @@ Scene build_scene(const SceneSurfaces& scene, const Camera& camera) {
                      families.end());
     auto mesh =
         std::make_shared<RenderMesh>(make_render_mesh(surface, st.style.hybrid_apparent_ridges));
-    if (st.style.lic) mesh->lic_field = lic_field(surface);
+    if (st.style.lic) set_lic_field(*mesh, surface);
     st.mesh = std::move(mesh);
     if (!families.empty()) {
       DrawLinesOptions options;

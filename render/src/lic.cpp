@@ -10,6 +10,7 @@
 
 #include "fabrica/core/error.hpp"
 #include "fabrica/core/surface.hpp"
+#include "fabrica/hatching/curvature_field.hpp"
 
 namespace fabrica::render {
 
@@ -87,29 +88,22 @@ float lic_noise(float x, float y, float z) {
   return lerp(lerp(c[0][0], c[1][0], ty), lerp(c[0][1], c[1][1], ty), tz);
 }
 
-std::vector<float> lic_field(const Surface& surface) {
-  // Placeholder until the shared curvature field (branch confis) lands:
-  // e1 of the corners, signs aligned to the first corner, averaged and
-  // projected into the triangle's plane; mask 1.
-  const auto& pc = surface.curvature();
-  const auto& fn = surface.face_normals();
-  const auto& faces = surface.faces();
-  std::vector<float> out(4 * faces.size(), 0.0f);
-  for (std::size_t f = 0; f < faces.size(); ++f) {
-    const Vec3& ref = pc.e1[faces[f][0]];
-    Vec3 d = Vec3::Zero();
-    for (int k = 0; k < 3; ++k) {
-      const Vec3& e = pc.e1[faces[f][k]];
-      d += e.dot(ref) < 0.0 ? -e : e;
-    }
-    d -= d.dot(fn[f]) * fn[f];
-    const double n = d.norm();
-    if (!(n > 1e-12)) continue;
-    d /= n;
-    for (int c = 0; c < 3; ++c) out[4 * f + c] = static_cast<float>(d[c]);
-    out[4 * f + 3] = 1.0f;
+void set_lic_field(RenderMesh& mesh, const Surface& surface) {
+  if (mesh.vertex_count() != surface.vertex_count() ||
+      mesh.triangle_count() != surface.face_count())
+    throw InputError("LIC: the render mesh was not made from this surface");
+  const hatching::CurvatureField field = hatching::compute_curvature_field(surface);
+  const hatching::FeatureRegions regions = hatching::compute_feature_regions(surface);
+  mesh.lic_field.assign(4 * surface.face_count(), 0.0f);
+  for (std::size_t f = 0; f < surface.face_count(); ++f) {
+    const Vec3& d = field.face_direction[f];
+    if (!(d.squaredNorm() > 0.0)) continue;  // degenerate face
+    for (int c = 0; c < 3; ++c) mesh.lic_field[4 * f + c] = static_cast<float>(d[c]);
+    mesh.lic_field[4 * f + 3] = 1.0f;
   }
-  return out;
+  mesh.lic_level.resize(surface.vertex_count());
+  for (std::size_t v = 0; v < surface.vertex_count(); ++v)
+    mesh.lic_level[v] = static_cast<float>(regions.level[v]);
 }
 
 // ------------------------------------------------------------ reference
@@ -126,8 +120,8 @@ struct Texel {
 LicBuffer lic_reference(const RenderMesh& mesh, const Camera& camera, const LicOptions& options) {
   validate(options);
   validate_camera(camera, "camera");
-  if (mesh.lic_field.size() != 4 * mesh.triangle_count())
-    throw InputError("LIC needs the mesh's per-triangle field (RenderMesh::lic_field)");
+  if (!mesh.has_lic_field())
+    throw InputError("LIC needs the mesh's direction field and feature level (set_lic_field)");
   const int W = camera.width, H = camera.height;
   const auto [n, f] = clip_planes(camera, mesh.center, std::max(mesh.radius, 1e-9));
   const Eigen::Matrix4d mvp = projection_matrix(camera, n, f) * view_matrix(camera);
@@ -189,7 +183,13 @@ LicBuffer lic_reference(const RenderMesh& mesh, const Camera& camera, const LicO
     if (tri[i] < 0) continue;
     const auto t = static_cast<std::size_t>(tri[i]);
     Vec3 p = Vec3::Zero();
-    for (int k = 0; k < 3; ++k) p += bary[i][k] * vertex(mesh.indices[3 * t + k]);
+    double level = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t v = mesh.indices[3 * t + k];
+      p += bary[i][k] * vertex(v);
+      level += bary[i][k] * mesh.lic_level[v];
+    }
+    const float mask = std::clamp(static_cast<float>(level), 0.0f, 1.0f);
     const float* fd = &mesh.lic_field[4 * t];
     Texel& d = data[i];
     const Vec3 pf = p.cast<float>().cast<double>();
@@ -201,10 +201,10 @@ LicBuffer lic_reference(const RenderMesh& mesh, const Camera& camera, const LicO
     const double sx = (dc.x() * c.w() - c.x() * dc.w()) * W,
                  sy = (dc.y() * c.w() - c.y() * dc.w()) * H;
     const double len = std::hypot(sx, sy);
-    if (!(len > 1e-20) || !(fd[3] > 0.0f)) continue;
+    if (!(len > 0.0) || !(fd[3] > 0.0f) || !(mask > 0.0f)) continue;
     d.dx = static_cast<float>(sx / len);
     d.dy = static_cast<float>(sy / len);
-    d.mask = fd[3];
+    d.mask = mask;
   }
 
   // Stage 2: the convolution (lic_stage2.frag).

@@ -330,7 +330,9 @@ struct Renderer::Impl {
     gm.source = mesh;
     gm.curvature = m.has_curvature();
     const std::size_t n = m.vertex_count();
-    const std::size_t floats = gm.curvature ? 14 * n : 6 * n;
+    const bool lic = m.has_lic_field();
+    const std::size_t lic_offset = gm.curvature ? 14 * n : 6 * n;
+    const std::size_t floats = lic_offset + (lic ? n : 0);
     g.GenVertexArrays(1, &gm.vao);
     g.GenBuffers(1, &gm.vbo);
     g.GenBuffers(1, &gm.ebo);
@@ -348,6 +350,7 @@ struct Renderer::Impl {
       data.insert(data.end(), m.e1.begin(), m.e1.end());
       data.insert(data.end(), m.e2.begin(), m.e2.end());
     }
+    if (lic) data.insert(data.end(), m.lic_level.begin(), m.lic_level.end());
     g.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(data.size() * sizeof(float)), data.data(),
                  GL_STATIC_DRAW);
     auto attrib = [&](GLuint loc, int size, std::size_t offset_floats) {
@@ -362,13 +365,14 @@ struct Renderer::Impl {
       attrib(3, 3, 8 * n);
       attrib(4, 3, 11 * n);
     }
+    if (lic) attrib(5, 1, lic_offset);
     g.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, gm.ebo);
     g.BufferData(GL_ELEMENT_ARRAY_BUFFER,
                  static_cast<GLsizeiptr>(m.indices.size() * sizeof(std::uint32_t)),
                  m.indices.data(), GL_STATIC_DRAW);
     gm.index_count = static_cast<GLsizei>(m.indices.size());
     g.BindVertexArray(0);
-    if (m.has_lic_field()) {
+    if (lic) {
       g.GenBuffers(1, &gm.field_buffer);
       g.BindBuffer(GL_TEXTURE_BUFFER, gm.field_buffer);
       g.BufferData(GL_TEXTURE_BUFFER, static_cast<GLsizeiptr>(m.lic_field.size() * sizeof(float)),
@@ -487,42 +491,92 @@ struct Renderer::Impl {
     ar_float = float_target;
     ar_color = float_target ? make_texture(GL_RGBA32F, GL_RGBA, GL_FLOAT, target_w, target_h)
                             : make_texture(GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, target_w, target_h);
-    g.GenRenderbuffers(1, &ar_depth);
-    g.BindRenderbuffer(GL_RENDERBUFFER, ar_depth);
+    make_two_stage_targets(ar_color, ar_depth, ar_fbo, ar_out_fbo, "apparent-ridge");
+  }
+
+  // A two-stage image method's targets (hybrid ridges, LIC): `fbo` draws
+  // into `color` with a new depth-stencil renderbuffer `depth`; `out_fbo`
+  // draws into main_color with the same depth-stencil.
+  void make_two_stage_targets(GLuint color, GLuint& depth, GLuint& fbo, GLuint& out_fbo,
+                              const std::string& name) {
+    const GlFunctions& g = gl();
+    g.GenRenderbuffers(1, &depth);
+    g.BindRenderbuffer(GL_RENDERBUFFER, depth);
     g.RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH24_STENCIL8, target_w, target_h);
-    g.GenFramebuffers(1, &ar_fbo);
-    g.BindFramebuffer(GL_FRAMEBUFFER, ar_fbo);
-    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, ar_color, 0);
-    g.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER,
-                              ar_depth);
-    check_fbo("apparent-ridge framebuffer");
-    g.GenFramebuffers(1, &ar_out_fbo);
-    g.BindFramebuffer(GL_FRAMEBUFFER, ar_out_fbo);
+    g.GenFramebuffers(1, &fbo);
+    g.BindFramebuffer(GL_FRAMEBUFFER, fbo);
+    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, color, 0);
+    g.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER, depth);
+    check_fbo((name + " framebuffer").c_str());
+    g.GenFramebuffers(1, &out_fbo);
+    g.BindFramebuffer(GL_FRAMEBUFFER, out_fbo);
     g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, main_color, 0);
-    g.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER,
-                              ar_depth);
-    check_fbo("apparent-ridge output framebuffer");
+    g.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER, depth);
+    check_fbo((name + " output framebuffer").c_str());
+  }
+
+  // Tiles' largest render size: the targets are (re)made for it.
+  void ensure_main_for(const std::vector<Tile>& tiles) {
+    int max_w = 0, max_h = 0;
+    for (const auto& t : tiles) {
+      max_w = std::max(max_w, t.render_w);
+      max_h = std::max(max_h, t.render_h);
+    }
+    ensure_main(max_w, max_h);
+  }
+
+  // Stage 1 of a two-stage method: `fbo` bound and cleared (colour `clear`,
+  // depth 1, stencil 0) for tile `t`, opaque state, stencil test on with
+  // REPLACE (each draw sets its reference value).
+  void begin_stage1(GLuint fbo, const Tile& t, const std::array<float, 4>& clear) {
+    const GlFunctions& g = gl();
+    g.BindFramebuffer(GL_FRAMEBUFFER, fbo);
+    g.Viewport(0, 0, t.render_w, t.render_h);
+    set_state_opaque();  // depth writes on, or Clear leaves the depth alone
+    g.ClearColor(clear[0], clear[1], clear[2], clear[3]);
+    g.ClearDepth(1.0);
+    g.ClearStencil(0);
+    g.StencilMask(0xFF);
+    g.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT | GL_STENCIL_BUFFER_BIT);
+    g.Enable(GL_STENCIL_TEST);
+    g.StencilOp(GL_KEEP, GL_KEEP, GL_REPLACE);
+  }
+
+  // Stage 2 of a two-stage method: `out_fbo` bound for tile `t`, scissored
+  // to `r`, stage 1's `data` on unit 0, stencil test EQUAL 1 (read only).
+  void begin_stage2(GLuint out_fbo, GLuint data, const Tile& t, const PixelRect& r) {
+    const GlFunctions& g = gl();
+    g.BindFramebuffer(GL_FRAMEBUFFER, out_fbo);
+    const GLenum color0 = GL_COLOR_ATTACHMENT0;
+    g.DrawBuffers(1, &color0);
+    g.Viewport(0, 0, t.render_w, t.render_h);
+    g.Enable(GL_SCISSOR_TEST);
+    g.Scissor(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
+    g.ActiveTexture(GL_TEXTURE0);
+    g.BindTexture(GL_TEXTURE_2D, data);
+    g.Enable(GL_STENCIL_TEST);
+    g.StencilMask(0x00);
+    g.StencilOp(GL_KEEP, GL_KEEP, GL_KEEP);
+    g.StencilFunc(GL_EQUAL, 1, 0xFF);
+  }
+
+  // The mark pass: the fullscreen triangle by the program in use (which
+  // discards the pixels to skip) writes window depth 0.5, no colour.
+  void mark_pixels() {
+    const GlFunctions& g = gl();
+    g.ColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+    g.Disable(GL_BLEND);
+    g.Enable(GL_DEPTH_TEST);
+    g.DepthFunc(GL_ALWAYS);
+    g.DepthMask(GL_TRUE);
+    draw_fullscreen();  // z = 0: window depth 0.5 on the marked pixels
+    g.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
   }
 
   void ensure_lic() {
     if (lic_fbo != 0) return;
-    const GlFunctions& g = gl();
     lic_color = make_texture(GL_RGBA32F, GL_RGBA, GL_FLOAT, target_w, target_h);
-    g.GenRenderbuffers(1, &lic_depth);
-    g.BindRenderbuffer(GL_RENDERBUFFER, lic_depth);
-    g.RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH24_STENCIL8, target_w, target_h);
-    g.GenFramebuffers(1, &lic_fbo);
-    g.BindFramebuffer(GL_FRAMEBUFFER, lic_fbo);
-    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, lic_color, 0);
-    g.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER,
-                              lic_depth);
-    check_fbo("LIC framebuffer");
-    g.GenFramebuffers(1, &lic_out_fbo);
-    g.BindFramebuffer(GL_FRAMEBUFFER, lic_out_fbo);
-    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, main_color, 0);
-    g.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER,
-                              lic_depth);
-    check_fbo("LIC output framebuffer");
+    make_two_stage_targets(lic_color, lic_depth, lic_fbo, lic_out_fbo, "LIC");
   }
 
   // ------------------------------------------------------------- helpers
@@ -597,17 +651,8 @@ struct Renderer::Impl {
                      const Matrices& m, const Tile& t, bool bare) {
     const GlFunctions& g = gl();
     ensure_ar(o.float_target);
-    g.BindFramebuffer(GL_FRAMEBUFFER, ar_fbo);
-    g.Viewport(0, 0, t.render_w, t.render_h);
-    set_state_opaque();  // depth writes on, or Clear leaves the depth alone
-    g.ClearColor(0.0f, 0.5f, 0.5f, 0.0f);
-    g.ClearDepth(1.0);
-    g.ClearStencil(0);
-    g.StencilMask(0xFF);
-    g.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT | GL_STENCIL_BUFFER_BIT);
     // Stencil: 1 where a hybrid mesh is the visible surface, 0 elsewhere.
-    g.Enable(GL_STENCIL_TEST);
-    g.StencilOp(GL_KEEP, GL_KEEP, GL_REPLACE);
+    begin_stage1(ar_fbo, t, {0.0f, 0.5f, 0.5f, 0.0f});
     // Occluders (q = 0, coverage 0) by their own program, so the hybrid
     // program has no per-fragment branch; the draw order is kept.
     const ShaderProgram& p =
@@ -650,18 +695,7 @@ struct Renderer::Impl {
     const GlFunctions& g = gl();
     const PixelRect r = tile_region(t, region);
     if (is_empty(r)) return;
-    g.BindFramebuffer(GL_FRAMEBUFFER, ar_out_fbo);
-    const GLenum color0 = GL_COLOR_ATTACHMENT0;
-    g.DrawBuffers(1, &color0);
-    g.Viewport(0, 0, t.render_w, t.render_h);
-    g.Enable(GL_SCISSOR_TEST);
-    g.Scissor(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
-    g.ActiveTexture(GL_TEXTURE0);
-    g.BindTexture(GL_TEXTURE_2D, ar_color);
-    g.Enable(GL_STENCIL_TEST);
-    g.StencilMask(0x00);
-    g.StencilOp(GL_KEEP, GL_KEEP, GL_KEEP);
-    g.StencilFunc(GL_EQUAL, 1, 0xFF);
+    begin_stage2(ar_out_fbo, ar_color, t, r);
     if (!bare) {
       const ShaderProgram& m = program("ar_mask");
       m.use();
@@ -671,13 +705,7 @@ struct Renderer::Impl {
       const double min_q =
           o.lambda >= -0.5 ? o.threshold / gain - 1e-4 * std::abs(o.threshold / gain) - 1e-7 : -1.0;
       m.set("u_min_q", static_cast<float>(min_q));
-      g.ColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
-      g.Disable(GL_BLEND);
-      g.Enable(GL_DEPTH_TEST);
-      g.DepthFunc(GL_ALWAYS);
-      g.DepthMask(GL_TRUE);
-      draw_fullscreen();  // z = 0: window depth 0.5 on the marked pixels
-      g.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+      mark_pixels();
     }
     set_state_overlay();
     if (!bare) {
@@ -714,18 +742,7 @@ struct Renderer::Impl {
                   float inv_cell, int image_w, int image_h) {
     const GlFunctions& g = gl();
     ensure_lic();
-    g.BindFramebuffer(GL_FRAMEBUFFER, lic_fbo);
-    const GLenum color0 = GL_COLOR_ATTACHMENT0;
-    g.DrawBuffers(1, &color0);
-    g.Viewport(0, 0, t.render_w, t.render_h);
-    set_state_opaque();
-    g.ClearColor(0.0f, 0.0f, 0.0f, 0.0f);
-    g.ClearDepth(1.0);
-    g.ClearStencil(0);
-    g.StencilMask(0xFF);
-    g.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT | GL_STENCIL_BUFFER_BIT);
-    g.Enable(GL_STENCIL_TEST);
-    g.StencilOp(GL_KEEP, GL_KEEP, GL_REPLACE);
+    begin_stage1(lic_fbo, t, {0.0f, 0.0f, 0.0f, 0.0f});
     const Eigen::Matrix4f mvp = Eigen::Map<const Eigen::Matrix4f>(m.projection.data()) *
                                 Eigen::Map<const Eigen::Matrix4f>(m.model_view.data());
     const ShaderProgram& p = program("lic1");
@@ -765,28 +782,11 @@ struct Renderer::Impl {
     const GlFunctions& g = gl();
     const PixelRect r = tile_region(t, region);
     if (is_empty(r)) return;
-    g.BindFramebuffer(GL_FRAMEBUFFER, lic_out_fbo);
-    const GLenum color0 = GL_COLOR_ATTACHMENT0;
-    g.DrawBuffers(1, &color0);
-    g.Viewport(0, 0, t.render_w, t.render_h);
-    g.Enable(GL_SCISSOR_TEST);
-    g.Scissor(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
-    g.ActiveTexture(GL_TEXTURE0);
-    g.BindTexture(GL_TEXTURE_2D, lic_color);
-    g.Enable(GL_STENCIL_TEST);
-    g.StencilMask(0x00);
-    g.StencilOp(GL_KEEP, GL_KEEP, GL_KEEP);
-    g.StencilFunc(GL_EQUAL, 1, 0xFF);
+    begin_stage2(lic_out_fbo, lic_color, t, r);
     const ShaderProgram& m = program("lic_mask");
     m.use();
     m.set("u_data", 0);
-    g.ColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
-    g.Disable(GL_BLEND);
-    g.Enable(GL_DEPTH_TEST);
-    g.DepthFunc(GL_ALWAYS);
-    g.DepthMask(GL_TRUE);
-    draw_fullscreen();  // window depth 0.5 on the marked pixels
-    g.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    mark_pixels();
     g.Disable(GL_STENCIL_TEST);
     g.DepthFunc(GL_EQUAL);
     g.DepthMask(GL_FALSE);
@@ -1157,12 +1157,7 @@ Image Renderer::render(const Scene& scene, const Camera& camera, const RenderOpt
   const int inner = I.tile_inner_size(options.max_tile_size, margin);
   const auto tiles = make_tiles(camera.width, camera.height, inner, margin);
 
-  int max_w = 0, max_h = 0;
-  for (const auto& t : tiles) {
-    max_w = std::max(max_w, t.render_w);
-    max_h = std::max(max_h, t.render_h);
-  }
-  I.ensure_main(max_w, max_h);
+  I.ensure_main_for(tiles);
 
   auto region_of = [&](auto&& selected) {
     std::vector<const RenderMesh*> meshes;
@@ -1206,12 +1201,7 @@ Image Renderer::render_hybrid(const std::shared_ptr<const RenderMesh>& mesh, con
   const float scale = hybrid_scale(*mesh, options);
   const PixelRect region = projected_rect(M, {mesh.get()}, camera.width, camera.height);
   const auto tiles = make_tiles(camera.width, camera.height, I.tile_inner_size(0));
-  int max_w = 0, max_h = 0;
-  for (const auto& t : tiles) {
-    max_w = std::max(max_w, t.render_w);
-    max_h = std::max(max_h, t.render_h);
-  }
-  I.ensure_main(max_w, max_h);
+  I.ensure_main_for(tiles);
   Image image(camera.width, camera.height);
   GLuint queries[2] = {0, 0};
   if (profile) g.GenQueries(2, queries);
@@ -1272,12 +1262,7 @@ Image Renderer::render_hybrid_buffer(const std::shared_ptr<const RenderMesh>& me
   const Matrices M = camera_matrices(camera, mesh->center, mesh->radius);
   const GpuMesh& gm = I.gpu_mesh(mesh);
   const auto tiles = make_tiles(camera.width, camera.height, I.tile_inner_size(0));
-  int max_w = 0, max_h = 0;
-  for (const auto& t : tiles) {
-    max_w = std::max(max_w, t.render_w);
-    max_h = std::max(max_h, t.render_h);
-  }
-  I.ensure_main(max_w, max_h);
+  I.ensure_main_for(tiles);
   Image image(camera.width, camera.height);
   for (const Tile& t : tiles) {
     I.hybrid_stage1({{&gm, hybrid_scale(*mesh, options), false}}, options, M, t, false);
@@ -1303,12 +1288,7 @@ Image Renderer::render_lic_buffer(const std::shared_ptr<const RenderMesh>& mesh,
   const int margin =
       std::max(kTileMargin, static_cast<int>(std::ceil(kernel.steps * double(kernel.step_px))) + 2);
   const auto tiles = make_tiles(camera.width, camera.height, I.tile_inner_size(0, margin), margin);
-  int max_w = 0, max_h = 0;
-  for (const auto& t : tiles) {
-    max_w = std::max(max_w, t.render_w);
-    max_h = std::max(max_h, t.render_h);
-  }
-  I.ensure_main(max_w, max_h);
+  I.ensure_main_for(tiles);
   const PixelRect region = projected_rect(M, {mesh.get()}, camera.width, camera.height);
   Image image(camera.width, camera.height);
   for (const Tile& t : tiles) {

@@ -60,15 +60,16 @@ double camera_px_per_mm(const Camera& camera);
 /// function of shaders/lic_noise.glsl (the interpolation in float).
 float lic_noise(float x, float y, float z);
 
-/// Per triangle (4 floats): the unit maximal-curvature direction in object
-/// space and the feature-region mask in [0, 1] that the LIC pass uses
-/// (RenderMesh::lic_field).
-std::vector<float> lic_field(const Surface& surface);
+/// Sets mesh.lic_field and mesh.lic_level from the shared curvature field
+/// and feature regions of `surface` (fabrica/hatching/curvature_field.hpp,
+/// default options; the mesh must be made from the same surface).
+void set_lic_field(RenderMesh& mesh, const Surface& surface);
 
 /// The LIC pass's two images on the CPU for one mesh (its own occluder),
 /// rasterised at pixel centres: `value` the LIC value v in [0, 1] per pixel
-/// (row 0 at the top, as Image), `mask` the feature mask (0 where the mesh is
-/// not visible or outside the feature regions). Needs mesh.lic_field.
+/// (row 0 at the top, as Image), `mask` the feature mask clamp(phi, 0, 1)
+/// (0 where the mesh is not visible or outside the feature regions). Needs
+/// mesh.lic_field and mesh.lic_level.
 struct LicBuffer {
   int width = 0, height = 0;
   std::vector<float> value, mask;
