@@ -3,7 +3,8 @@
 // both ways, u_steps steps of u_step pixels each (Euler; each step takes the
 // direction of the texel it lands on, its sign aligned with the previous
 // one), stopping at the target's edge or where the mask is 0; Hann weights
-// 0.5 + 0.5 cos(pi i / (steps + 1)), the centre weight 1. The mean is
+// u_weights[i - 1] = 0.5 + 0.5 cos(pi i / (steps + 1)) (computed once on the
+// CPU, lic_kernel), the centre weight 1. The mean is
 // stretched around 0.5 by u_gain and clamped to [0, 1]: v. Output (blended
 // by multiplication into the shaded colour) mix(1, v, strength * mask); with
 // LIC_VALUE, (v, mask, 0, 1) for the tests. render/src/lic.cpp
@@ -13,6 +14,7 @@ uniform int u_steps;
 uniform float u_step;
 uniform float u_gain;
 uniform float u_strength;
+uniform float u_weights[LIC_MAX_STEPS];
 layout(location = 0) out vec4 o_color;
 void main() {
   ivec2 size = textureSize(u_data, 0);
@@ -31,7 +33,7 @@ void main() {
       vec2 nd = s.xy;
       if (dot(nd, d) < 0.0) nd = -nd;
       d = nd;
-      float w = 0.5 + 0.5 * cos(3.14159265 * float(i) / float(u_steps + 1));
+      float w = u_weights[i - 1];
       sum += w * s.z;
       wsum += w;
     }

@@ -50,6 +50,9 @@ LicKernel lic_kernel(const LicOptions& o, double cell_mm, double px_per_mm) {
   // Averaging about 2 L independent cells shrinks the noise's spread by
   // sqrt(2 L); the stretch restores most of it (docs/algorithms.md §13).
   k.gain = static_cast<float>(std::max(1.0, 0.8 * std::sqrt(2.0 * o.kernel_length)));
+  for (int i = 1; i <= k.steps; ++i)
+    k.weights.push_back(
+        static_cast<float>(0.5 + 0.5 * std::cos(std::numbers::pi * i / (k.steps + 1.0))));
   return k;
 }
 
@@ -230,8 +233,7 @@ LicBuffer lic_reference(const RenderMesh& mesh, const Camera& camera, const LicO
           float nx = s.dx, ny = s.dy;
           if (nx * dx + ny * dy < 0.0f) nx = -nx, ny = -ny;
           dx = nx, dy = ny;
-          const float w = 0.5f + 0.5f * std::cos(std::numbers::pi_v<float> * float(i) /
-                                                 float(kernel.steps + 1));
+          const float w = kernel.weights[static_cast<std::size_t>(i - 1)];
           sum += w * s.noise;
           wsum += w;
         }

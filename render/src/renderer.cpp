@@ -24,6 +24,7 @@ namespace {
 
 constexpr int kTileMargin = 2;  // pixels rendered around each tile (3x3 filters, AA)
 constexpr int kMaxImageSide = 32768;
+const std::string kLicMaxStepsDefine = "LIC_MAX_STEPS " + std::to_string(kLicMaxSteps);
 
 struct GpuMesh {
   std::weak_ptr<const RenderMesh> source;
@@ -289,9 +290,10 @@ struct Renderer::Impl {
     else if (key == "lic_mask")
       stages = {vs({"fullscreen.vert"}), fs({"lic_mask.frag"})};
     else if (key == "lic2")
-      stages = {vs({"fullscreen.vert"}), fs({"lic_stage2.frag"})};
+      stages = {vs({"fullscreen.vert"}), fs({"lic_stage2.frag"}, {kLicMaxStepsDefine})};
     else if (key == "lic2_value")
-      stages = {vs({"fullscreen.vert"}), fs({"lic_stage2.frag"}, {"LIC_VALUE"})};
+      stages = {vs({"fullscreen.vert"}),
+                fs({"lic_stage2.frag"}, {kLicMaxStepsDefine, "LIC_VALUE"})};
     else
       throw Error(ErrorKind::internal, "unknown program " + key);
     return programs.emplace(key, ShaderProgram(gl(), key, stages)).first->second;
@@ -801,6 +803,7 @@ struct Renderer::Impl {
     p.set("u_step", k.step_px);
     p.set("u_gain", k.gain);
     p.set("u_strength", strength);
+    p.set_array("u_weights", k.weights);
     draw_fullscreen();
     g.Disable(GL_SCISSOR_TEST);
     g.Disable(GL_BLEND);

@@ -47,6 +47,9 @@ struct LicKernel {
   int steps = 0;
   float step_px = 1.0f;
   float gain = 1.0f;  ///< contrast stretch of the averaged noise around 0.5
+  /// Hann weights 0.5 + 0.5 cos(pi i / (steps + 1)) of steps 1..steps
+  /// (weights[i - 1]); the centre weighs 1. Passed to the shader as is.
+  std::vector<float> weights;
 };
 inline constexpr int kLicMaxSteps = 24;
 LicKernel lic_kernel(const LicOptions& options, double cell_mm, double px_per_mm);
