@@ -8,6 +8,13 @@
 // (fabrica::lines extraction + chaining for the same camera) on the same
 // meshes.
 //
+// Surface LIC (issue 21, docs/lic.md): BM_LicIgea renders igea (134k
+// vertices, the rtsc reference view at 1280 x 800) shaded with the LIC pass
+// and BM_LicIgeaOff the same scene without it, in the same run; the LIC
+// pass costs the difference (the target: <= 50 ms on llvmpipe).
+// BM_LicIgeaBuffer times the pass alone (render_lic_buffer: stage 1 into
+// the LIC target, mark, convolution, readback).
+//
 // The spheres are generated here: a latitude-longitude sphere of radius 50 mm
 // with smooth bumps r = R (1 + 0.05 sin 5θ sin 4φ + 0.02 sin 11θ cos 7φ), so
 // every size shows the same lines. Times are wall clock (the software
@@ -27,6 +34,7 @@
 #include "fabrica/lines/chain.hpp"
 #include "fabrica/lines/extract.hpp"
 #include "fabrica/render/renderer.hpp"
+#include "igea_view.hpp"
 
 namespace fr = fabrica::render;
 using fabrica::Vec3;
@@ -202,6 +210,62 @@ void BM_ObjectSpaceApparent(benchmark::State& state) {
   state.counters["polylines"] = static_cast<double>(polylines);
 }
 
+// Igea with its LIC field (prepared once) and the rtsc view at 1280 x 800.
+struct LicInput {
+  std::unique_ptr<fabrica::Surface> surface;
+  std::shared_ptr<fr::RenderMesh> mesh;
+  fabrica::Camera camera;
+};
+
+LicInput& lic_input() {
+  static LicInput in = [] {
+    LicInput i;
+    i.surface = fabrica::bench::load_igea();
+    i.mesh = std::make_shared<fr::RenderMesh>(fr::make_render_mesh(*i.surface, false));
+    fr::set_lic_field(*i.mesh, *i.surface);
+    i.camera = fabrica::bench::igea_v1_camera();
+    i.camera.width = 1280;
+    i.camera.height = 800;
+    return i;
+  }();
+  return in;
+}
+
+void run_lic_scene(benchmark::State& state, bool lic) {
+  LicInput& in = lic_input();
+  fr::Scene scene;
+  fr::Structure s;
+  s.name = "igea";
+  s.style = fr::default_style(fr::Role::focus);
+  s.style.lic = lic;
+  s.mesh = in.mesh;
+  scene.structures.push_back(s);
+  renderer().render(scene, in.camera);  // upload, compile, allocate
+  for (auto _ : state) {
+    fr::Image img = renderer().render(scene, in.camera);
+    benchmark::DoNotOptimize(img.rgba.data());
+  }
+  state.counters["vertices"] = static_cast<double>(in.mesh->vertex_count());
+  state.SetLabel(renderer().context().renderer());
+}
+
+void BM_LicIgea(benchmark::State& state) {
+  run_lic_scene(state, true);
+}
+void BM_LicIgeaOff(benchmark::State& state) {
+  run_lic_scene(state, false);
+}
+void BM_LicIgeaBuffer(benchmark::State& state) {
+  LicInput& in = lic_input();
+  const fr::LicOptions o;
+  renderer().render_lic_buffer(in.mesh, in.camera, o);
+  for (auto _ : state) {
+    fr::Image img = renderer().render_lic_buffer(in.mesh, in.camera, o);
+    benchmark::DoNotOptimize(img.rgba.data());
+  }
+  state.counters["vertices"] = static_cast<double>(in.mesh->vertex_count());
+}
+
 void sizes(benchmark::internal::Benchmark* b) {
   for (int kv : {50, 300, 1000})
     for (int px : {512, 1024, 2048}) b->Args({kv, px});
@@ -211,6 +275,9 @@ BENCHMARK(BM_Hybrid)->Apply(sizes)->Unit(benchmark::kMillisecond)->UseRealTime()
 BENCHMARK(BM_HybridBare)->Apply(sizes)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_HybridOverBare)->Apply(sizes)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_HybridStages)->Apply(sizes)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_LicIgeaOff)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_LicIgea)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_LicIgeaBuffer)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_ObjectSpaceApparent)
     ->Args({50, 1024})
     ->Args({300, 1024})

@@ -2,5 +2,5 @@
 if(TARGET fabrica_render AND TARGET fabrica_lines)
   fabrica_add_bench(bench_render
     SOURCES ${CMAKE_CURRENT_LIST_DIR}/bench_render.cpp
-    LIBS fabrica::render fabrica::lines)
+    LIBS fabrica::render fabrica::lines fabrica::io)
 endif()

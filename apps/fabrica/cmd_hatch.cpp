@@ -1,6 +1,7 @@
 // `fabrica hatch MESH -o OUT.svg|png`: shading strokes after Singh & Schaefer
-// 2010 ("Suggestive Hatching"), optionally with feature lines on top
-// (docs/hatching.md).
+// 2010 ("Suggestive Hatching", --method shading, the default) or ConFIS
+// streamlines after Lawonn, Moench & Preim 2013 (--method confis), optionally
+// with feature lines on top (docs/hatching.md, docs/confis.md).
 #include <tbb/global_control.h>
 #include <CLI/CLI.hpp>
 
@@ -8,6 +9,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -37,6 +39,7 @@ namespace fabrica::cli {
 namespace {
 
 struct HatchArgs {
+  std::string method = "shading";
   std::string mesh;
   std::string camera_file;
   std::string view;
@@ -51,7 +54,18 @@ struct HatchArgs {
   bool uniform_depth = false;
   double stroke_width = 1.0;
   double max_length = 0.0;
-  double min_length = 1.0;
+  std::optional<double> min_length;  ///< default 1 (shading), 8 (confis)
+  // ConFIS (--method confis)
+  double contour_margin = 0.3;
+  double convex_threshold = 0.1;
+  double concave_threshold = 0.1;
+  double umbilic_threshold = 0.01;
+  double spacing = 6.0;
+  double min_weight = 0.15;
+  bool no_contours = false;
+  bool no_features = false;
+  /// Options of the other method that were given (an error).
+  std::vector<std::string> misplaced;
   bool no_ridge_removal = false;
   double ridge_angle = 20.0;
   bool draw_ridges = false;
@@ -142,13 +156,27 @@ std::string write_hatching_png(const HatchArgs& args, const Surface& surface, co
     style.fade_by_strength = false;
     return style;
   };
-  render::PolylineLayer stroke_layer{"strokes", plain(args.stroke_width, {0, 0, 0, 1}), {}};
+  // One layer per style weight (ConFIS fades towards its masks' borders;
+  // shading strokes are all weight 1), lightest first, as the SVG's runs.
+  std::map<double, render::PolylineLayer> by_weight;
   for (const hatching::Stroke& stroke : strokes.strokes) {
-    std::vector<Vec3> points;
-    for (const hatching::StrokeVertex& v : stroke.vertices) points.push_back(v.position);
-    stroke_layer.polylines.push_back(std::move(points));
+    for (const hatching::WeightedRun& run : hatching::weighted_runs(stroke)) {
+      auto it = by_weight.find(run.weight);
+      if (it == by_weight.end()) {
+        const float w = static_cast<float>(run.weight);
+        it = by_weight
+                 .emplace(run.weight,
+                          render::PolylineLayer{
+                              "strokes", plain(args.stroke_width * run.weight, {0, 0, 0, w}), {}})
+                 .first;
+      }
+      std::vector<Vec3> points;
+      for (std::size_t k = run.first; k <= run.last; ++k)
+        points.push_back(stroke.vertices[k].position);
+      it->second.polylines.push_back(std::move(points));
+    }
   }
-  structure.polyline_layers.push_back(std::move(stroke_layer));
+  for (auto& [weight, layer] : by_weight) structure.polyline_layers.push_back(std::move(layer));
   if (args.draw_ridges) {
     render::PolylineLayer ridges{"ridges", plain(args.stroke_width, {0.84f, 0.15f, 0.16f, 1}), {}};
     for (const auto& r : strokes.ridges) ridges.polylines.push_back({r[0].position, r[1].position});
@@ -184,6 +212,11 @@ std::string write_hatching_png(const HatchArgs& args, const Surface& surface, co
 #endif
 
 int run_hatch(const HatchArgs& args) {
+  const HatchingMethod method = parse_hatching_method(args.method);
+  for (const std::string& option : args.misplaced)
+    throw InputError(option + ": only for --method " +
+                     (method == HatchingMethod::confis ? "shading" : "confis") +
+                     " (this run uses --method " + to_string(method) + ")");
   std::unique_ptr<tbb::global_control> threads;
   if (args.threads > 0)
     threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
@@ -232,7 +265,20 @@ int run_hatch(const HatchArgs& args) {
   validate_camera(camera, args.camera_file.empty() ? "camera" : args.camera_file);
 
   DrawHatchingOptions drawing;
+  drawing.method = method;
   drawing.light = args.light;
+  hatching::ConfisOptions& confis = drawing.confis;
+  confis.contour_margin = args.contour_margin;
+  confis.contours = !args.no_contours;
+  confis.features = !args.no_features;
+  confis.feature_regions.convex_threshold = args.convex_threshold;
+  confis.feature_regions.concave_threshold = args.concave_threshold;
+  confis.field.umbilic_threshold = args.umbilic_threshold;
+  confis.spacing_px = args.spacing;
+  confis.min_weight = args.min_weight;
+  confis.stroke_width_px = args.stroke_width;
+  confis.max_length_px = args.max_length;
+  if (args.min_length) confis.min_length_px = *args.min_length;
   hatching::HatchingOptions& options = drawing.hatching;
   options.intensity_threshold = args.threshold;
   options.grid_depth = args.grid_depth;
@@ -240,7 +286,7 @@ int run_hatch(const HatchArgs& args) {
   options.adaptive_depth = !args.uniform_depth;
   options.stroke_width_px = args.stroke_width;
   options.max_length_px = args.max_length;
-  options.min_length_px = args.min_length;
+  options.min_length_px = args.min_length.value_or(1.0);
   options.ridge_removal = !args.no_ridge_removal;
   options.ridges.min_angle_deg = args.ridge_angle;
   const hatching::StrokeSet strokes = draw_hatching(surface, camera, drawing);
@@ -271,12 +317,11 @@ int run_hatch(const HatchArgs& args) {
     std::size_t vertices = 0;
     for (const auto& s : strokes.strokes) vertices += s.vertices.size();
     std::printf(
-        "%s: %zu strokes (%zu vertices), %zu seeds tried of %zu candidates, %zu ridge segments; "
-        "grid depth %d, "
-        "seed depth %d%s%s\n",
-        args.output.c_str(), strokes.strokes.size(), vertices, strokes.stats.seeds,
-        strokes.stats.candidates, strokes.ridges.size(), strokes.grid_depth, strokes.seed_depth,
-        via.empty() ? "" : "; rendered via ", via.c_str());
+        "%s: %s, %zu strokes (%zu vertices), %zu seeds tried of %zu candidates, %zu ridge "
+        "segments; grid depth %d, seed depth %d%s%s\n",
+        args.output.c_str(), to_string(method), strokes.strokes.size(), vertices,
+        strokes.stats.seeds, strokes.stats.candidates, strokes.ridges.size(), strokes.grid_depth,
+        strokes.seed_depth, via.empty() ? "" : "; rendered via ", via.c_str());
   }
   if (!args.quiet) {
     std::printf("  stroke ends:");
@@ -298,6 +343,10 @@ void add_hatch_command(CLI::App& app, Action& action) {
                                      "Shading strokes (Singh & Schaefer 2010, \"Suggestive "
                                      "Hatching\") as SVG or PNG; see docs/hatching.md");
   cmd->add_option("mesh", args->mesh, "Input mesh (OBJ, PLY, STL, OFF, VTP, VTK)")->required();
+  cmd->add_option("--method", args->method,
+                  "shading (default: shading strokes, Singh & Schaefer 2010) or confis "
+                  "(curvature streamlines in the contour margin and feature regions, Lawonn et "
+                  "al. 2013; docs/confis.md)");
   cmd->add_option("-o,--output", args->output,
                   "Output OUT.svg, or OUT.png (rendered headless; needs the renderer and EGL or "
                   "OSMesa)")
@@ -328,7 +377,8 @@ void add_hatch_command(CLI::App& app, Action& action) {
                   "Stroke width in pixels (also sets the density)");
   cmd->add_option("--max-length", args->max_length,
                   "Maximum stroke length in pixels (0 = no limit)");
-  cmd->add_option("--min-length", args->min_length, "Drop strokes shorter than this many pixels");
+  cmd->add_option("--min-length", args->min_length,
+                  "Drop strokes shorter than this many pixels (default 1; confis 8)");
   cmd->add_flag("--no-ridge-removal", args->no_ridge_removal,
                 "Do not keep strokes away from intensity ridges");
   cmd->add_option("--ridge-angle", args->ridge_angle,
@@ -345,12 +395,48 @@ void add_hatch_command(CLI::App& app, Action& action) {
   cmd->add_option("--backend", args->backend,
                   "PNG only: headless GL backend egl or osmesa (default: FABRICA_GL_BACKEND, "
                   "else EGL then OSMesa)");
+  // ConFIS (--method confis; docs/confis.md).
+  std::vector<CLI::Option*> confis_only{
+      cmd->add_option("--contour-margin", args->contour_margin,
+                      "confis: width of the contour margin on n.v, in (0, 1] (default 0.3): "
+                      "streamlines where 0 <= n.v < this"),
+      cmd->add_option("--convex-threshold", args->convex_threshold,
+                      "confis: feature regions where k1 * feature size >= this (strongly convex; "
+                      "default 0.1)"),
+      cmd->add_option("--concave-threshold", args->concave_threshold,
+                      "confis: feature regions where k1 * feature size <= -this (strongly "
+                      "concave; default 0.1)"),
+      cmd->add_option("--umbilic-threshold", args->umbilic_threshold,
+                      "confis: umbilic (no direction, no feature region) where |k1 - k2| * "
+                      "feature size < this (default 0.01)"),
+      cmd->add_option("--spacing", args->spacing,
+                      "confis: distance between streamlines in pixels (default 6)"),
+      cmd->add_option("--min-weight", args->min_weight,
+                      "confis: width and opacity factor at the masks' borders, in [0, 1] "
+                      "(default 0.15)"),
+      cmd->add_flag("--no-contours", args->no_contours,
+                    "confis: no streamlines in the contour margin"),
+      cmd->add_flag("--no-features", args->no_features,
+                    "confis: no streamlines in the feature regions")};
+  std::vector<CLI::Option*> shading_only;
+  for (const char* name :
+       {"--light", "--threshold", "--grid-depth", "--seed-depth", "--uniform-depth",
+        "--no-ridge-removal", "--ridge-angle", "--draw-ridges"})
+    shading_only.push_back(cmd->get_option(name));
   cmd->add_option("--threads", args->threads,
                   "Worker threads (0 = all); the output does not depend on it");
   cmd->add_flag("--keep-orientation", args->keep_orientation,
                 "Do not re-orient the mesh outward before hatching");
   cmd->add_flag("-q,--quiet", args->quiet, "No summary line");
-  cmd->callback([args, &action] { action = [args] { return run_hatch(*args); }; });
+  cmd->callback([args, &action, confis_only, shading_only] {
+    // Options of the other method are an error (run_hatch names them once
+    // --method is known to be valid).
+    args->misplaced.clear();
+    const bool confis = lower(args->method) == "confis";
+    for (CLI::Option* o : confis ? shading_only : confis_only)
+      if (o->count() > 0) args->misplaced.push_back(o->get_name());
+    action = [args] { return run_hatch(*args); };
+  });
 }
 
 }  // namespace fabrica::cli

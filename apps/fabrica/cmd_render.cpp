@@ -1,5 +1,6 @@
 // `fabrica render MESH_OR_SCENE [--camera FILE | --view NAME] [--style S]
-//  [--lines LIST] [--hybrid-ar] [--context MESH ...] [--size WxH]
+//  [--lines LIST] [--hybrid-ar] [--lic [--lic-length L] [--lic-noise-scale MM]
+//  [--lic-strength S]] [--context MESH ...] [--size WxH]
 //  [--transparent] [--backend egl|osmesa] [--svg OUT.svg] [--pdf OUT.pdf]
 //  [--labels] [--legend] [--scale-bar] [--orientation-marker] [--annotate]
 //  [--font-size PX] -o OUT.png`:
@@ -34,10 +35,11 @@ struct RenderArgs {
   std::string save_scene, save_camera, frame;
   std::vector<std::string> context;
   std::optional<double> tau, lambda, threshold, line_width, context_opacity;
+  std::optional<double> lic_length, lic_noise_scale, lic_strength;
   std::optional<int> smooth;
   std::optional<double> font_size;
   bool labels = false, legend = false, scale_bar = false, orientation = false, annotate = false;
-  bool hybrid = false, transparent = false, no_fade = false, per_fragment = false,
+  bool hybrid = false, lic = false, transparent = false, no_fade = false, per_fragment = false,
        sign_free = false, float_target = false, quiet = false;
 };
 
@@ -96,6 +98,23 @@ int run_render(const RenderArgs& a) {
   std::optional<Space> space_override;
   if (!a.space.empty()) space_override = parse_space(a.space);
   if (a.smooth && *a.smooth < 0) throw InputError("--smooth must be >= 0 (iterations; 0 = off)");
+  // LIC parameters: the scene's, then the options (validated before any mesh is read).
+  if (!a.lic && (a.lic_length || a.lic_noise_scale || a.lic_strength) &&
+      std::none_of(spec.structures.begin(), spec.structures.end(),
+                   [](const render::StructureSpec& s) { return s.style.lic; }))
+    throw InputError("--lic-length, --lic-noise-scale and --lic-strength need --lic");
+  if (a.lic_length) {
+    spec.lic.kernel_length = *a.lic_length;
+    render::validate(spec.lic, "--lic-length");
+  }
+  if (a.lic_noise_scale) {
+    spec.lic.noise_scale = *a.lic_noise_scale;
+    render::validate(spec.lic, "--lic-noise-scale");
+  }
+  if (a.lic_strength) {
+    spec.lic.strength = *a.lic_strength;
+    render::validate(spec.lic, "--lic-strength");
+  }
   for (auto& s : spec.structures) {
     if (space_override) s.space = space_override;
     if (a.smooth) s.style.smooth = *a.smooth;
@@ -112,6 +131,7 @@ int run_render(const RenderArgs& a) {
     if (!a.lines.empty())
       s.style.families = parse_family_list(a.lines, "--lines", s.style.families, true);
     if (a.hybrid) s.style.hybrid_apparent_ridges = true;
+    if (a.lic) s.style.lic = true;
     if (a.line_width) s.style.lines.width = *a.line_width;
     if (!a.hidden.empty()) {
       const auto h = render::parse_hidden_lines(a.hidden);
@@ -170,6 +190,7 @@ int run_render(const RenderArgs& a) {
   ro.hybrid.per_fragment = a.per_fragment;
   ro.hybrid.sign_free = a.sign_free;
   ro.hybrid.float_target = a.float_target;
+  ro.lic = spec.lic;
   const auto renderer = headless_renderer(ho);  // one GL context per `fabrica batch` worker
   render::RenderedScene picture = render::render_scene(*renderer, scene, camera, ro);
   const render::Annotation annotation = render::annotate_scene(scene, camera, spec.annotation);
@@ -231,6 +252,15 @@ void add_render_command(CLI::App& app, Action& action) {
   cmd->add_flag("--per-fragment", args->per_fragment, "Hybrid: q1, t1 per fragment (Phong-like)");
   cmd->add_flag("--sign-free", args->sign_free, "Hybrid: store t1 as a double angle");
   cmd->add_flag("--float-target", args->float_target, "Hybrid: 32-bit float render target");
+  cmd->add_flag("--lic", args->lic,
+                "Surface LIC: noise smeared along the maximal-curvature direction in the "
+                "feature regions, blended with the focus shading (docs/lic.md)");
+  cmd->add_option("--lic-length", args->lic_length,
+                  "LIC: half length of the kernel in noise cells, in (0, 64] (8)");
+  cmd->add_option("--lic-noise-scale", args->lic_noise_scale,
+                  "LIC: noise cell size on the surface in mm (0 = bounding radius / 200)");
+  cmd->add_option("--lic-strength", args->lic_strength,
+                  "LIC: how much of the shading the texture replaces, in [0, 1] (0.8)");
   cmd->add_option("--context", args->context, "Context mesh (repeatable): ghosted, silhouettes");
   cmd->add_option("--frame", args->frame,
                   "What the view frames: focus (default when there is context) or all");

@@ -48,7 +48,8 @@ void simplify_range(const std::vector<Vec2>& points, std::size_t first, std::siz
 
 /// Appends a path: absolute start, then relative steps between coordinates
 /// rounded on the output grid (so rounding never accumulates).
-void append_path(std::string& out, const std::vector<Vec2>& points, int decimals) {
+void append_path(std::string& out, const std::vector<Vec2>& points, int decimals,
+                 const std::string& attributes = {}) {
   const double scale = std::pow(10.0, decimals);
   auto q = [&](double v) { return static_cast<long long>(std::llround(v * scale)); };
   const unsigned long long unit = static_cast<unsigned long long>(std::llround(scale));
@@ -72,7 +73,9 @@ void append_path(std::string& out, const std::vector<Vec2>& points, int decimals
     return text;
   };
   long long px = q(points[0].x()), py = q(points[0].y());
-  out += "<path d=\"M";
+  out += "<path ";
+  out += attributes;
+  out += "d=\"M";
   out += number(px);
   out += ' ';
   out += number(py);
@@ -100,6 +103,26 @@ std::string fixed(double v, int decimals = 2) {
 
 }  // namespace
 
+std::vector<WeightedRun> weighted_runs(const Stroke& stroke, int levels) {
+  std::vector<WeightedRun> runs;
+  const std::size_t n = stroke.vertices.size();
+  if (n == 0) return runs;
+  levels = std::max(levels, 1);
+  auto quantise = [&](std::size_t k) {
+    const double w = 0.5 * (stroke.vertices[k].weight + stroke.vertices[k + 1].weight);
+    return std::clamp(std::ceil(w * levels - 1e-9) / levels, 1.0 / levels, 1.0);
+  };
+  if (n == 1) return {WeightedRun{std::clamp(stroke.vertices[0].weight, 0.0, 1.0), 0, 0}};
+  for (std::size_t k = 0; k + 1 < n; ++k) {
+    const double w = quantise(k);
+    if (!runs.empty() && runs.back().weight == w)
+      runs.back().last = k + 1;
+    else
+      runs.push_back(WeightedRun{w, k, k + 1});
+  }
+  return runs;
+}
+
 std::vector<Vec2> simplify_polyline(const std::vector<Vec2>& points, double tolerance) {
   if (points.size() <= 2 || !(tolerance > 0.0)) return points;
   std::vector<std::uint8_t> keep(points.size(), 0);
@@ -125,10 +148,18 @@ std::string hatching_svg(const StrokeSet& strokes, const SvgStyle& style,
          "\" stroke-width=\"" + fixed(style.stroke_width_px) + "\">\n";
   std::vector<Vec2> points;
   for (const Stroke& stroke : strokes.strokes) {
-    points.clear();
-    for (const StrokeVertex& v : stroke.vertices) points.push_back(v.pixel);
-    if (points.empty()) continue;
-    append_path(out, simplify_polyline(points, style.simplify_px), decimals);
+    // Runs of one style weight (ConFIS); shading strokes are a single run of 1.
+    for (const WeightedRun& run : weighted_runs(stroke)) {
+      points.clear();
+      for (std::size_t k = run.first; k <= run.last; ++k)
+        points.push_back(stroke.vertices[k].pixel);
+      if (points.empty()) continue;
+      const std::string attributes =
+          run.weight == 1.0 ? std::string()
+                            : "stroke-width=\"" + fixed(run.weight * style.stroke_width_px, 3) +
+                                  "\" stroke-opacity=\"" + fixed(run.weight, 3) + "\" ";
+      append_path(out, simplify_polyline(points, style.simplify_px), decimals, attributes);
+    }
   }
   out += "</g>\n";
   if (style.draw_ridges && !strokes.ridges.empty()) {

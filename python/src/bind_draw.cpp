@@ -136,7 +136,8 @@ void bind_render(py::module_& m) {
       [](const py::object& mesh, const Camera& camera, const std::string& style,
          const py::object& lines, const py::list& context, double context_opacity, bool hybrid,
          bool transparent, std::optional<double> line_width, int smooth,
-         const std::string& backend) {
+         const std::string& backend, bool lic, double lic_length, double lic_noise_scale,
+         double lic_strength) {
         render::SceneSurfaces scene;
         render::StructureSpec focus = structure("focus", render::Role::focus);
         const auto shading = render::parse_shading(style);
@@ -145,6 +146,12 @@ void bind_render(py::module_& m) {
         focus.style.shading = *shading;
         focus.style.families = parse_families(lines, focus.style.families, true);
         focus.style.hybrid_apparent_ridges = hybrid;
+        focus.style.lic = lic;
+        render::LicOptions lic_options;
+        lic_options.kernel_length = lic_length;
+        lic_options.noise_scale = lic_noise_scale;
+        lic_options.strength = lic_strength;
+        render::validate(lic_options, "lic");
         if (line_width) focus.style.lines.width = *line_width;
         if (smooth < 0) throw InputError("smooth must be >= 0 (iterations; 0 = off)");
         focus.style.smooth = smooth;
@@ -159,6 +166,7 @@ void bind_render(py::module_& m) {
         const render::HeadlessOptions headless = render::headless_options(backend);
         render::RenderOptions options;
         options.transparent_background = transparent;
+        options.lic = lic_options;
         render::Image image;
         {
           py::gil_scoped_release release;
@@ -170,8 +178,12 @@ void bind_render(py::module_& m) {
       py::arg("lines") = py::none(), py::arg("context") = py::list(),
       py::arg("context_opacity") = 0.25, py::arg("hybrid") = false, py::arg("transparent") = false,
       py::arg("line_width") = py::none(), py::arg("smooth") = 0, py::arg("backend") = "",
+      py::arg("lic") = false, py::arg("lic_length") = 8.0, py::arg("lic_noise_scale") = 0.0,
+      py::arg("lic_strength") = 0.8,
       "Renders a Mesh or Surface (the focus) and optional context meshes headless (EGL or "
       "OSMesa) as `fabrica render` does; returns an (height, width, 4) uint8 RGBA array. "
+      "lic=True adds the surface LIC (docs/lic.md; lic_length in noise cells, "
+      "lic_noise_scale in mm with 0 = automatic, lic_strength in [0, 1]). "
       "UnavailableError when no headless OpenGL can be created.");
   m.def(
       "render_scene",
@@ -209,6 +221,7 @@ void bind_render(py::module_& m) {
           validate_camera(c, "camera");
           render::RenderOptions options;
           options.transparent_background = spec.transparent;
+          options.lic = spec.lic;
           image = render::render_scene(scene, c, options, headless).image;
           // The scene's "annotation" (labels, legend, ...), as `fabrica render` draws it.
           render::draw_annotation(image, render::annotate_scene(scene, c, spec.annotation).overlay);

@@ -224,6 +224,25 @@ def test_render_equals_cli_png(tmp_path, liver, fabrica_cli):
 
 
 @pytest.mark.skipif(not fabrica.has_render, reason="built without the renderer")
+def test_render_lic_equals_cli_png(tmp_path, liver, fabrica_cli):
+    mesh = fabrica.read_mesh(str(liver))
+    cam, cam_path = cli_camera(tmp_path, mesh, 320, 240)
+    result = fabrica_cli("render", liver, "--camera", cam_path, "--lic", "--lic-length", "6",
+                         "--lic-strength", "0.9", "-q", "-o", tmp_path / "cli.png", check=False)
+    if result.returncode == 4:
+        pytest.skip("no headless OpenGL here: " + result.stderr.strip())
+    assert result.returncode == 0, result.stderr
+    image = fabrica.render(mesh, cam, lic=True, lic_length=6.0, lic_strength=0.9)
+    import matplotlib.image as mpimg
+
+    cli = (mpimg.imread(str(tmp_path / "cli.png")) * 255).round().astype(np.uint8)
+    np.testing.assert_array_equal(image, cli)
+    assert (image != fabrica.render(mesh, cam)).any()  # the texture is there
+    with pytest.raises(fabrica.InputError, match="strength"):
+        fabrica.render(mesh, cam, lic=True, lic_strength=2.0)
+
+
+@pytest.mark.skipif(not fabrica.has_render, reason="built without the renderer")
 def test_render_scene_equals_cli_png(tmp_path, fabrica_cli):
     import os
     from pathlib import Path

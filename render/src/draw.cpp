@@ -73,8 +73,10 @@ Scene build_scene(const SceneSurfaces& scene, const Camera& camera) {
     if (st.style.hybrid_apparent_ridges)
       families.erase(std::remove(families.begin(), families.end(), LineFamily::apparent),
                      families.end());
-    st.mesh =
+    auto mesh =
         std::make_shared<RenderMesh>(make_render_mesh(surface, st.style.hybrid_apparent_ridges));
+    if (st.style.lic) set_lic_field(*mesh, surface);
+    st.mesh = std::move(mesh);
     if (!families.empty()) {
       DrawLinesOptions options;
       options.lines.families = families;

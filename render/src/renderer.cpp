@@ -24,12 +24,15 @@ namespace {
 
 constexpr int kTileMargin = 2;  // pixels rendered around each tile (3x3 filters, AA)
 constexpr int kMaxImageSide = 32768;
+const std::string kLicMaxStepsDefine = "LIC_MAX_STEPS " + std::to_string(kLicMaxSteps);
 
 struct GpuMesh {
   std::weak_ptr<const RenderMesh> source;
   GLuint vao = 0, vbo = 0, ebo = 0;
   GLsizei index_count = 0;
   bool curvature = false;
+  // Surface LIC: RenderMesh::lic_field as a texture buffer (RGBA32F per triangle).
+  GLuint field_buffer = 0, field_texture = 0;
 };
 
 struct Matrices {
@@ -52,9 +55,7 @@ Matrices camera_matrices(const Camera& camera, const Vec3& center, double radius
   m.near_plane = static_cast<float>(n);
   m.far_plane = static_cast<float>(f);
   m.orthographic = camera.projection == Projection::orthographic;
-  const double half_h = (camera.center - camera.eye).norm() *
-                        std::tan(0.5 * camera.fov_deg * std::numbers::pi / 180.0);
-  m.px_per_mm = camera.height / (2.0 * half_h);
+  m.px_per_mm = camera_px_per_mm(camera);
   return m;
 }
 
@@ -62,6 +63,7 @@ Matrices camera_matrices(const Camera& camera, const Vec3& center, double radius
 // the bottom left) and the uniform mapping whole-image clip space to it.
 struct Tile {
   int x = 0, y = 0, w = 0, h = 0;  // inner region
+  int margin = kTileMargin;        // pixels rendered around it
   int render_w = 0, render_h = 0;  // with margins
   std::array<float, 4> transform{};
 };
@@ -106,7 +108,7 @@ PixelRect projected_rect(const Matrices& m, const std::vector<const RenderMesh*>
 // `region` in the pixels of tile `t` (render region, margins included),
 // one pixel inside it; empty (x1 <= x0 or y1 <= y0) when the tile misses it.
 PixelRect tile_region(const Tile& t, const PixelRect& region) {
-  const int ox = t.x - kTileMargin, oy = t.y - kTileMargin;  // tile origin in the image
+  const int ox = t.x - t.margin, oy = t.y - t.margin;  // tile origin in the image
   return {std::max(1, region.x0 - ox), std::max(1, region.y0 - oy),
           std::min(t.render_w - 1, region.x1 - ox), std::min(t.render_h - 1, region.y1 - oy)};
 }
@@ -115,7 +117,10 @@ bool is_empty(const PixelRect& r) {
   return r.x1 <= r.x0 || r.y1 <= r.y0;
 }
 
-std::vector<Tile> make_tiles(int width, int height, int inner) {
+// Tiles of at most `inner` pixels a side, each rendered with `margin`
+// pixels around it (kTileMargin, or the LIC kernel's reach: a filter
+// reading up to `margin` pixels away sees what it would see untiled).
+std::vector<Tile> make_tiles(int width, int height, int inner, int margin = kTileMargin) {
   std::vector<Tile> tiles;
   for (int y = 0; y < height; y += inner) {
     for (int x = 0; x < width; x += inner) {
@@ -124,9 +129,10 @@ std::vector<Tile> make_tiles(int width, int height, int inner) {
       t.y = y;
       t.w = std::min(inner, width - x);
       t.h = std::min(inner, height - y);
-      t.render_w = t.w + 2 * kTileMargin;
-      t.render_h = t.h + 2 * kTileMargin;
-      const double ox = x - kTileMargin, oy = y - kTileMargin;
+      t.margin = margin;
+      t.render_w = t.w + 2 * margin;
+      t.render_h = t.h + 2 * margin;
+      const double ox = x - margin, oy = y - margin;
       t.transform = {float(double(width) / t.render_w), float(double(height) / t.render_h),
                      float((width - 2.0 * ox) / t.render_w - 1.0),
                      float((height - 2.0 * oy) / t.render_h - 1.0)};
@@ -145,6 +151,45 @@ struct LineBatch {
 
 bool is_wide_family(LineFamily f) {
   return f == LineFamily::contour || f == LineFamily::boundary;
+}
+
+// What the passes of one Renderer::render frame share (prepared once).
+struct FrameState {
+  FrameState(const Scene& s, const Camera& c, const RenderOptions& o)
+      : scene(s), camera(c), options(o) {}
+  const Scene& scene;
+  const Camera& camera;
+  const RenderOptions& options;
+  Matrices M;
+  std::vector<const GpuMesh*> gpu;
+  bool any_transparent = false, any_hybrid = false, any_lic = false;
+  double tolerance = 0.0, line_scale = 1.0;
+  float bg_alpha = 1.0f;
+  std::vector<LineBatch> batches;
+  bool lines_need_depth_b = false;
+  PixelRect hybrid_region, lic_region;
+  LicKernel lic_kernel;
+  float lic_inv_cell = 1.0f;
+};
+
+void check_size(const Camera& camera) {
+  validate_camera(camera, "camera");
+  if (camera.width > kMaxImageSide || camera.height > kMaxImageSide)
+    throw InputError("image size " + std::to_string(camera.width) + "x" +
+                     std::to_string(camera.height) + " is too large (at most " +
+                     std::to_string(kMaxImageSide) + " pixels a side)");
+}
+
+float hybrid_scale(const RenderMesh& mesh, const HybridOptions& o) {
+  double tau = 0.0;
+  if (o.tau) {
+    tau = *o.tau;
+  } else {
+    const double fs = mesh.feature_size > 0.0 ? mesh.feature_size : mesh.mean_edge_length;
+    tau = default_tau(fs);
+  }
+  if (!std::isfinite(tau)) throw InputError("hybrid apparent ridges: tau must be finite");
+  return static_cast<float>(std::exp2(tau));
 }
 
 }  // namespace
@@ -168,6 +213,10 @@ struct Renderer::Impl {
   // the filter runs only where it can ink (hybrid_stage2).
   GLuint ar_fbo = 0, ar_color = 0, ar_depth = 0, ar_out_fbo = 0;
   bool ar_float = false;
+  // Surface LIC: stage 1 draws (direction, noise, mask) into lic_color with
+  // the depth-stencil lic_depth (stencil 1 where a LIC mesh is visible);
+  // stage 2 multiplies into main_color through lic_out_fbo (lic_stage2).
+  GLuint lic_fbo = 0, lic_color = 0, lic_depth = 0, lic_out_fbo = 0;
 
   explicit Impl(std::unique_ptr<GlContext> c) : ctx(std::move(c)) {
     ctx->make_current();
@@ -234,6 +283,17 @@ struct Renderer::Impl {
       stages = {vs({"ar_bare.vert"}), fs({"ar_bare_stage1.frag"})};
     else if (key == "ar_bare2")
       stages = {vs({"fullscreen.vert"}), fs({"ar_bare_stage2.frag"})};
+    else if (key == "lic1")
+      stages = {vs({"lic_stage1.vert"}), fs({"lic_noise.glsl", "lic_stage1.frag"})};
+    else if (key == "lic_occluder")
+      stages = {vs({"lic_stage1.vert"}), fs({"lic_occluder.frag"})};
+    else if (key == "lic_mask")
+      stages = {vs({"fullscreen.vert"}), fs({"lic_mask.frag"})};
+    else if (key == "lic2")
+      stages = {vs({"fullscreen.vert"}), fs({"lic_stage2.frag"}, {kLicMaxStepsDefine})};
+    else if (key == "lic2_value")
+      stages = {vs({"fullscreen.vert"}),
+                fs({"lic_stage2.frag"}, {kLicMaxStepsDefine, "LIC_VALUE"})};
     else
       throw Error(ErrorKind::internal, "unknown program " + key);
     return programs.emplace(key, ShaderProgram(gl(), key, stages)).first->second;
@@ -244,6 +304,8 @@ struct Renderer::Impl {
     gl().DeleteVertexArrays(1, &m.vao);
     gl().DeleteBuffers(1, &m.vbo);
     gl().DeleteBuffers(1, &m.ebo);
+    gl().DeleteTextures(1, &m.field_texture);
+    gl().DeleteBuffers(1, &m.field_buffer);
     m = GpuMesh{};
   }
 
@@ -270,7 +332,9 @@ struct Renderer::Impl {
     gm.source = mesh;
     gm.curvature = m.has_curvature();
     const std::size_t n = m.vertex_count();
-    const std::size_t floats = gm.curvature ? 14 * n : 6 * n;
+    const bool lic = m.has_lic_field();
+    const std::size_t lic_offset = gm.curvature ? 14 * n : 6 * n;
+    const std::size_t floats = lic_offset + (lic ? n : 0);
     g.GenVertexArrays(1, &gm.vao);
     g.GenBuffers(1, &gm.vbo);
     g.GenBuffers(1, &gm.ebo);
@@ -288,6 +352,7 @@ struct Renderer::Impl {
       data.insert(data.end(), m.e1.begin(), m.e1.end());
       data.insert(data.end(), m.e2.begin(), m.e2.end());
     }
+    if (lic) data.insert(data.end(), m.lic_level.begin(), m.lic_level.end());
     g.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(data.size() * sizeof(float)), data.data(),
                  GL_STATIC_DRAW);
     auto attrib = [&](GLuint loc, int size, std::size_t offset_floats) {
@@ -302,12 +367,24 @@ struct Renderer::Impl {
       attrib(3, 3, 8 * n);
       attrib(4, 3, 11 * n);
     }
+    if (lic) attrib(5, 1, lic_offset);
     g.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, gm.ebo);
     g.BufferData(GL_ELEMENT_ARRAY_BUFFER,
                  static_cast<GLsizeiptr>(m.indices.size() * sizeof(std::uint32_t)),
                  m.indices.data(), GL_STATIC_DRAW);
     gm.index_count = static_cast<GLsizei>(m.indices.size());
     g.BindVertexArray(0);
+    if (lic) {
+      g.GenBuffers(1, &gm.field_buffer);
+      g.BindBuffer(GL_TEXTURE_BUFFER, gm.field_buffer);
+      g.BufferData(GL_TEXTURE_BUFFER, static_cast<GLsizeiptr>(m.lic_field.size() * sizeof(float)),
+                   m.lic_field.data(), GL_STATIC_DRAW);
+      g.GenTextures(1, &gm.field_texture);
+      g.BindTexture(GL_TEXTURE_BUFFER, gm.field_texture);
+      g.TexBuffer(GL_TEXTURE_BUFFER, GL_RGBA32F, gm.field_buffer);
+      g.BindTexture(GL_TEXTURE_BUFFER, 0);
+      g.BindBuffer(GL_TEXTURE_BUFFER, 0);
+    }
     check_gl_error(g, "uploading a mesh");
     return meshes.emplace(mesh.get(), gm).first->second;
   }
@@ -342,13 +419,16 @@ struct Renderer::Impl {
 
   void release_targets() {
     const GlFunctions& g = gl();
-    GLuint fbos[] = {main_fbo, overlay_fbo, oit_fbo, depthb_fbo, ar_fbo, ar_out_fbo};
-    g.DeleteFramebuffers(6, fbos);
-    GLuint textures[] = {main_color, depth_a, accum, reveal, depth_b, ar_color};
-    g.DeleteTextures(6, textures);
-    g.DeleteRenderbuffers(1, &ar_depth);
+    GLuint fbos[] = {main_fbo, overlay_fbo, oit_fbo, depthb_fbo,
+                     ar_fbo,   ar_out_fbo,  lic_fbo, lic_out_fbo};
+    g.DeleteFramebuffers(8, fbos);
+    GLuint textures[] = {main_color, depth_a, accum, reveal, depth_b, ar_color, lic_color};
+    g.DeleteTextures(7, textures);
+    GLuint renderbuffers[] = {ar_depth, lic_depth};
+    g.DeleteRenderbuffers(2, renderbuffers);
     main_fbo = overlay_fbo = oit_fbo = depthb_fbo = ar_fbo = ar_out_fbo = 0;
     main_color = depth_a = accum = reveal = depth_b = ar_color = ar_depth = 0;
+    lic_fbo = lic_out_fbo = lic_color = lic_depth = 0;
     target_w = target_h = 0;
   }
 
@@ -413,28 +493,99 @@ struct Renderer::Impl {
     ar_float = float_target;
     ar_color = float_target ? make_texture(GL_RGBA32F, GL_RGBA, GL_FLOAT, target_w, target_h)
                             : make_texture(GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, target_w, target_h);
-    g.GenRenderbuffers(1, &ar_depth);
-    g.BindRenderbuffer(GL_RENDERBUFFER, ar_depth);
+    make_two_stage_targets(ar_color, ar_depth, ar_fbo, ar_out_fbo, "apparent-ridge");
+  }
+
+  // A two-stage image method's targets (hybrid ridges, LIC): `fbo` draws
+  // into `color` with a new depth-stencil renderbuffer `depth`; `out_fbo`
+  // draws into main_color with the same depth-stencil.
+  void make_two_stage_targets(GLuint color, GLuint& depth, GLuint& fbo, GLuint& out_fbo,
+                              const std::string& name) {
+    const GlFunctions& g = gl();
+    g.GenRenderbuffers(1, &depth);
+    g.BindRenderbuffer(GL_RENDERBUFFER, depth);
     g.RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH24_STENCIL8, target_w, target_h);
-    g.GenFramebuffers(1, &ar_fbo);
-    g.BindFramebuffer(GL_FRAMEBUFFER, ar_fbo);
-    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, ar_color, 0);
-    g.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER,
-                              ar_depth);
-    check_fbo("apparent-ridge framebuffer");
-    g.GenFramebuffers(1, &ar_out_fbo);
-    g.BindFramebuffer(GL_FRAMEBUFFER, ar_out_fbo);
+    g.GenFramebuffers(1, &fbo);
+    g.BindFramebuffer(GL_FRAMEBUFFER, fbo);
+    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, color, 0);
+    g.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER, depth);
+    check_fbo((name + " framebuffer").c_str());
+    g.GenFramebuffers(1, &out_fbo);
+    g.BindFramebuffer(GL_FRAMEBUFFER, out_fbo);
     g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, main_color, 0);
-    g.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER,
-                              ar_depth);
-    check_fbo("apparent-ridge output framebuffer");
+    g.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER, depth);
+    check_fbo((name + " output framebuffer").c_str());
+  }
+
+  // Tiles' largest render size: the targets are (re)made for it.
+  void ensure_main_for(const std::vector<Tile>& tiles) {
+    int max_w = 0, max_h = 0;
+    for (const auto& t : tiles) {
+      max_w = std::max(max_w, t.render_w);
+      max_h = std::max(max_h, t.render_h);
+    }
+    ensure_main(max_w, max_h);
+  }
+
+  // Stage 1 of a two-stage method: `fbo` bound and cleared (colour `clear`,
+  // depth 1, stencil 0) for tile `t`, opaque state, stencil test on with
+  // REPLACE (each draw sets its reference value).
+  void begin_stage1(GLuint fbo, const Tile& t, const std::array<float, 4>& clear) {
+    const GlFunctions& g = gl();
+    g.BindFramebuffer(GL_FRAMEBUFFER, fbo);
+    g.Viewport(0, 0, t.render_w, t.render_h);
+    set_state_opaque();  // depth writes on, or Clear leaves the depth alone
+    g.ClearColor(clear[0], clear[1], clear[2], clear[3]);
+    g.ClearDepth(1.0);
+    g.ClearStencil(0);
+    g.StencilMask(0xFF);
+    g.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT | GL_STENCIL_BUFFER_BIT);
+    g.Enable(GL_STENCIL_TEST);
+    g.StencilOp(GL_KEEP, GL_KEEP, GL_REPLACE);
+  }
+
+  // Stage 2 of a two-stage method: `out_fbo` bound for tile `t`, scissored
+  // to `r`, stage 1's `data` on unit 0, stencil test EQUAL 1 (read only).
+  void begin_stage2(GLuint out_fbo, GLuint data, const Tile& t, const PixelRect& r) {
+    const GlFunctions& g = gl();
+    g.BindFramebuffer(GL_FRAMEBUFFER, out_fbo);
+    const GLenum color0 = GL_COLOR_ATTACHMENT0;
+    g.DrawBuffers(1, &color0);
+    g.Viewport(0, 0, t.render_w, t.render_h);
+    g.Enable(GL_SCISSOR_TEST);
+    g.Scissor(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
+    g.ActiveTexture(GL_TEXTURE0);
+    g.BindTexture(GL_TEXTURE_2D, data);
+    g.Enable(GL_STENCIL_TEST);
+    g.StencilMask(0x00);
+    g.StencilOp(GL_KEEP, GL_KEEP, GL_KEEP);
+    g.StencilFunc(GL_EQUAL, 1, 0xFF);
+  }
+
+  // The mark pass: the fullscreen triangle by the program in use (which
+  // discards the pixels to skip) writes window depth 0.5, no colour.
+  void mark_pixels() {
+    const GlFunctions& g = gl();
+    g.ColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+    g.Disable(GL_BLEND);
+    g.Enable(GL_DEPTH_TEST);
+    g.DepthFunc(GL_ALWAYS);
+    g.DepthMask(GL_TRUE);
+    draw_fullscreen();  // z = 0: window depth 0.5 on the marked pixels
+    g.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  }
+
+  void ensure_lic() {
+    if (lic_fbo != 0) return;
+    lic_color = make_texture(GL_RGBA32F, GL_RGBA, GL_FLOAT, target_w, target_h);
+    make_two_stage_targets(lic_color, lic_depth, lic_fbo, lic_out_fbo, "LIC");
   }
 
   // ------------------------------------------------------------- helpers
-  int tile_inner_size(int requested) const {
+  int tile_inner_size(int requested, int margin = kTileMargin) const {
     int limit = std::min(ctx->max_framebuffer_size(), 4096);
     if (requested > 0) limit = std::min(limit, requested);
-    return std::max(16, limit - 2 * kTileMargin);
+    return std::max(16, limit - 2 * margin);
   }
 
   void set_common(const ShaderProgram& p, const Matrices& m, const Tile& t) {
@@ -456,7 +607,7 @@ struct Renderer::Impl {
     g.ReadBuffer(GL_COLOR_ATTACHMENT0);
     g.PixelStorei(GL_PACK_ALIGNMENT, 1);
     std::vector<std::uint8_t> buffer(static_cast<std::size_t>(t.w) * t.h * 4);
-    g.ReadPixels(kTileMargin, kTileMargin, t.w, t.h, GL_RGBA, GL_UNSIGNED_BYTE, buffer.data());
+    g.ReadPixels(t.margin, t.margin, t.w, t.h, GL_RGBA, GL_UNSIGNED_BYTE, buffer.data());
     check_gl_error(g, "reading the image back");
     for (int j = 0; j < t.h; ++j) {
       const int row = image_h - 1 - (t.y + j);
@@ -502,17 +653,8 @@ struct Renderer::Impl {
                      const Matrices& m, const Tile& t, bool bare) {
     const GlFunctions& g = gl();
     ensure_ar(o.float_target);
-    g.BindFramebuffer(GL_FRAMEBUFFER, ar_fbo);
-    g.Viewport(0, 0, t.render_w, t.render_h);
-    set_state_opaque();  // depth writes on, or Clear leaves the depth alone
-    g.ClearColor(0.0f, 0.5f, 0.5f, 0.0f);
-    g.ClearDepth(1.0);
-    g.ClearStencil(0);
-    g.StencilMask(0xFF);
-    g.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT | GL_STENCIL_BUFFER_BIT);
     // Stencil: 1 where a hybrid mesh is the visible surface, 0 elsewhere.
-    g.Enable(GL_STENCIL_TEST);
-    g.StencilOp(GL_KEEP, GL_KEEP, GL_REPLACE);
+    begin_stage1(ar_fbo, t, {0.0f, 0.5f, 0.5f, 0.0f});
     // Occluders (q = 0, coverage 0) by their own program, so the hybrid
     // program has no per-fragment branch; the draw order is kept.
     const ShaderProgram& p =
@@ -555,18 +697,7 @@ struct Renderer::Impl {
     const GlFunctions& g = gl();
     const PixelRect r = tile_region(t, region);
     if (is_empty(r)) return;
-    g.BindFramebuffer(GL_FRAMEBUFFER, ar_out_fbo);
-    const GLenum color0 = GL_COLOR_ATTACHMENT0;
-    g.DrawBuffers(1, &color0);
-    g.Viewport(0, 0, t.render_w, t.render_h);
-    g.Enable(GL_SCISSOR_TEST);
-    g.Scissor(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
-    g.ActiveTexture(GL_TEXTURE0);
-    g.BindTexture(GL_TEXTURE_2D, ar_color);
-    g.Enable(GL_STENCIL_TEST);
-    g.StencilMask(0x00);
-    g.StencilOp(GL_KEEP, GL_KEEP, GL_KEEP);
-    g.StencilFunc(GL_EQUAL, 1, 0xFF);
+    begin_stage2(ar_out_fbo, ar_color, t, r);
     if (!bare) {
       const ShaderProgram& m = program("ar_mask");
       m.use();
@@ -576,13 +707,7 @@ struct Renderer::Impl {
       const double min_q =
           o.lambda >= -0.5 ? o.threshold / gain - 1e-4 * std::abs(o.threshold / gain) - 1e-7 : -1.0;
       m.set("u_min_q", static_cast<float>(min_q));
-      g.ColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
-      g.Disable(GL_BLEND);
-      g.Enable(GL_DEPTH_TEST);
-      g.DepthFunc(GL_ALWAYS);
-      g.DepthMask(GL_TRUE);
-      draw_fullscreen();  // z = 0: window depth 0.5 on the marked pixels
-      g.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+      mark_pixels();
     }
     set_state_overlay();
     if (!bare) {
@@ -607,6 +732,329 @@ struct Renderer::Impl {
     g.DepthFunc(GL_LESS);
     g.Disable(GL_DEPTH_TEST);
   }
+
+  // LIC stage 1 into lic_fbo (docs/algorithms.md §14): LIC meshes by
+  // lic_stage1.frag (stencil 1), the other opaque meshes as occluders
+  // (mask 0, stencil 0), in scene order, with their own depth test.
+  struct LicDraw {
+    const GpuMesh* mesh;
+    bool occluder;
+  };
+  void lic_stage1(const std::vector<LicDraw>& draws, const Matrices& m, const Tile& t,
+                  float inv_cell, int image_w, int image_h) {
+    const GlFunctions& g = gl();
+    ensure_lic();
+    begin_stage1(lic_fbo, t, {0.0f, 0.0f, 0.0f, 0.0f});
+    const Eigen::Matrix4f mvp = Eigen::Map<const Eigen::Matrix4f>(m.projection.data()) *
+                                Eigen::Map<const Eigen::Matrix4f>(m.model_view.data());
+    const ShaderProgram& p = program("lic1");
+    const ShaderProgram& o = program("lic_occluder");
+    const ShaderProgram* current = nullptr;
+    g.ActiveTexture(GL_TEXTURE1);
+    for (const auto& d : draws) {
+      const ShaderProgram& q = d.occluder ? o : p;
+      if (&q != current) {
+        current = &q;
+        q.use();
+        set_common(q, m, t);
+        if (&q == &p) {
+          p.set_mat4("u_mvp", mvp.data());
+          p.set("u_image_size", static_cast<float>(image_w), static_cast<float>(image_h));
+          p.set("u_inv_cell", inv_cell);
+          p.set("u_field", 1);
+        }
+      }
+      if (!d.occluder) g.BindTexture(GL_TEXTURE_BUFFER, d.mesh->field_texture);
+      g.StencilFunc(GL_ALWAYS, d.occluder ? 0 : 1, 0xFF);
+      draw_mesh(*d.mesh);
+    }
+    g.BindTexture(GL_TEXTURE_BUFFER, 0);
+    g.ActiveTexture(GL_TEXTURE0);
+    g.Disable(GL_STENCIL_TEST);
+  }
+
+  // LIC stage 2 into main_color (through lic_out_fbo), scissored to
+  // `region`: as hybrid_stage2, a cheap pass first marks the pixels with a
+  // mask > 0 among the LIC pixels (stencil 1) by a depth write, then the
+  // convolution runs with depth test EQUAL on those only. Multiplied into
+  // the colour (blend DST_COLOR, ZERO), or with `value` written as is
+  // ((v, mask, 0, 1), render_lic_buffer).
+  void lic_stage2(const LicKernel& k, float strength, const Tile& t, const PixelRect& region,
+                  bool value) {
+    const GlFunctions& g = gl();
+    const PixelRect r = tile_region(t, region);
+    if (is_empty(r)) return;
+    begin_stage2(lic_out_fbo, lic_color, t, r);
+    const ShaderProgram& m = program("lic_mask");
+    m.use();
+    m.set("u_data", 0);
+    mark_pixels();
+    g.Disable(GL_STENCIL_TEST);
+    g.DepthFunc(GL_EQUAL);
+    g.DepthMask(GL_FALSE);
+    if (!value) {
+      g.Enable(GL_BLEND);
+      g.BlendFunc(GL_DST_COLOR, GL_ZERO);
+    }
+    const ShaderProgram& p = program(value ? "lic2_value" : "lic2");
+    p.use();
+    p.set("u_data", 0);
+    p.set("u_steps", k.steps);
+    p.set("u_step", k.step_px);
+    p.set("u_gain", k.gain);
+    p.set("u_strength", strength);
+    p.set_array("u_weights", k.weights);
+    draw_fullscreen();
+    g.Disable(GL_SCISSOR_TEST);
+    g.Disable(GL_BLEND);
+    g.StencilMask(0xFF);
+    g.DepthFunc(GL_LESS);
+    g.Disable(GL_DEPTH_TEST);
+  }
+  // ------------------------------------------------- Renderer::render passes
+  // One frame of a scene: what the passes share, prepared once by
+  // prepare_frame; then per tile one function per pass (render()).
+  void pass_opaque(const FrameState& F, const Tile& t) {
+    const GlFunctions& g = gl();
+    const Scene& scene = F.scene;
+    g.BindFramebuffer(GL_FRAMEBUFFER, main_fbo);
+    const GLenum color0 = GL_COLOR_ATTACHMENT0;
+    g.DrawBuffers(1, &color0);
+    g.Viewport(0, 0, t.render_w, t.render_h);
+    g.ClearColor(scene.background.r * F.bg_alpha, scene.background.g * F.bg_alpha,
+                 scene.background.b * F.bg_alpha, F.bg_alpha);
+    set_state_opaque();  // depth writes on, or Clear leaves the depth alone
+    g.ClearDepth(1.0);
+    g.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    const ShaderProgram& p = program("mesh");
+    p.use();
+    set_common(p, F.M, t);
+    for (std::size_t i = 0; i < scene.structures.size(); ++i) {
+      const Structure& s = scene.structures[i];
+      if (!opaque(s)) continue;
+      const bool fill = s.style.shading != Shading::none;
+      g.ColorMask(fill, fill, fill, fill);
+      set_shading(p, s.style, 1.0f);
+      draw_mesh(*F.gpu[i]);
+    }
+    g.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  }
+
+  // Surface LIC of the opaque structures with style.lic, multiplied into
+  // their shading (before the ghosted structures are composited over it).
+  void pass_lic(const FrameState& F, const Tile& t) {
+    if (!F.any_lic || is_empty(tile_region(t, F.lic_region))) return;
+    std::vector<LicDraw> draws;
+    for (std::size_t i = 0; i < F.scene.structures.size(); ++i) {
+      const Structure& s = F.scene.structures[i];
+      if (!opaque(s)) continue;
+      draws.push_back({F.gpu[i], !s.style.lic});
+    }
+    lic_stage1(draws, F.M, t, F.lic_inv_cell, F.camera.width, F.camera.height);
+    lic_stage2(F.lic_kernel, static_cast<float>(F.options.lic.strength), t, F.lic_region, false);
+  }
+
+  // Ghosted structures: weighted blended OIT, then composite.
+  void pass_transparent(const FrameState& F, const Tile& t) {
+    if (!F.any_transparent) return;
+    const GlFunctions& g = gl();
+    ensure_oit();
+    g.BindFramebuffer(GL_FRAMEBUFFER, oit_fbo);
+    const float zero[4] = {0, 0, 0, 0};
+    g.ClearBufferfv(GL_COLOR, 0, zero);
+    g.ClearBufferfv(GL_COLOR, 1, zero);
+    g.Enable(GL_DEPTH_TEST);
+    g.DepthMask(GL_FALSE);
+    g.Enable(GL_BLEND);
+    g.BlendFunc(GL_ONE, GL_ONE);
+    const ShaderProgram& p = program("mesh_oit");
+    p.use();
+    set_common(p, F.M, t);
+    for (std::size_t i = 0; i < F.scene.structures.size(); ++i) {
+      const Structure& s = F.scene.structures[i];
+      if (opaque(s) || s.style.shading == Shading::none || s.style.opacity <= 0.0) continue;
+      set_shading(p, s.style, static_cast<float>(s.style.opacity));
+      draw_mesh(*F.gpu[i]);
+    }
+    g.BindFramebuffer(GL_FRAMEBUFFER, overlay_fbo);
+    set_state_overlay();
+    const ShaderProgram& c = program("oit_composite");
+    c.use();
+    g.ActiveTexture(GL_TEXTURE0);
+    g.BindTexture(GL_TEXTURE_2D, accum);
+    g.ActiveTexture(GL_TEXTURE1);
+    g.BindTexture(GL_TEXTURE_2D, reveal);
+    c.set("u_accum", 0);
+    c.set("u_reveal", 1);
+    draw_fullscreen();
+    g.ActiveTexture(GL_TEXTURE0);
+  }
+
+  // Depth of every surface, for lines of ghosted structures.
+  void pass_depth_b(const FrameState& F, const Tile& t) {
+    if (!F.lines_need_depth_b) return;
+    const GlFunctions& g = gl();
+    ensure_depth_b();
+    g.BindFramebuffer(GL_READ_FRAMEBUFFER, main_fbo);
+    g.BindFramebuffer(GL_DRAW_FRAMEBUFFER, depthb_fbo);
+    g.BlitFramebuffer(0, 0, t.render_w, t.render_h, 0, 0, t.render_w, t.render_h,
+                      GL_DEPTH_BUFFER_BIT, GL_NEAREST);
+    g.BindFramebuffer(GL_FRAMEBUFFER, depthb_fbo);
+    set_state_opaque();
+    const ShaderProgram& p = program("depth");
+    p.use();
+    set_common(p, F.M, t);
+    for (std::size_t i = 0; i < F.scene.structures.size(); ++i)
+      if (!opaque(F.scene.structures[i])) draw_mesh(*F.gpu[i]);
+  }
+
+  // Hybrid apparent ridges (where the tile meets the hybrid meshes).
+  void pass_hybrid(const FrameState& F, const Tile& t) {
+    if (!F.any_hybrid || is_empty(tile_region(t, F.hybrid_region))) return;
+    std::vector<HybridDraw> draws;
+    for (std::size_t i = 0; i < F.scene.structures.size(); ++i) {
+      const Structure& s = F.scene.structures[i];
+      if (s.style.hybrid_apparent_ridges)
+        draws.push_back({F.gpu[i], hybrid_scale(*s.mesh, F.options.hybrid), false});
+      else if (opaque(s))
+        draws.push_back({F.gpu[i], 1.0f, true});
+    }
+    hybrid_stage1(draws, F.options.hybrid, F.M, t, false);
+    hybrid_stage2(F.options.hybrid, t, F.hybrid_region, false);
+  }
+
+  // Lines as quads, depth-tested against depth A (opaque) or B (ghosted).
+  void pass_lines(const FrameState& F, const Tile& t) {
+    if (F.batches.empty()) return;
+    const GlFunctions& g = gl();
+    g.BindFramebuffer(GL_FRAMEBUFFER, overlay_fbo);  // depth A is sampled, not attached
+    g.Viewport(0, 0, t.render_w, t.render_h);
+    set_state_overlay();
+    const ShaderProgram& p = program("lines");
+    p.use();
+    set_common(p, F.M, t);
+    p.set("u_image_size", static_cast<float>(F.camera.width), static_cast<float>(F.camera.height));
+    p.set("u_px_per_mm", static_cast<float>(F.M.px_per_mm));
+    p.set("u_near_far", F.M.near_plane, F.M.far_plane);
+    p.set("u_depth_tolerance", static_cast<float>(F.tolerance));
+    p.set("u_depth", 0);
+    g.ActiveTexture(GL_TEXTURE0);
+    g.BindVertexArray(line_vao);
+    for (const auto& b : F.batches) {
+      const Structure& s = F.scene.structures[b.structure];
+      const LineStyle& ls =
+          b.layer < 0 ? s.style.lines : s.polyline_layers[static_cast<std::size_t>(b.layer)].style;
+      g.BindTexture(GL_TEXTURE_2D, opaque(s) ? depth_a : depth_b);
+      const double w = ls.width * (b.wide ? ls.contour_width_factor : 1.0) * F.line_scale;
+      p.set("u_width", static_cast<float>(w));
+      p.set("u_taper", static_cast<float>(ls.taper));
+      p.set("u_width_by_strength", ls.width_by_strength ? 1 : 0);
+      p.set("u_line_color", ls.color.r, ls.color.g, ls.color.b, ls.color.a);
+      p.set("u_fade_by_strength", ls.fade_by_strength ? 1 : 0);
+      p.set("u_hidden_mode", static_cast<int>(ls.hidden));
+      p.set("u_hidden_opacity", static_cast<float>(ls.hidden_opacity));
+      p.set("u_dash_px", static_cast<float>(ls.dash * F.line_scale));
+      g.DrawElements(GL_TRIANGLES, b.count, GL_UNSIGNED_INT,
+                     reinterpret_cast<const void*>(std::size_t(b.first) * sizeof(std::uint32_t)));
+    }
+  }
+
+  static bool opaque(const Structure& s) { return s.style.opacity >= 0.999; }
+
+  void set_shading(const ShaderProgram& p, const StructureStyle& st, float alpha) {
+    p.set("u_shading", st.shading == Shading::lambert ? 1 : st.shading == Shading::toon ? 2 : 0);
+    p.set("u_color", st.color.r, st.color.g, st.color.b, alpha);
+    p.set("u_ambient", static_cast<float>(st.ambient));
+    p.set("u_toon_levels", st.toon_levels);
+  }
+
+  // The line geometry: one strip per polyline, batched per structure and
+  // style: the polyline layers first (under), then the feature lines per
+  // width class; uploaded into line_vbo/line_ebo.
+  std::vector<LineBatch> upload_lines(const Scene& scene) {
+    const GlFunctions& g = gl();
+    std::vector<float> line_vertices;
+    std::vector<std::uint32_t> line_indices;
+    std::vector<LineBatch> batches;
+    // Appends polyline `n` vertices long; position(i) and strength(i) give its vertices.
+    auto append_polyline = [&](std::size_t n, bool closed, auto position, auto strength) {
+      if (n < 2) return;
+      closed = closed && n >= 3;
+      std::vector<double> arc(n, 0.0);
+      for (std::size_t i = 1; i < n; ++i)
+        arc[i] = arc[i - 1] + (position(i) - position(i - 1)).norm();
+      const double total = closed ? 0.0 : arc.back();
+      const auto base = static_cast<std::uint32_t>(line_vertices.size() / 13);
+      for (std::size_t i = 0; i < n; ++i) {
+        const Vec3 p = position(i);
+        const Vec3 prev = i > 0 ? position(i - 1) : (closed ? position(n - 1) : p);
+        const Vec3 next = i + 1 < n ? position(i + 1) : (closed ? position(0) : p);
+        for (float side : {-1.0f, 1.0f}) {
+          for (const Vec3* v : {&p, &prev, &next})
+            for (int c = 0; c < 3; ++c) line_vertices.push_back(static_cast<float>((*v)[c]));
+          line_vertices.push_back(side);
+          line_vertices.push_back(strength(i));
+          line_vertices.push_back(static_cast<float>(arc[i]));
+          line_vertices.push_back(static_cast<float>(total));
+        }
+      }
+      auto segment = [&](std::uint32_t a, std::uint32_t b) {
+        const std::uint32_t a0 = base + 2 * a, a1 = a0 + 1, b0 = base + 2 * b, b1 = b0 + 1;
+        line_indices.insert(line_indices.end(), {a0, a1, b0, a1, b1, b0});
+      };
+      for (std::size_t i = 0; i + 1 < n; ++i)
+        segment(static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(i + 1));
+      if (closed) segment(static_cast<std::uint32_t>(n - 1), 0);
+    };
+    auto close_batch = [&](LineBatch batch) {
+      batch.count = static_cast<GLsizei>(line_indices.size()) - batch.first;
+      if (batch.count > 0) batches.push_back(batch);
+    };
+    for (std::size_t si = 0; si < scene.structures.size(); ++si) {
+      const Structure& s = scene.structures[si];
+      for (std::size_t li = 0; li < s.polyline_layers.size(); ++li) {
+        const LineBatch batch{si, false, static_cast<int>(li),
+                              static_cast<GLsizei>(line_indices.size()), 0};
+        for (const std::vector<Vec3>& pl : s.polyline_layers[li].polylines)
+          append_polyline(
+              pl.size(), false, [&](std::size_t i) { return pl[i]; },
+              [](std::size_t) { return 1.0f; });
+        close_batch(batch);
+      }
+      for (int wide = 0; wide < 2; ++wide) {
+        const LineBatch batch{si, wide == 1, -1, static_cast<GLsizei>(line_indices.size()), 0};
+        for (const Polyline& pl : s.lines.polylines) {
+          if (is_wide_family(pl.family) != (wide == 1)) continue;
+          if (!s.style.families.empty() &&
+              std::find(s.style.families.begin(), s.style.families.end(), pl.family) ==
+                  s.style.families.end())
+            continue;
+          append_polyline(
+              pl.vertices.size(), pl.closed, [&](std::size_t i) { return pl.vertices[i].position; },
+              [&](std::size_t i) { return pl.vertices[i].strength; });
+        }
+        close_batch(batch);
+      }
+    }
+    if (!batches.empty()) {
+      g.BindVertexArray(line_vao);
+      g.BindBuffer(GL_ARRAY_BUFFER, line_vbo);
+      g.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(line_vertices.size() * sizeof(float)),
+                   line_vertices.data(), GL_DYNAMIC_DRAW);
+      const GLsizei stride = 13 * sizeof(float);
+      for (GLuint loc = 0; loc < 4; ++loc) {
+        g.EnableVertexAttribArray(loc);
+        g.VertexAttribPointer(loc, loc == 3 ? 4 : 3, GL_FLOAT, GL_FALSE, stride,
+                              reinterpret_cast<const void*>(std::size_t(loc) * 3 * sizeof(float)));
+      }
+      g.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, line_ebo);
+      g.BufferData(GL_ELEMENT_ARRAY_BUFFER,
+                   static_cast<GLsizeiptr>(line_indices.size() * sizeof(std::uint32_t)),
+                   line_indices.data(), GL_DYNAMIC_DRAW);
+      g.BindVertexArray(0);
+    }
+    return batches;
+  }
 };
 
 Renderer::Renderer(std::unique_ptr<GlContext> context) {
@@ -620,30 +1068,6 @@ GlContext& Renderer::context() {
   return *impl_->ctx;
 }
 
-namespace {
-
-void check_size(const Camera& camera) {
-  validate_camera(camera, "camera");
-  if (camera.width > kMaxImageSide || camera.height > kMaxImageSide)
-    throw InputError("image size " + std::to_string(camera.width) + "x" +
-                     std::to_string(camera.height) + " is too large (at most " +
-                     std::to_string(kMaxImageSide) + " pixels a side)");
-}
-
-float hybrid_scale(const RenderMesh& mesh, const HybridOptions& o) {
-  double tau = 0.0;
-  if (o.tau) {
-    tau = *o.tau;
-  } else {
-    const double fs = mesh.feature_size > 0.0 ? mesh.feature_size : mesh.mean_edge_length;
-    tau = default_tau(fs);
-  }
-  if (!std::isfinite(tau)) throw InputError("hybrid apparent ridges: tau must be finite");
-  return static_cast<float>(std::exp2(tau));
-}
-
-}  // namespace
-
 Image Renderer::render(const Scene& scene, const Camera& camera, const RenderOptions& options) {
   check_size(camera);
   if (scene.structures.empty()) throw InputError("the scene has no structures to draw");
@@ -652,7 +1076,6 @@ Image Renderer::render(const Scene& scene, const Camera& camera, const RenderOpt
       throw InputError("structure '" + s.name + "' has no mesh to draw");
   Impl& I = *impl_;
   I.ctx->make_current();
-  const GlFunctions& g = I.gl();
 
   // Scene bounding sphere (enclosing every structure's sphere).
   Vec3 center = scene.structures.front().mesh->center;
@@ -686,274 +1109,84 @@ Image Renderer::render(const Scene& scene, const Camera& camera, const RenderOpt
       for (const auto& pl : layer.polylines)
         for (const Vec3& p : pl) enclose(p);
   }
-  const Matrices M = camera_matrices(camera, center, radius);
+  FrameState F(scene, camera, options);
+  F.M = camera_matrices(camera, center, radius);
 
-  double tolerance = options.depth_tolerance;
-  if (!(tolerance > 0.0)) {
+  F.tolerance = options.depth_tolerance;
+  if (!(F.tolerance > 0.0)) {
     double edge = 0.0;
     for (const auto& s : scene.structures) edge = std::max(edge, s.mesh->mean_edge_length);
-    tolerance = edge + 0.002 * radius;
+    F.tolerance = edge + 0.002 * radius;
   }
-  const double line_scale =
-      options.scale_lines_with_image
-          ? std::min(camera.width, camera.height) / std::max(1.0, options.line_reference_size)
-          : 1.0;
+  F.line_scale = options.scale_lines_with_image ? std::min(camera.width, camera.height) /
+                                                      std::max(1.0, options.line_reference_size)
+                                                : 1.0;
 
   // Upload meshes; classify structures.
-  std::vector<const GpuMesh*> gpu;
-  bool any_transparent = false, any_hybrid = false;
+  validate(options.lic, "render options: lic");
+  double lic_radius = 0.0;
   for (const auto& s : scene.structures) {
-    gpu.push_back(&I.gpu_mesh(s.mesh));
-    if (s.style.opacity < 0.999) any_transparent = true;
+    F.gpu.push_back(&I.gpu_mesh(s.mesh));
+    if (s.style.opacity < 0.999) F.any_transparent = true;
     if (s.style.hybrid_apparent_ridges) {
       if (!s.mesh->has_curvature())
         throw InputError("structure '" + s.name +
                          "': hybrid apparent ridges need per-vertex curvature");
-      any_hybrid = true;
+      F.any_hybrid = true;
+    }
+    if (s.style.lic && Impl::opaque(s)) {
+      if (!s.mesh->has_lic_field())
+        throw InputError("structure '" + s.name +
+                         "': LIC needs the mesh's direction field (RenderMesh::lic_field)");
+      F.any_lic = true;
+      lic_radius = std::max(lic_radius, s.mesh->radius);
     }
   }
-  auto opaque = [&](const Structure& s) { return s.style.opacity >= 0.999; };
+  F.batches = I.upload_lines(scene);
+  for (const auto& b : F.batches)
+    if (!Impl::opaque(scene.structures[b.structure])) F.lines_need_depth_b = true;
 
-  // Line geometry: one strip per polyline, batched per structure and style:
-  // the polyline layers first (under), then the feature lines per width class.
-  std::vector<float> line_vertices;
-  std::vector<std::uint32_t> line_indices;
-  std::vector<LineBatch> batches;
-  // Appends polyline `n` vertices long; position(i) and strength(i) give its vertices.
-  auto append_polyline = [&](std::size_t n, bool closed, auto position, auto strength) {
-    if (n < 2) return;
-    closed = closed && n >= 3;
-    std::vector<double> arc(n, 0.0);
-    for (std::size_t i = 1; i < n; ++i)
-      arc[i] = arc[i - 1] + (position(i) - position(i - 1)).norm();
-    const double total = closed ? 0.0 : arc.back();
-    const auto base = static_cast<std::uint32_t>(line_vertices.size() / 13);
-    for (std::size_t i = 0; i < n; ++i) {
-      const Vec3 p = position(i);
-      const Vec3 prev = i > 0 ? position(i - 1) : (closed ? position(n - 1) : p);
-      const Vec3 next = i + 1 < n ? position(i + 1) : (closed ? position(0) : p);
-      for (float side : {-1.0f, 1.0f}) {
-        for (const Vec3* v : {&p, &prev, &next})
-          for (int c = 0; c < 3; ++c) line_vertices.push_back(static_cast<float>((*v)[c]));
-        line_vertices.push_back(side);
-        line_vertices.push_back(strength(i));
-        line_vertices.push_back(static_cast<float>(arc[i]));
-        line_vertices.push_back(static_cast<float>(total));
-      }
-    }
-    auto segment = [&](std::uint32_t a, std::uint32_t b) {
-      const std::uint32_t a0 = base + 2 * a, a1 = a0 + 1, b0 = base + 2 * b, b1 = b0 + 1;
-      line_indices.insert(line_indices.end(), {a0, a1, b0, a1, b1, b0});
-    };
-    for (std::size_t i = 0; i + 1 < n; ++i)
-      segment(static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(i + 1));
-    if (closed) segment(static_cast<std::uint32_t>(n - 1), 0);
-  };
-  auto close_batch = [&](LineBatch batch) {
-    batch.count = static_cast<GLsizei>(line_indices.size()) - batch.first;
-    if (batch.count > 0) batches.push_back(batch);
-  };
-  for (std::size_t si = 0; si < scene.structures.size(); ++si) {
-    const Structure& s = scene.structures[si];
-    for (std::size_t li = 0; li < s.polyline_layers.size(); ++li) {
-      const LineBatch batch{si, false, static_cast<int>(li),
-                            static_cast<GLsizei>(line_indices.size()), 0};
-      for (const std::vector<Vec3>& pl : s.polyline_layers[li].polylines)
-        append_polyline(
-            pl.size(), false, [&](std::size_t i) { return pl[i]; },
-            [](std::size_t) { return 1.0f; });
-      close_batch(batch);
-    }
-    for (int wide = 0; wide < 2; ++wide) {
-      const LineBatch batch{si, wide == 1, -1, static_cast<GLsizei>(line_indices.size()), 0};
-      for (const Polyline& pl : s.lines.polylines) {
-        if (is_wide_family(pl.family) != (wide == 1)) continue;
-        if (!s.style.families.empty() && std::find(s.style.families.begin(), s.style.families.end(),
-                                                   pl.family) == s.style.families.end())
-          continue;
-        append_polyline(
-            pl.vertices.size(), pl.closed, [&](std::size_t i) { return pl.vertices[i].position; },
-            [&](std::size_t i) { return pl.vertices[i].strength; });
-      }
-      close_batch(batch);
-    }
+  // Tiles: with LIC, margins as wide as the kernel reaches.
+  int margin = kTileMargin;
+  if (F.any_lic) {
+    RenderMesh probe;
+    probe.radius = lic_radius;
+    const double cell = lic_noise_cell(probe, options.lic);
+    F.lic_inv_cell = static_cast<float>(1.0 / cell);
+    F.lic_kernel = lic_kernel(options.lic, cell, F.M.px_per_mm);
+    margin = std::max(
+        margin, static_cast<int>(std::ceil(F.lic_kernel.steps * double(F.lic_kernel.step_px))) + 2);
   }
-  bool lines_need_depth_b = false;
-  for (const auto& b : batches)
-    if (!opaque(scene.structures[b.structure])) lines_need_depth_b = true;
-  if (!batches.empty()) {
-    g.BindVertexArray(I.line_vao);
-    g.BindBuffer(GL_ARRAY_BUFFER, I.line_vbo);
-    g.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(line_vertices.size() * sizeof(float)),
-                 line_vertices.data(), GL_DYNAMIC_DRAW);
-    const GLsizei stride = 13 * sizeof(float);
-    for (GLuint loc = 0; loc < 4; ++loc) {
-      g.EnableVertexAttribArray(loc);
-      g.VertexAttribPointer(loc, loc == 3 ? 4 : 3, GL_FLOAT, GL_FALSE, stride,
-                            reinterpret_cast<const void*>(std::size_t(loc) * 3 * sizeof(float)));
-    }
-    g.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, I.line_ebo);
-    g.BufferData(GL_ELEMENT_ARRAY_BUFFER,
-                 static_cast<GLsizeiptr>(line_indices.size() * sizeof(std::uint32_t)),
-                 line_indices.data(), GL_DYNAMIC_DRAW);
-    g.BindVertexArray(0);
-  }
+  const int inner = I.tile_inner_size(options.max_tile_size, margin);
+  const auto tiles = make_tiles(camera.width, camera.height, inner, margin);
 
-  const int inner = I.tile_inner_size(options.max_tile_size);
-  const auto tiles = make_tiles(camera.width, camera.height, inner);
-  int max_w = 0, max_h = 0;
-  for (const auto& t : tiles) {
-    max_w = std::max(max_w, t.render_w);
-    max_h = std::max(max_h, t.render_h);
-  }
-  I.ensure_main(max_w, max_h);
+  I.ensure_main_for(tiles);
 
-  PixelRect hybrid_region;
-  if (any_hybrid) {
-    std::vector<const RenderMesh*> hybrid_meshes;
+  auto region_of = [&](auto&& selected) {
+    std::vector<const RenderMesh*> meshes;
     for (const auto& s : scene.structures)
-      if (s.style.hybrid_apparent_ridges) hybrid_meshes.push_back(s.mesh.get());
-    hybrid_region = projected_rect(M, hybrid_meshes, camera.width, camera.height);
-  }
+      if (selected(s)) meshes.push_back(s.mesh.get());
+    return projected_rect(F.M, meshes, camera.width, camera.height);
+  };
+  if (F.any_hybrid)
+    F.hybrid_region = region_of([](const Structure& s) { return s.style.hybrid_apparent_ridges; });
+  if (F.any_lic)
+    F.lic_region = region_of([](const Structure& s) { return s.style.lic && Impl::opaque(s); });
 
-  const float bg_alpha = options.transparent_background ? 0.0f : scene.background.a;
+  F.bg_alpha = options.transparent_background ? 0.0f : scene.background.a;
   Image image(camera.width, camera.height);
   for (const Tile& t : tiles) {
-    // 1. Opaque structures.
-    g.BindFramebuffer(GL_FRAMEBUFFER, I.main_fbo);
-    const GLenum color0 = GL_COLOR_ATTACHMENT0;
-    g.DrawBuffers(1, &color0);
-    g.Viewport(0, 0, t.render_w, t.render_h);
-    g.ClearColor(scene.background.r * bg_alpha, scene.background.g * bg_alpha,
-                 scene.background.b * bg_alpha, bg_alpha);
-    I.set_state_opaque();  // depth writes on, or Clear leaves the depth alone
-    g.ClearDepth(1.0);
-    g.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-    {
-      const ShaderProgram& p = I.program("mesh");
-      p.use();
-      I.set_common(p, M, t);
-      for (std::size_t i = 0; i < scene.structures.size(); ++i) {
-        const Structure& s = scene.structures[i];
-        if (!opaque(s)) continue;
-        const bool fill = s.style.shading != Shading::none;
-        g.ColorMask(fill, fill, fill, fill);
-        p.set("u_shading", s.style.shading == Shading::lambert ? 1
-                           : s.style.shading == Shading::toon  ? 2
-                                                               : 0);
-        p.set("u_color", s.style.color.r, s.style.color.g, s.style.color.b, 1.0f);
-        p.set("u_ambient", static_cast<float>(s.style.ambient));
-        p.set("u_toon_levels", s.style.toon_levels);
-        I.draw_mesh(*gpu[i]);
-      }
-      g.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-    }
-    // 2. Ghosted structures: weighted blended OIT, then composite.
-    if (any_transparent) {
-      I.ensure_oit();
-      g.BindFramebuffer(GL_FRAMEBUFFER, I.oit_fbo);
-      const float zero[4] = {0, 0, 0, 0};
-      g.ClearBufferfv(GL_COLOR, 0, zero);
-      g.ClearBufferfv(GL_COLOR, 1, zero);
-      g.Enable(GL_DEPTH_TEST);
-      g.DepthMask(GL_FALSE);
-      g.Enable(GL_BLEND);
-      g.BlendFunc(GL_ONE, GL_ONE);
-      const ShaderProgram& p = I.program("mesh_oit");
-      p.use();
-      I.set_common(p, M, t);
-      for (std::size_t i = 0; i < scene.structures.size(); ++i) {
-        const Structure& s = scene.structures[i];
-        if (opaque(s) || s.style.shading == Shading::none || s.style.opacity <= 0.0) continue;
-        p.set("u_shading", s.style.shading == Shading::lambert ? 1
-                           : s.style.shading == Shading::toon  ? 2
-                                                               : 0);
-        p.set("u_color", s.style.color.r, s.style.color.g, s.style.color.b,
-              static_cast<float>(s.style.opacity));
-        p.set("u_ambient", static_cast<float>(s.style.ambient));
-        p.set("u_toon_levels", s.style.toon_levels);
-        I.draw_mesh(*gpu[i]);
-      }
-      g.BindFramebuffer(GL_FRAMEBUFFER, I.overlay_fbo);
-      I.set_state_overlay();
-      const ShaderProgram& c = I.program("oit_composite");
-      c.use();
-      g.ActiveTexture(GL_TEXTURE0);
-      g.BindTexture(GL_TEXTURE_2D, I.accum);
-      g.ActiveTexture(GL_TEXTURE1);
-      g.BindTexture(GL_TEXTURE_2D, I.reveal);
-      c.set("u_accum", 0);
-      c.set("u_reveal", 1);
-      I.draw_fullscreen();
-      g.ActiveTexture(GL_TEXTURE0);
-    }
-    // 3. Depth of every surface, for lines of ghosted structures.
-    if (lines_need_depth_b) {
-      I.ensure_depth_b();
-      g.BindFramebuffer(GL_READ_FRAMEBUFFER, I.main_fbo);
-      g.BindFramebuffer(GL_DRAW_FRAMEBUFFER, I.depthb_fbo);
-      g.BlitFramebuffer(0, 0, t.render_w, t.render_h, 0, 0, t.render_w, t.render_h,
-                        GL_DEPTH_BUFFER_BIT, GL_NEAREST);
-      g.BindFramebuffer(GL_FRAMEBUFFER, I.depthb_fbo);
-      I.set_state_opaque();
-      const ShaderProgram& p = I.program("depth");
-      p.use();
-      I.set_common(p, M, t);
-      for (std::size_t i = 0; i < scene.structures.size(); ++i)
-        if (!opaque(scene.structures[i])) I.draw_mesh(*gpu[i]);
-    }
-    // 4. Hybrid apparent ridges (where the tile meets the hybrid meshes).
-    if (any_hybrid && !is_empty(tile_region(t, hybrid_region))) {
-      std::vector<Impl::HybridDraw> draws;
-      for (std::size_t i = 0; i < scene.structures.size(); ++i) {
-        const Structure& s = scene.structures[i];
-        if (s.style.hybrid_apparent_ridges)
-          draws.push_back({gpu[i], hybrid_scale(*s.mesh, options.hybrid), false});
-        else if (opaque(s))
-          draws.push_back({gpu[i], 1.0f, true});
-      }
-      I.hybrid_stage1(draws, options.hybrid, M, t, false);
-      I.hybrid_stage2(options.hybrid, t, hybrid_region, false);
-    }
-    // 5. Lines.
-    if (!batches.empty()) {
-      g.BindFramebuffer(GL_FRAMEBUFFER, I.overlay_fbo);  // depth A is sampled, not attached
-      g.Viewport(0, 0, t.render_w, t.render_h);
-      I.set_state_overlay();
-      const ShaderProgram& p = I.program("lines");
-      p.use();
-      I.set_common(p, M, t);
-      p.set("u_image_size", static_cast<float>(camera.width), static_cast<float>(camera.height));
-      p.set("u_px_per_mm", static_cast<float>(M.px_per_mm));
-      p.set("u_near_far", M.near_plane, M.far_plane);
-      p.set("u_depth_tolerance", static_cast<float>(tolerance));
-      p.set("u_depth", 0);
-      g.ActiveTexture(GL_TEXTURE0);
-      g.BindVertexArray(I.line_vao);
-      for (const auto& b : batches) {
-        const Structure& s = scene.structures[b.structure];
-        const LineStyle& ls = b.layer < 0
-                                  ? s.style.lines
-                                  : s.polyline_layers[static_cast<std::size_t>(b.layer)].style;
-        g.BindTexture(GL_TEXTURE_2D, opaque(s) ? I.depth_a : I.depth_b);
-        const double w = ls.width * (b.wide ? ls.contour_width_factor : 1.0) * line_scale;
-        p.set("u_width", static_cast<float>(w));
-        p.set("u_taper", static_cast<float>(ls.taper));
-        p.set("u_width_by_strength", ls.width_by_strength ? 1 : 0);
-        p.set("u_line_color", ls.color.r, ls.color.g, ls.color.b, ls.color.a);
-        p.set("u_fade_by_strength", ls.fade_by_strength ? 1 : 0);
-        p.set("u_hidden_mode", static_cast<int>(ls.hidden));
-        p.set("u_hidden_opacity", static_cast<float>(ls.hidden_opacity));
-        p.set("u_dash_px", static_cast<float>(ls.dash * line_scale));
-        g.DrawElements(GL_TRIANGLES, b.count, GL_UNSIGNED_INT,
-                       reinterpret_cast<const void*>(std::size_t(b.first) * sizeof(std::uint32_t)));
-      }
-    }
-    check_gl_error(g, "drawing the scene");
+    I.pass_opaque(F, t);
+    I.pass_lic(F, t);
+    I.pass_transparent(F, t);
+    I.pass_depth_b(F, t);
+    I.pass_hybrid(F, t);
+    I.pass_lines(F, t);
+    check_gl_error(I.gl(), "drawing the scene");
     I.read_tile(I.main_fbo, t, camera.height, image, true);
   }
-  g.BindVertexArray(0);
-  g.BindFramebuffer(GL_FRAMEBUFFER, 0);
+  I.gl().BindVertexArray(0);
+  I.gl().BindFramebuffer(GL_FRAMEBUFFER, 0);
   return image;
 }
 
@@ -971,12 +1204,7 @@ Image Renderer::render_hybrid(const std::shared_ptr<const RenderMesh>& mesh, con
   const float scale = hybrid_scale(*mesh, options);
   const PixelRect region = projected_rect(M, {mesh.get()}, camera.width, camera.height);
   const auto tiles = make_tiles(camera.width, camera.height, I.tile_inner_size(0));
-  int max_w = 0, max_h = 0;
-  for (const auto& t : tiles) {
-    max_w = std::max(max_w, t.render_w);
-    max_h = std::max(max_h, t.render_h);
-  }
-  I.ensure_main(max_w, max_h);
+  I.ensure_main_for(tiles);
   Image image(camera.width, camera.height);
   GLuint queries[2] = {0, 0};
   if (profile) g.GenQueries(2, queries);
@@ -1037,18 +1265,49 @@ Image Renderer::render_hybrid_buffer(const std::shared_ptr<const RenderMesh>& me
   const Matrices M = camera_matrices(camera, mesh->center, mesh->radius);
   const GpuMesh& gm = I.gpu_mesh(mesh);
   const auto tiles = make_tiles(camera.width, camera.height, I.tile_inner_size(0));
-  int max_w = 0, max_h = 0;
-  for (const auto& t : tiles) {
-    max_w = std::max(max_w, t.render_w);
-    max_h = std::max(max_h, t.render_h);
-  }
-  I.ensure_main(max_w, max_h);
+  I.ensure_main_for(tiles);
   Image image(camera.width, camera.height);
   for (const Tile& t : tiles) {
     I.hybrid_stage1({{&gm, hybrid_scale(*mesh, options), false}}, options, M, t, false);
     I.read_tile(I.ar_fbo, t, camera.height, image, false);
   }
   I.gl().BindFramebuffer(GL_FRAMEBUFFER, 0);
+  return image;
+}
+
+Image Renderer::render_lic_buffer(const std::shared_ptr<const RenderMesh>& mesh,
+                                  const Camera& camera, const LicOptions& options) {
+  check_size(camera);
+  validate(options);
+  if (!mesh || !mesh->has_lic_field())
+    throw InputError("LIC needs a mesh with its direction field (RenderMesh::lic_field)");
+  Impl& I = *impl_;
+  I.ctx->make_current();
+  const GlFunctions& g = I.gl();
+  const Matrices M = camera_matrices(camera, mesh->center, mesh->radius);
+  const GpuMesh& gm = I.gpu_mesh(mesh);
+  const double cell = lic_noise_cell(*mesh, options);
+  const LicKernel kernel = lic_kernel(options, cell, M.px_per_mm);
+  const int margin =
+      std::max(kTileMargin, static_cast<int>(std::ceil(kernel.steps * double(kernel.step_px))) + 2);
+  const auto tiles = make_tiles(camera.width, camera.height, I.tile_inner_size(0, margin), margin);
+  I.ensure_main_for(tiles);
+  const PixelRect region = projected_rect(M, {mesh.get()}, camera.width, camera.height);
+  Image image(camera.width, camera.height);
+  for (const Tile& t : tiles) {
+    I.lic_stage1({{&gm, false}}, M, t, static_cast<float>(1.0 / cell), camera.width, camera.height);
+    g.BindFramebuffer(GL_FRAMEBUFFER, I.main_fbo);
+    const GLenum color0 = GL_COLOR_ATTACHMENT0;
+    g.DrawBuffers(1, &color0);
+    g.Viewport(0, 0, t.render_w, t.render_h);
+    g.ClearColor(0.0f, 0.0f, 0.0f, 0.0f);
+    g.Clear(GL_COLOR_BUFFER_BIT);
+    I.lic_stage2(kernel, static_cast<float>(options.strength), t, region, true);
+    check_gl_error(g, "drawing the LIC buffer");
+    I.read_tile(I.main_fbo, t, camera.height, image, false);
+  }
+  g.BindVertexArray(0);
+  g.BindFramebuffer(GL_FRAMEBUFFER, 0);
   return image;
 }
 

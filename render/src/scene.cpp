@@ -138,14 +138,15 @@ T choice(const nlohmann::json& j, const char* key, Parse parse,
                    did_you_mean(v, choices) + " (use " + list + ")");
 }
 
-const std::vector<std::string> kSceneKeys = {"background", "transparent", "camera",    "view",
-                                             "frame",      "structures",  "annotation"};
+const std::vector<std::string> kSceneKeys = {"background", "transparent", "camera",     "view",
+                                             "frame",      "structures",  "annotation", "lic"};
 const std::vector<std::string> kAnnotationKeys = {"labels", "legend", "scale_bar", "orientation",
                                                   "font_size"};
+const std::vector<std::string> kLicKeys = {"kernel_length", "noise_scale", "strength"};
 const std::vector<std::string> kStructureKeys = {
-    "name",    "mesh",    "role",        "space",  "shading",    "color",
-    "opacity", "ambient", "toon_levels", "lines",  "line_color", "line_width",
-    "taper",   "fade",    "hidden",      "hybrid", "smooth",     "label"};
+    "name",    "mesh",        "role",   "space",      "shading",    "color", "opacity",
+    "ambient", "toon_levels", "lines",  "line_color", "line_width", "taper", "fade",
+    "hidden",  "hybrid",      "smooth", "lic",        "label"};
 const std::vector<std::string> kCameraKeys = {"eye",   "center", "up",   "fov_deg", "projection",
                                               "width", "height", "near", "far"};
 const std::vector<std::string> kViews = {"anterior", "posterior", "left",
@@ -353,6 +354,17 @@ SceneSpec scene_spec_from_json(const nlohmann::json& j, const std::filesystem::p
       if (a.contains("font_size"))
         an.font_size = number(a, "font_size", 4.0, 200.0, what, "annotation");
     }
+    if (j.contains("lic")) {
+      if (!j["lic"].is_object())
+        throw InputError(what + ": lic must be an object {kernel_length, noise_scale, strength}");
+      check_keys(j["lic"], kLicKeys, what, "lic");
+      const auto& l = j["lic"];
+      if (l.contains("kernel_length"))
+        spec.lic.kernel_length = number(l, "kernel_length", 1e-3, 64.0, what, "lic");
+      if (l.contains("noise_scale"))
+        spec.lic.noise_scale = number(l, "noise_scale", 0.0, 1e6, what, "lic");
+      if (l.contains("strength")) spec.lic.strength = number(l, "strength", 0.0, 1.0, what, "lic");
+    }
     if (!j.contains("structures") || !j["structures"].is_array() || j["structures"].empty())
       throw InputError(what + ": 'structures' must be a non-empty array");
     std::vector<std::string> family_names;
@@ -415,6 +427,7 @@ SceneSpec scene_spec_from_json(const nlohmann::json& j, const std::filesystem::p
         st.style.lines.hidden = choice<HiddenLines>(s, "hidden", parse_hidden_lines,
                                                     {"omit", "dashed", "show"}, what, path);
       if (s.contains("hybrid")) st.style.hybrid_apparent_ridges = boolean(s, "hybrid", what, path);
+      if (s.contains("lic")) st.style.lic = boolean(s, "lic", what, path);
       if (s.contains("smooth"))
         st.style.smooth = static_cast<int>(number(s, "smooth", 0, 1000, what, path));
       if (s.contains("label")) {
@@ -454,6 +467,11 @@ nlohmann::json scene_spec_to_json(const SceneSpec& spec) {
                        {"scale_bar", spec.annotation.scale_bar},
                        {"orientation", spec.annotation.orientation},
                        {"font_size", spec.annotation.font_size}};
+  if (std::any_of(spec.structures.begin(), spec.structures.end(),
+                  [](const StructureSpec& s) { return s.style.lic; }))
+    j["lic"] = {{"kernel_length", spec.lic.kernel_length},
+                {"noise_scale", spec.lic.noise_scale},
+                {"strength", spec.lic.strength}};
   nlohmann::json list = nlohmann::json::array();
   for (const auto& s : spec.structures) {
     nlohmann::json o;
@@ -475,6 +493,7 @@ nlohmann::json scene_spec_to_json(const SceneSpec& spec) {
     o["fade"] = s.style.lines.fade_by_strength;
     o["hidden"] = to_string(s.style.lines.hidden);
     o["hybrid"] = s.style.hybrid_apparent_ridges;
+    if (s.style.lic) o["lic"] = true;
     if (s.style.smooth > 0) o["smooth"] = s.style.smooth;
     if (!s.show_label)
       o["label"] = false;

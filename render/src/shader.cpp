@@ -175,5 +175,9 @@ void ShaderProgram::set_mat3(const char* name, const float* m) const {
 void ShaderProgram::set_mat4(const char* name, const float* m) const {
   gl_->UniformMatrix4fv(uniform(name), 1, GL_FALSE, m);
 }
+void ShaderProgram::set_array(const char* name, const std::vector<float>& values) const {
+  if (!values.empty())
+    gl_->Uniform1fv(uniform(name), static_cast<GLsizei>(values.size()), values.data());
+}
 
 }  // namespace fabrica::render

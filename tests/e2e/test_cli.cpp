@@ -1352,6 +1352,48 @@ TEST(Render, SmoothFlagAndSceneKey) {
   }
 }
 
+// Surface LIC (issue 21, item 2): --lic, its parameters and the scene keys;
+// bad values exit 2 with a one-line message naming the option or key.
+TEST(Render, LicFlagAndSceneKeys) {
+  if (!has_command("render")) GTEST_SKIP() << "no render command in this build";
+  const fs::path dir = work_dir();
+  const Outcome r =
+      run_fabrica({"render", aneurysm().string(), "-o", (dir / "a.png").string(), "--size",
+                   "128x128", "--lic", "--lic-length", "6", "--lic-strength", "0.5", "--save-scene",
+                   (dir / "saved.json").string(), "-q"});
+  if (r.code == 4) GTEST_SKIP() << "no headless GL: " << r.err;
+  ASSERT_EQ(r.code, 0) << describe(r);
+  const auto saved = nlohmann::json::parse(read_text(dir / "saved.json"));
+  EXPECT_TRUE(saved.at("structures").at(0).at("lic").get<bool>());
+  EXPECT_EQ(saved.at("lic").at("kernel_length").get<double>(), 6.0);
+  EXPECT_EQ(saved.at("lic").at("strength").get<double>(), 0.5);
+  const Outcome again =
+      run_fabrica({"render", (dir / "saved.json").string(), "-o", (dir / "b.png").string(), "-q"});
+  ASSERT_EQ(again.code, 0) << describe(again);
+  EXPECT_EQ(read_text(dir / "a.png"), read_text(dir / "b.png")) << "the saved scene re-renders";
+  write_bytes(dir / "bad.json", "{\"lic\": {\"kernel_lenght\": 4}, \"structures\": [{\"mesh\": \"" +
+                                    aneurysm().generic_string() + "\", \"lic\": true}]}");
+  const std::vector<std::pair<std::vector<std::string>, std::string>> bad_cases = {
+      {{"--lic", "--lic-strength", "2"}, "--lic-strength"},
+      {{"--lic", "--lic-length", "0"}, "--lic-length"},
+      {{"--lic", "--lic-noise-scale", "-1"}, "--lic-noise-scale"},
+      {{"--lic-length", "4"}, "need --lic"},
+      {{"--lic-lenght", "4"}, "--lic-length"}};
+  for (const auto& [extra, needle] : bad_cases) {
+    std::vector<std::string> args = {"render", aneurysm().string(), "-o", (dir / "c.png").string()};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const Outcome bad = run_fabrica(args);
+    EXPECT_EQ(bad.code, 2) << describe(bad);
+    EXPECT_TRUE(one_line(bad.err)) << describe(bad);
+    EXPECT_NE(bad.err.find(needle), std::string::npos) << describe(bad);
+  }
+  const Outcome key =
+      run_fabrica({"render", (dir / "bad.json").string(), "-o", (dir / "c.png").string()});
+  EXPECT_EQ(key.code, 2) << describe(key);
+  EXPECT_NE(key.err.find("kernel_length"), std::string::npos) << describe(key);
+  EXPECT_FALSE(fs::exists(dir / "c.png"));
+}
+
 TEST(Pipeline, ExtractedSurfaceThroughEveryMeshCommand) {
   if (!has_command("extract")) GTEST_SKIP() << "no extract command in this build";
   const fs::path dir = work_dir();

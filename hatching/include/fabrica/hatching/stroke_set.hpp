@@ -29,15 +29,19 @@ enum class StrokeEnd : std::uint8_t {
   proximity,      ///< too close to an earlier stroke or an intensity ridge (proximity grid)
   outside_image,  ///< left the image
   step_limit,     ///< safety limit on faces crossed (should not happen)
+  region,         ///< ConFIS: left the contour margin and the feature regions
 };
-inline constexpr int kStrokeEndCount = 9;
+inline constexpr int kStrokeEndCount = 10;
 const char* to_string(StrokeEnd end);
 
 struct StrokeVertex {
   SurfacePoint anchor;
   Vec3 position = Vec3::Zero();  ///< mm
   Vec2 pixel = Vec2::Zero();     ///< image position
-  double intensity = 0.0;        ///< I (unclamped) at the vertex
+  double intensity = 0.0;        ///< I (unclamped) at the vertex; ConFIS: n·v
+  /// Style weight in [0, 1] scaling the stroke's width and opacity there:
+  /// 1 for shading strokes; ConFIS: how deep inside its masks the point is.
+  double weight = 1.0;
 };
 
 struct Stroke {

@@ -39,6 +39,18 @@ std::string hatching_svg(const StrokeSet& strokes, const SvgStyle& style = {},
 void write_hatching_svg(const std::filesystem::path& path, const StrokeSet& strokes,
                         const SvgStyle& style = {}, const std::vector<SvgLayer>& layers = {});
 
+/// A piece of a stroke drawn with one style weight (width and opacity
+/// factor): vertices first..last (inclusive; neighbouring runs share their
+/// end vertex).
+struct WeightedRun {
+  double weight = 1.0;
+  std::size_t first = 0, last = 0;
+};
+/// Splits a stroke where its style weight, quantised per segment (the mean
+/// of the segment's two vertices rounded up to a multiple of 1/levels),
+/// changes. A stroke whose weights are all 1 (shading strokes) is one run.
+std::vector<WeightedRun> weighted_runs(const Stroke& stroke, int levels = 8);
+
 /// Douglas–Peucker simplification of an image polyline (keeps both ends).
 std::vector<Vec2> simplify_polyline(const std::vector<Vec2>& points, double tolerance);
 

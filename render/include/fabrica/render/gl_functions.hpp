@@ -49,6 +49,7 @@ namespace fabrica::render {
   X(PFNGLBINDTEXTUREPROC, BindTexture)                           \
   X(PFNGLTEXIMAGE2DPROC, TexImage2D)                             \
   X(PFNGLTEXPARAMETERIPROC, TexParameteri)                       \
+  X(PFNGLTEXBUFFERPROC, TexBuffer)                               \
   X(PFNGLACTIVETEXTUREPROC, ActiveTexture)                       \
   X(PFNGLGENFRAMEBUFFERSPROC, GenFramebuffers)                   \
   X(PFNGLDELETEFRAMEBUFFERSPROC, DeleteFramebuffers)             \
@@ -97,6 +98,7 @@ namespace fabrica::render {
   X(PFNGLUNIFORM2FPROC, Uniform2f)                               \
   X(PFNGLUNIFORM3FPROC, Uniform3f)                               \
   X(PFNGLUNIFORM4FPROC, Uniform4f)                               \
+  X(PFNGLUNIFORM1FVPROC, Uniform1fv)                             \
   X(PFNGLUNIFORMMATRIX3FVPROC, UniformMatrix3fv)                 \
   X(PFNGLUNIFORMMATRIX4FVPROC, UniformMatrix4fv)                 \
   X(PFNGLGENQUERIESPROC, GenQueries)                             \

@@ -13,6 +13,7 @@
 #include "fabrica/core/camera.hpp"
 #include "fabrica/render/context.hpp"
 #include "fabrica/render/image.hpp"
+#include "fabrica/render/lic.hpp"
 #include "fabrica/render/scene.hpp"
 
 namespace fabrica::render {
@@ -48,6 +49,8 @@ struct RenderOptions {
   /// Hidden-line depth tolerance in mm (0 = automatic from the meshes).
   double depth_tolerance = 0.0;
   HybridOptions hybrid;
+  /// Surface LIC of the structures whose style has `lic` (docs/lic.md).
+  LicOptions lic;
 };
 
 /// Where one render_hybrid frame spends its time (filled when asked for; the
@@ -89,6 +92,12 @@ class Renderer {
   /// Stage 1 only: the packed (q, t1) buffer as an image (for figures and tests).
   Image render_hybrid_buffer(const std::shared_ptr<const RenderMesh>& mesh, const Camera& camera,
                              const HybridOptions& options);
+
+  /// The LIC pass alone on one mesh (needs RenderMesh::lic_field): per pixel
+  /// red = the LIC value v, green = the feature mask (0 where the mesh is not
+  /// visible), 8 bits each; what lic_reference computes on the CPU.
+  Image render_lic_buffer(const std::shared_ptr<const RenderMesh>& mesh, const Camera& camera,
+                          const LicOptions& options);
 
  private:
   struct Impl;

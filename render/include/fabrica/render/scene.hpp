@@ -14,6 +14,7 @@
 
 #include "fabrica/core/camera.hpp"
 #include "fabrica/lines/line_set.hpp"
+#include "fabrica/render/lic.hpp"
 #include "fabrica/render/render_mesh.hpp"
 
 namespace fabrica::render {
@@ -57,6 +58,9 @@ struct StructureStyle {
   std::vector<LineFamily> families;
   LineStyle lines;
   bool hybrid_apparent_ridges = false;  ///< image-space apparent ridges (needs curvature)
+  /// Surface LIC in the feature regions, multiplied into the shading
+  /// (lic.hpp; opaque structures only; RenderOptions::lic holds its parameters).
+  bool lic = false;
   /// Iterations of on-surface smoothing of the object-space lines
   /// (fabrica/lines/smooth.hpp); 0 = off.
   int smooth = 0;
@@ -132,6 +136,9 @@ struct SceneSpec {
   Color background{1.0f, 1.0f, 1.0f, 1.0f};
   bool transparent = false;
   AnnotationSpec annotation;
+  /// Parameters of the surface LIC of the structures with `lic` (the
+  /// caller passes them on as RenderOptions::lic, as `fabrica render` does).
+  LicOptions lic;
 };
 
 const char* to_string(Frame frame);
@@ -169,8 +176,9 @@ std::optional<HiddenLines> parse_hidden_lines(std::string_view s);
 /// transparent, camera {...} (camera JSON), view "anterior"|..., frame
 /// "focus"|"all", structures: [{name, mesh, role, space, shading, color,
 /// opacity, ambient, toon_levels, lines: [families], line_color, line_width,
-/// taper, fade, hidden, hybrid, smooth, label: "text" | false}], annotation
-/// {labels, legend, scale_bar, orientation: booleans, font_size: pixels}.
+/// taper, fade, hidden, hybrid, smooth, lic, label: "text" | false}],
+/// annotation {labels, legend, scale_bar, orientation: booleans, font_size:
+/// pixels}, lic {kernel_length, noise_scale, strength} (docs/lic.md).
 /// Missing style keys take default_style(role). Relative mesh paths are
 /// resolved against `base_dir`. Validation is strict: an unknown key or a
 /// value of the wrong type throws InputError naming `what`, the JSON path

@@ -51,6 +51,8 @@ class ShaderProgram {
   void set(const char* name, float x, float y, float z, float w) const;
   void set_mat3(const char* name, const float* column_major) const;
   void set_mat4(const char* name, const float* column_major) const;
+  /// A float array uniform (`name` without [0]); nothing for an empty one.
+  void set_array(const char* name, const std::vector<float>& values) const;
 
  private:
   void release();
