@@ -5,12 +5,15 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 namespace fabrica::hatching {
 namespace {
 constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
 constexpr int kBandRows = 16;
+/// Faces per binning chunk (fixed, so the binning does not depend on threads).
+constexpr std::size_t kBinChunk = 16384;
 }  // namespace
 
 ImageProjector::ImageProjector(const Camera& camera)
@@ -74,31 +77,54 @@ DepthBuffer rasterize_depth(const TriangleMesh& mesh, const Camera& camera) {
   });
 
   // Bin faces into bands of rows (in face order, so every band sees its
-  // faces in increasing index), then rasterise the bands in parallel.
+  // faces in increasing index), then rasterise the bands in parallel. The
+  // binning runs on fixed chunks of faces in parallel, each chunk with its
+  // own band lists, joined in chunk order: the same lists at any thread count.
   const int bands = (camera.height + kBandRows - 1) / kBandRows;
-  std::vector<std::vector<std::int32_t>> band_faces(static_cast<std::size_t>(bands));
   std::vector<std::array<int, 4>> boxes(nf);
-  for (std::size_t f = 0; f < nf; ++f) {
-    const Face& t = mesh.faces[f];
-    const ProjectedPoint& a = projected[static_cast<std::size_t>(t[0])];
-    const ProjectedPoint& b = projected[static_cast<std::size_t>(t[1])];
-    const ProjectedPoint& c = projected[static_cast<std::size_t>(t[2])];
-    if (a.depth <= 0.0 || b.depth <= 0.0 || c.depth <= 0.0) continue;
-    const double lo_x = std::min({a.pixel.x(), b.pixel.x(), c.pixel.x()});
-    const double hi_x = std::max({a.pixel.x(), b.pixel.x(), c.pixel.x()});
-    const double lo_y = std::min({a.pixel.y(), b.pixel.y(), c.pixel.y()});
-    const double hi_y = std::max({a.pixel.y(), b.pixel.y(), c.pixel.y()});
-    if (!(hi_x >= 0.0 && hi_y >= 0.0 && lo_x < camera.width && lo_y < camera.height)) continue;
-    // Pixel centres i + 0.5 inside [lo, hi].
-    const int i0 = std::max(0, static_cast<int>(std::ceil(lo_x - 0.5)));
-    const int i1 = std::min(camera.width - 1, static_cast<int>(std::floor(hi_x - 0.5)));
-    const int j0 = std::max(0, static_cast<int>(std::ceil(lo_y - 0.5)));
-    const int j1 = std::min(camera.height - 1, static_cast<int>(std::floor(hi_y - 0.5)));
-    if (i0 > i1 || j0 > j1) continue;
-    boxes[f] = {i0, i1, j0, j1};
-    for (int band = j0 / kBandRows; band <= j1 / kBandRows; ++band)
-      band_faces[static_cast<std::size_t>(band)].push_back(static_cast<std::int32_t>(f));
-  }
+  const std::size_t chunks = (nf + kBinChunk - 1) / kBinChunk;
+  std::vector<std::vector<std::vector<std::int32_t>>> chunk_bands(
+      chunks, std::vector<std::vector<std::int32_t>>(static_cast<std::size_t>(bands)));
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1), [&](const auto& r) {
+    for (std::size_t chunk = r.begin(); chunk != r.end(); ++chunk) {
+      auto& band_faces = chunk_bands[chunk];
+      const std::size_t f_end = std::min(nf, (chunk + 1) * kBinChunk);
+      for (std::size_t f = chunk * kBinChunk; f < f_end; ++f) {
+        const Face& t = mesh.faces[f];
+        const ProjectedPoint& a = projected[static_cast<std::size_t>(t[0])];
+        const ProjectedPoint& b = projected[static_cast<std::size_t>(t[1])];
+        const ProjectedPoint& c = projected[static_cast<std::size_t>(t[2])];
+        if (a.depth <= 0.0 || b.depth <= 0.0 || c.depth <= 0.0) continue;
+        const double lo_x = std::min({a.pixel.x(), b.pixel.x(), c.pixel.x()});
+        const double hi_x = std::max({a.pixel.x(), b.pixel.x(), c.pixel.x()});
+        const double lo_y = std::min({a.pixel.y(), b.pixel.y(), c.pixel.y()});
+        const double hi_y = std::max({a.pixel.y(), b.pixel.y(), c.pixel.y()});
+        if (!(hi_x >= 0.0 && hi_y >= 0.0 && lo_x < camera.width && lo_y < camera.height)) continue;
+        // Pixel centres i + 0.5 inside [lo, hi].
+        const int i0 = std::max(0, static_cast<int>(std::ceil(lo_x - 0.5)));
+        const int i1 = std::min(camera.width - 1, static_cast<int>(std::floor(hi_x - 0.5)));
+        const int j0 = std::max(0, static_cast<int>(std::ceil(lo_y - 0.5)));
+        const int j1 = std::min(camera.height - 1, static_cast<int>(std::floor(hi_y - 0.5)));
+        if (i0 > i1 || j0 > j1) continue;
+        boxes[f] = {i0, i1, j0, j1};
+        for (int band = j0 / kBandRows; band <= j1 / kBandRows; ++band)
+          band_faces[static_cast<std::size_t>(band)].push_back(static_cast<std::int32_t>(f));
+      }
+    }
+  });
+  std::vector<std::vector<std::int32_t>> band_faces(static_cast<std::size_t>(bands));
+  tbb::parallel_for(tbb::blocked_range<int>(0, bands, 1), [&](const tbb::blocked_range<int>& r) {
+    for (int band = r.begin(); band != r.end(); ++band) {
+      auto& out = band_faces[static_cast<std::size_t>(band)];
+      std::size_t total = 0;
+      for (const auto& lists : chunk_bands) total += lists[static_cast<std::size_t>(band)].size();
+      out.reserve(total);
+      for (const auto& lists : chunk_bands) {
+        const auto& in = lists[static_cast<std::size_t>(band)];
+        out.insert(out.end(), in.begin(), in.end());
+      }
+    }
+  });
 
   tbb::parallel_for(tbb::blocked_range<int>(0, bands, 1), [&](const tbb::blocked_range<int>& r) {
     for (int band = r.begin(); band != r.end(); ++band) {
