@@ -5,6 +5,11 @@
 // an interactive session; everything per view (field, depth buffer, ridges,
 // proximity grid, tracing) is timed. Paper: 0.7–2.5 s per frame (2009).
 //
+// Side by side, the same meshes and views with ConFIS (issue 21,
+// `--method confis`): BM_Confis times one view after the per-mesh
+// precompute (curvature, direction field, feature regions; timed on its own
+// by BM_ConfisPrecompute). Target: igea ≤ 30 ms per view at 2 threads.
+//
 //   bench_hatching --benchmark_min_time=1
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
@@ -17,6 +22,8 @@
 #include "fabrica/core/camera.hpp"
 #include "fabrica/core/depth_raster.hpp"
 #include "fabrica/core/surface.hpp"
+#include "fabrica/hatching/confis.hpp"
+#include "fabrica/hatching/depth_buffer.hpp"
 #include "fabrica/hatching/hatching.hpp"
 #include "fabrica/hatching/intensity_ridges.hpp"
 #include "fabrica/io/mesh_io.hpp"
@@ -109,6 +116,47 @@ void BM_Hatch(benchmark::State& state) {
   state.counters["strokes"] = static_cast<double>(strokes);
 }
 
+/// ConFIS per view after the per-mesh precompute (made once per mesh).
+void BM_Confis(benchmark::State& state) {
+  Loaded& l = load(static_cast<int>(state.range(0)));
+  const tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
+                                    static_cast<std::size_t>(state.range(1)));
+  const fabrica::hatching::ConfisOptions options;
+  static std::map<int, fabrica::hatching::ConfisPrecompute> precomputed;
+  auto it = precomputed.find(static_cast<int>(state.range(0)));
+  if (it == precomputed.end())
+    it = precomputed
+             .emplace(static_cast<int>(state.range(0)),
+                      fabrica::hatching::precompute_confis(*l.surface, options))
+             .first;
+  std::size_t strokes = 0;
+  for (auto _ : state) {
+    const auto result = fabrica::hatching::confis(*l.surface, l.camera, it->second, options);
+    strokes = result.strokes.size();
+    benchmark::DoNotOptimize(strokes);
+  }
+  state.SetLabel(std::string(kCases[state.range(0)].name) + " confis " +
+                 std::to_string(state.range(1)) + "T");
+  state.counters["faces"] = static_cast<double>(l.surface->face_count());
+  state.counters["strokes"] = static_cast<double>(strokes);
+}
+
+/// The per-mesh part of ConFIS on a fresh Surface (curvature included).
+void BM_ConfisPrecompute(benchmark::State& state) {
+  Loaded& l = load(static_cast<int>(state.range(0)));
+  const tbb::global_control threads(tbb::global_control::max_allowed_parallelism, 2);
+  for (auto _ : state) {
+    state.PauseTiming();
+    auto fresh = std::make_unique<fabrica::Surface>(l.surface->mesh());
+    fresh->topology();
+    fresh->vertex_normals();
+    state.ResumeTiming();
+    auto pre = fabrica::hatching::precompute_confis(*fresh);
+    benchmark::DoNotOptimize(pre.field.face_direction.data());
+  }
+  state.SetLabel(std::string(kCases[state.range(0)].name) + " confis precompute 2T");
+}
+
 /// Stages of one frame, for the breakdown: 0 field, 1 depth buffer, 2 ridges.
 void BM_Stage(benchmark::State& state) {
   Loaded& l = load(static_cast<int>(state.range(0)));
@@ -135,13 +183,30 @@ void BM_Stage(benchmark::State& state) {
 BENCHMARK(BM_Stage)
     ->ArgsProduct({{0, 1, 2, 3, 4}, {0, 1, 2}})
     ->ArgNames({"mesh", "stage"})
+    ->MeasureProcessCPUTime()
     ->Unit(benchmark::kMillisecond)
     ->MinTime(0.2);
 
 BENCHMARK(BM_Hatch)
     ->ArgsProduct({{0, 1, 2, 3, 4}, {0, 1}, {2, 1}})
     ->ArgNames({"mesh", "ridges", "threads"})
+    ->MeasureProcessCPUTime()
     ->Unit(benchmark::kMillisecond)
     ->MinTime(0.5);
+
+// CPU column: the process's CPU time (all threads), which a loaded machine
+// does not inflate as it does wall-clock time.
+BENCHMARK(BM_Confis)
+    ->ArgsProduct({{0, 1, 2, 3, 4}, {2, 1}})
+    ->ArgNames({"mesh", "threads"})
+    ->MeasureProcessCPUTime()
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(0.5);
+
+BENCHMARK(BM_ConfisPrecompute)
+    ->ArgsProduct({{0, 3}})
+    ->ArgNames({"mesh"})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(2);
 
 BENCHMARK_MAIN();

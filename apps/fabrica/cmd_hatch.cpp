@@ -341,7 +341,8 @@ void add_hatch_command(CLI::App& app, Action& action) {
   auto args = std::make_shared<HatchArgs>();
   CLI::App* cmd = app.add_subcommand("hatch",
                                      "Shading strokes (Singh & Schaefer 2010, \"Suggestive "
-                                     "Hatching\") as SVG or PNG; see docs/hatching.md");
+                                     "Hatching\"), or ConFIS curvature streamlines with --method "
+                                     "confis, as SVG or PNG; see docs/hatching.md, docs/confis.md");
   cmd->add_option("mesh", args->mesh, "Input mesh (OBJ, PLY, STL, OFF, VTP, VTK)")->required();
   cmd->add_option("--method", args->method,
                   "shading (default: shading strokes, Singh & Schaefer 2010) or confis "

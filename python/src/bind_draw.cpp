@@ -60,6 +60,18 @@ void bind_hatching(py::module_& m) {
             return out;
           },
           "every stroke as a (k, 2) array of image coordinates")
+      .def(
+          "weights",
+          [](const PyStrokes& s, std::size_t i) {
+            if (i >= s.strokes->strokes.size()) throw py::index_error("stroke index out of range");
+            std::vector<double> values;
+            for (const auto& v : s.strokes->strokes[i].vertices) values.push_back(v.weight);
+            const auto n = static_cast<py::ssize_t>(values.size());
+            return own_array(std::move(values), {n});
+          },
+          py::arg("i"),
+          "(k,) style weights of stroke i in [0, 1] (width and opacity factor; 1 for shading "
+          "strokes, ConFIS fades towards its masks' borders)")
       .def_property_readonly("width", [](const PyStrokes& s) { return s.strokes->width; })
       .def_property_readonly("height", [](const PyStrokes& s) { return s.strokes->height; })
       .def_property_readonly("grid_depth", [](const PyStrokes& s) { return s.strokes->grid_depth; })
@@ -74,10 +86,26 @@ void bind_hatching(py::module_& m) {
       "hatch",
       [](const py::object& mesh, const Camera& camera, const std::string& light, double threshold,
          int grid_depth, int seed_depth, bool uniform_depth, double stroke_width, double max_length,
-         double min_length, bool ridge_removal, double ridge_angle) {
+         std::optional<double> min_length, bool ridge_removal, double ridge_angle,
+         const std::string& method, double contour_margin, double convex_threshold,
+         double concave_threshold, double umbilic_threshold, double spacing, double min_weight,
+         bool contours, bool features) {
         auto surface = as_surface(mesh);
         DrawHatchingOptions d;
+        d.method = parse_hatching_method(method);
         d.light = light;
+        hatching::ConfisOptions& c = d.confis;
+        c.contour_margin = contour_margin;
+        c.feature_regions.convex_threshold = convex_threshold;
+        c.feature_regions.concave_threshold = concave_threshold;
+        c.field.umbilic_threshold = umbilic_threshold;
+        c.spacing_px = spacing;
+        c.min_weight = min_weight;
+        c.contours = contours;
+        c.features = features;
+        c.stroke_width_px = stroke_width;
+        c.max_length_px = max_length;
+        if (min_length) c.min_length_px = *min_length;
         hatching::HatchingOptions& o = d.hatching;
         o.intensity_threshold = threshold;
         o.grid_depth = grid_depth;
@@ -85,7 +113,7 @@ void bind_hatching(py::module_& m) {
         o.adaptive_depth = !uniform_depth;
         o.stroke_width_px = stroke_width;
         o.max_length_px = max_length;
-        o.min_length_px = min_length;
+        o.min_length_px = min_length.value_or(1.0);
         o.ridge_removal = ridge_removal;
         o.ridges.min_angle_deg = ridge_angle;
         validate_camera(camera, "camera");
@@ -95,10 +123,17 @@ void bind_hatching(py::module_& m) {
       },
       py::arg("mesh"), py::arg("camera"), py::arg("light") = "eye", py::arg("threshold") = 1.0,
       py::arg("grid_depth") = -1, py::arg("seed_depth") = -1, py::arg("uniform_depth") = false,
-      py::arg("stroke_width") = 1.0, py::arg("max_length") = 0.0, py::arg("min_length") = 1.0,
-      py::arg("ridge_removal") = true, py::arg("ridge_angle") = 20.0,
-      "Hatching strokes (Singh & Schaefer 2010) as `fabrica hatch` makes them; light is eye, "
-      "dir:X,Y,Z, view:X,Y,Z or point:X,Y,Z. A Mesh is prepared (oriented outward) first.");
+      py::arg("stroke_width") = 1.0, py::arg("max_length") = 0.0,
+      py::arg("min_length") = py::none(), py::arg("ridge_removal") = true,
+      py::arg("ridge_angle") = 20.0, py::arg("method") = "shading", py::arg("contour_margin") = 0.3,
+      py::arg("convex_threshold") = 0.1, py::arg("concave_threshold") = 0.1,
+      py::arg("umbilic_threshold") = 0.01, py::arg("spacing") = 6.0, py::arg("min_weight") = 0.15,
+      py::arg("contours") = true, py::arg("features") = true,
+      "Hatching strokes as `fabrica hatch` makes them. method: shading (Singh & Schaefer 2010; "
+      "light is eye, dir:X,Y,Z, view:X,Y,Z or point:X,Y,Z) or confis (ConFIS streamlines, "
+      "Lawonn et al. 2013: contour_margin ... features as the --contour-margin ... "
+      "--no-features flags, docs/confis.md). min_length defaults to 1 (shading) or 8 (confis). "
+      "A Mesh is prepared (oriented outward) first.");
   m.def(
       "write_hatching_svg",
       [](const PyStrokes& s, const std::string& path, double stroke_width, bool draw_ridges,

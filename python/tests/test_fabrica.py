@@ -203,6 +203,27 @@ def test_hatch_equals_cli_svg(tmp_path, liver, fabrica_cli):
         fabrica.hatch(mesh, cam, light="sideways")
 
 
+@pytest.mark.skipif(not fabrica.has_hatching, reason="built without hatching")
+def test_hatch_confis_equals_cli_svg(tmp_path, liver, fabrica_cli):
+    mesh = fabrica.read_mesh(str(liver))
+    cam, cam_path = cli_camera(tmp_path, mesh, 400, 400)
+    fabrica_cli("hatch", liver, "--camera", cam_path, "--method", "confis", "--spacing", "5",
+                "--contour-margin", "0.4", "-q", "-o", tmp_path / "cli.svg")
+    strokes = fabrica.hatch(mesh, cam, method="confis", spacing=5, contour_margin=0.4)
+    assert len(strokes) > 5
+    weights = strokes.weights(0)
+    assert weights.shape == (len(strokes[0]),)
+    assert np.all((weights >= 0.15 - 1e-12) & (weights <= 1.0))
+    fabrica.write_hatching_svg(strokes, str(tmp_path / "py.svg"))
+    assert (tmp_path / "py.svg").read_bytes() == (tmp_path / "cli.svg").read_bytes()
+    # Shading strokes are all weight 1.
+    assert np.all(fabrica.hatch(mesh, cam).weights(0) == 1.0)
+    with pytest.raises(ValueError, match="did you mean 'confis'"):
+        fabrica.hatch(mesh, cam, method="confsi")
+    with pytest.raises(ValueError, match="--spacing"):
+        fabrica.hatch(mesh, cam, method="confis", spacing=0)
+
+
 @pytest.mark.skipif(not fabrica.has_render, reason="built without the renderer")
 def test_render_equals_cli_png(tmp_path, liver, fabrica_cli):
     mesh = fabrica.read_mesh(str(liver))

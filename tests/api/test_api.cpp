@@ -109,6 +109,33 @@ TEST(Api, DrawHatchingEqualsHatchSvg) {
   EXPECT_EQ(hatching::hatching_svg(strokes), slurp(out));
 }
 
+// Issue 21: the one-call API's method confis gives what `fabrica hatch
+// --method confis` writes, and the method names parse with a did-you-mean.
+TEST(Api, DrawHatchingConfisEqualsHatchSvg) {
+  const fs::path dir = test::temp_dir("api_confis");
+  const fs::path out = dir / "x.svg";
+  ASSERT_EQ(run_fabrica({"hatch", liver().string(), "--size", "400x300", "--method", "confis",
+                         "--spacing", "4", "--convex-threshold", "0.05", "-q", "-o", out.string()}),
+            0);
+  PreparedMesh prepared = prepare_mesh(liver());
+  const Camera camera = anterior(prepared.mesh, 400, 300);
+  const Surface surface(std::move(prepared.mesh));
+  DrawHatchingOptions options;
+  options.method = parse_hatching_method("ConFIS");
+  options.confis.spacing_px = 4.0;
+  options.confis.feature_regions.convex_threshold = 0.05;
+  const hatching::StrokeSet strokes = draw_hatching(surface, camera, options);
+  EXPECT_GT(strokes.strokes.size(), 5u);
+  EXPECT_EQ(hatching::hatching_svg(strokes), slurp(out));
+  EXPECT_EQ(parse_hatching_method("shading"), HatchingMethod::shading);
+  try {
+    parse_hatching_method("shadnig");
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("did you mean 'shading'"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Api, HatchOrientsInwardMeshesAsLinesDoes) {
   // The drift issue 16 names: `hatch` now prepares the mesh as `lines` does,
   // so an inward-facing copy hatches exactly like the outward original.
@@ -176,6 +203,13 @@ TEST(Api, OptionValidationThrowsInputError) {
   EXPECT_THROW(draw_hatching(surface, camera, h), InputError);
   h.light = "dir:0,0,0";
   EXPECT_THROW(draw_hatching(surface, camera, h), InputError);
+  h = {};
+  h.method = HatchingMethod::confis;
+  h.confis.spacing_px = -1.0;
+  EXPECT_THROW(draw_hatching(surface, camera, h), InputError);
+  h.confis = {};
+  h.confis.contour_margin = 2.0;
+  EXPECT_THROW(validate(h), InputError);
 }
 
 TEST(Api, MeshArraysAreViewsAndRoundTrip) {

@@ -372,6 +372,42 @@ TEST(BatchInputs, VolumeLabelsCameraFilesAndHatching) {
   by_hand(liver, {"--camera", (root / "side.json").string()}, "liver/lines-side.seg");
 }
 
+// Issue 21: a hatch style with "method": "confis" next to a shading one in
+// the same worker gives what the commands make (the method's own options
+// are reset between items).
+TEST(BatchInputs, HatchStylesOfBothMethods) {
+  const fs::path root = fabrica::test::temp_dir("batch-confis");
+  const std::string liver =
+      (fabrica::test::bundled_data() / "meshes/anatomy/liver/sofa_liver_coarse.obj").string();
+  write_text(root / "m.json",
+             json({{"inputs", {{{"mesh", liver}, {"name", "liver"}}}},
+                   {"views", {"anterior"}},
+                   {"styles",
+                    {{{"name", "confis"},
+                      {"command", "hatch"},
+                      {"method", "confis"},
+                      {"spacing", 5},
+                      {"formats", {"svg"}}},
+                     {{"name", "shading"}, {"command", "hatch"}, {"formats", {"svg"}}}}},
+                   {"size", {200, 200}}})
+                 .dump());
+  const auto r =
+      fabrica({"batch", (root / "m.json").string(), "-o", (root / "out").string(), "--jobs", "1"},
+              root / "log");
+  ASSERT_EQ(r.code, 0) << r.log;
+  for (const auto& [style, extra] : std::vector<std::pair<std::string, std::vector<std::string>>>{
+           {"confis", {"--method", "confis", "--spacing", "5"}}, {"shading", {}}}) {
+    std::vector<std::string> args = {"hatch",    liver,    "--view",
+                                     "anterior", "--size", "200x200",
+                                     "--quiet",  "-o",     (root / "x.svg").string()};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const auto x = fabrica(args, root / "x.log");
+    ASSERT_EQ(x.code, 0) << x.log;
+    EXPECT_EQ(read_text(root / "x.svg"), read_text(root / "out/liver" / (style + "-anterior.svg")))
+        << style;
+  }
+}
+
 TEST(BatchMemory, TenTimesTheItemsInOneProcessDoNotGrowItsMemory) {
   const fs::path root = fabrica::test::temp_dir("batch-memory");
   fs::create_directory_symlink(fabrica::test::bundled_data(), root / "data");

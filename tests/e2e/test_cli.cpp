@@ -1666,6 +1666,61 @@ TEST(Hardening, EveryOutputKindIsTheSameAtAnyThreadCount) {
   }
 }
 
+// ConFIS (issue 21): `fabrica hatch --method confis` on the bundled anatomy
+// (liver, vessels, cortex) exits 0 with strokes; bad parameters exit 2 with
+// one line naming the option and leave no output.
+TEST(ConfisCli, BundledAnatomyGivesStrokes) {
+  if (!has_command("hatch")) GTEST_SKIP() << "no hatch command in this build";
+  const fs::path dir = work_dir();
+  const fs::path anatomy = test::bundled_data() / "meshes" / "anatomy";
+  for (const fs::path& mesh :
+       {anatomy / "liver" / "sofa_liver-smooth.obj", anatomy / "vessels" / "vmtk_aorta-surface.stl",
+        anatomy / "brain" / "fsaverage5" / "pial_left.off"}) {
+    const fs::path out = dir / (mesh.stem().string() + ".svg");
+    const Outcome r = run_fabrica(
+        {"hatch", mesh.string(), "--method", "confis", "--view", "left", "-o", out.string()});
+    ASSERT_EQ(r.code, 0) << describe(r);
+    // "OUT: confis, N strokes (...)"
+    const auto at = r.out.find(": confis, ");
+    ASSERT_NE(at, std::string::npos) << describe(r);
+    const long strokes = std::stol(r.out.substr(at + 10));
+    EXPECT_GT(strokes, 20) << describe(r);
+    const std::string svg = read_text(out);
+    EXPECT_GT(static_cast<long>(std::count(svg.begin(), svg.end(), '\n')), strokes);  // a path each
+    EXPECT_NE(svg.find("stroke-opacity"), std::string::npos);  // weights fade to the borders
+  }
+}
+
+TEST(ConfisCli, BadParametersExit2) {
+  if (!has_command("hatch")) GTEST_SKIP() << "no hatch command in this build";
+  const fs::path dir = work_dir();
+  const std::string out = (dir / "x.svg").string();
+  const std::vector<std::pair<std::vector<std::string>, std::string>> calls{
+      {{"--method", "confsi"}, "did you mean 'confis'"},
+      {{"--method", "confis", "--spacing", "0"}, "--spacing"},
+      {{"--method", "confis", "--spacing", "nan"}, "--spacing"},
+      {{"--method", "confis", "--contour-margin", "1.5"}, "--contour-margin"},
+      {{"--method", "confis", "--contour-margin", "0"}, "--contour-margin"},
+      {{"--method", "confis", "--convex-threshold", "-1"}, "--convex-threshold"},
+      {{"--method", "confis", "--concave-threshold", "0"}, "--concave-threshold"},
+      {{"--method", "confis", "--umbilic-threshold", "-0.5"}, "--umbilic-threshold"},
+      {{"--method", "confis", "--min-weight", "2"}, "--min-weight"},
+      {{"--method", "confis", "--min-length", "-3"}, "--min-length"},
+      {{"--method", "confis", "--no-contours", "--no-features"}, "--no-features"},
+      {{"--method", "confis", "--light", "view:1,0,0"}, "--light"},
+      {{"--spacing", "4"}, "--spacing"},
+  };
+  for (const auto& [extra, expected] : calls) {
+    std::vector<std::string> args{"hatch", aneurysm().string(), "-o", out};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const Outcome r = run_fabrica(args);
+    EXPECT_EQ(r.code, 2) << describe(r);
+    EXPECT_TRUE(one_line(r.err)) << describe(r);
+    EXPECT_NE(r.err.find(expected), std::string::npos) << describe(r);
+    EXPECT_TRUE(list_dir(dir).empty()) << joined(list_dir(dir));
+  }
+}
+
 }  // namespace
 
 TEST(Render, AnnotationFlagsAndTheirErrors) {
