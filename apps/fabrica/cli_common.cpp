@@ -171,7 +171,64 @@ std::shared_ptr<const LoadedSurface> load_prepared_surface(const std::filesystem
   return loaded;
 }
 
+ChosenCamera choose_camera(const std::string& camera_file, const std::string& view,
+                           const std::string& size, std::pair<int, int> default_size,
+                           const ViewFramer& frame, const std::optional<Camera>& given,
+                           const std::string& given_what, const std::string& default_view) {
+  if (!camera_file.empty() && !view.empty())
+    throw InputError("give either --camera FILE or --view NAME, not both");
+  std::optional<std::pair<int, int>> wanted;
+  if (!size.empty()) wanted = parse_size(size);
+  ChosenCamera out;
+  if (!camera_file.empty() || (view.empty() && given)) {
+    // A camera keeps its framing; --size changes only the picture's size.
+    out.camera = !camera_file.empty() ? read_camera(camera_file) : *given;
+    out.what = !camera_file.empty() ? camera_file : given_what;
+    if (wanted) std::tie(out.camera.width, out.camera.height) = *wanted;
+  } else {
+    const std::string name = view.empty() ? default_view : lower(view);
+    const auto [w, h] = wanted.value_or(default_size);
+    out.camera = frame(parse_view(name), w, h);
+    out.what = "--view " + name;
+    out.from_view = true;
+  }
+  validate_camera(out.camera, out.what);
+  return out;
+}
+
+bool is_scene_file(const std::filesystem::path& path) {
+  return lower(path.extension().string()) == ".json";
+}
+
 #if __has_include("fabrica/render/renderer.hpp")
+render::SceneSurfaces load_scene_surfaces(render::SceneSpec spec) {
+  return render::load_scene(std::move(spec), [](const render::StructureSpec& s) {
+    PrepareOptions prepare;
+    prepare.space = s.space;
+    return load_prepared_surface(s.mesh, prepare)->surface;
+  });
+}
+
+ChosenCamera choose_scene_camera(const render::SceneSurfaces& scene, render::Frame frame,
+                                 const std::string& camera_file, const std::string& view,
+                                 const std::string& size, std::pair<int, int> default_size,
+                                 const std::string& input) {
+  return choose_camera(
+      camera_file, view, size, default_size,
+      [&](AnatomicalView v, int w, int h) { return render::view_camera(scene, v, frame, w, h); },
+      scene.spec.camera, input + ": camera",
+      scene.spec.view ? to_string(*scene.spec.view) : "anterior");
+}
+
+render::Frame frame_option(const std::string& text, const render::SceneSpec& spec) {
+  std::optional<render::Frame> frame;
+  if (!text.empty()) {
+    frame = render::parse_frame(lower(text));
+    if (!frame) throw InputError("--frame must be focus or all (got \"" + text + "\")");
+  }
+  return render::default_frame(spec, frame);
+}
+
 namespace {
 struct KeptRenderer {
   bool keep = false;

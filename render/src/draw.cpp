@@ -53,10 +53,11 @@ SceneSurfaces load_scene(SceneSpec spec) {
   });
 }
 
-Camera view_camera(const SceneSurfaces& scene, AnatomicalView view, Frame frame) {
+Camera view_camera(const SceneSurfaces& scene, AnatomicalView view, Frame frame, int width,
+                   int height) {
   if (frame == Frame::focus && scene.has_focus)
-    return fit_camera(view, scene.focus_box, scene.space);
-  return anatomical_camera(view, scene.box, scene.space);
+    return fit_camera(view, scene.focus_box, scene.space, width, height);
+  return anatomical_camera(view, scene.box, scene.space, width, height);
 }
 
 Scene build_scene(const SceneSurfaces& scene, const Camera& camera) {
@@ -99,13 +100,18 @@ HeadlessOptions headless_options(const std::string& backend) {
   return headless;
 }
 
-RenderedScene render_scene(Renderer& renderer, const SceneSurfaces& scene, const Camera& camera,
+RenderedScene render_scene(Renderer& renderer, Scene drawn, const Camera& camera,
                            const RenderOptions& options) {
   RenderedScene out;
-  out.scene = build_scene(scene, camera);
+  out.scene = std::move(drawn);
   out.image = renderer.render(out.scene, camera, options);
   out.backend = renderer.context().backend();
   return out;
+}
+
+RenderedScene render_scene(Renderer& renderer, const SceneSurfaces& scene, const Camera& camera,
+                           const RenderOptions& options) {
+  return render_scene(renderer, build_scene(scene, camera), camera, options);
 }
 
 RenderedScene render_scene(const SceneSurfaces& scene, const Camera& camera,

@@ -133,7 +133,7 @@ const std::vector<std::string> kSceneKeys = {"background", "transparent", "camer
 const std::vector<std::string> kStructureKeys = {
     "name",    "mesh",    "role",        "space",  "shading",    "color",
     "opacity", "ambient", "toon_levels", "lines",  "line_color", "line_width",
-    "taper",   "fade",    "hidden",      "hybrid", "smooth"};
+    "taper",   "fade",    "hidden",      "hybrid", "smooth",     "hatching"};
 const std::vector<std::string> kCameraKeys = {"eye",   "center", "up",   "fov_deg", "projection",
                                               "width", "height", "near", "far"};
 const std::vector<std::string> kViews = {"anterior", "posterior", "left",
@@ -390,6 +390,7 @@ SceneSpec scene_spec_from_json(const nlohmann::json& j, const std::filesystem::p
       if (s.contains("hybrid")) st.style.hybrid_apparent_ridges = boolean(s, "hybrid", what, path);
       if (s.contains("smooth"))
         st.style.smooth = static_cast<int>(number(s, "smooth", 0, 1000, what, path));
+      if (s.contains("hatching")) st.hatching = boolean(s, "hatching", what, path);
       spec.structures.push_back(std::move(st));
     }
   } catch (const nlohmann::json::exception& e) {
@@ -427,6 +428,7 @@ nlohmann::json scene_spec_to_json(const SceneSpec& spec) {
     o["hidden"] = to_string(s.style.lines.hidden);
     o["hybrid"] = s.style.hybrid_apparent_ridges;
     if (s.style.smooth > 0) o["smooth"] = s.style.smooth;
+    if (s.hatching) o["hatching"] = *s.hatching;
     list.push_back(o);
   }
   j["structures"] = list;

@@ -97,6 +97,10 @@ struct StructureSpec {
   Role role = Role::focus;
   StructureStyle style;
   std::optional<Space> space;  ///< override of the file's coordinate tag
+  /// Hatched by `fabrica hatch SCENE.json`; unset: the focus structures are.
+  std::optional<bool> hatching;
+  /// Whether `fabrica hatch` hatches this structure.
+  bool hatched() const { return hatching.value_or(role == Role::focus); }
 };
 
 /// What the default camera frames: every structure, or the focus
@@ -149,7 +153,7 @@ std::optional<HiddenLines> parse_hidden_lines(std::string_view s);
 /// transparent, camera {...} (camera JSON), view "anterior"|..., frame
 /// "focus"|"all", structures: [{name, mesh, role, space, shading, color,
 /// opacity, ambient, toon_levels, lines: [families], line_color, line_width,
-/// taper, fade, hidden, hybrid, smooth}].
+/// taper, fade, hidden, hybrid, smooth, hatching}].
 /// Missing style keys take default_style(role). Relative mesh paths are
 /// resolved against `base_dir`. Validation is strict: an unknown key or a
 /// value of the wrong type throws InputError naming `what`, the JSON path
