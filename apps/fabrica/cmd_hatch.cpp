@@ -202,7 +202,9 @@ std::vector<hatching::SvgLayer> scene_line_layers(const render::SceneSurfaces& s
   std::vector<hatching::SvgLayer> out;
   for (const LineLayer& layer : render::vector_layers(scene, drawn, camera)) {
     hatching::SvgLayer svg;
-    svg.name = "lines-" + layer.name;
+    svg.name = "lines-";  // a class name: letters, digits, '-' and '_'
+    for (const char c : layer.name)
+      svg.name += std::isalnum(static_cast<unsigned char>(c)) || c == '_' ? c : '-';
     svg.color = layer.color;
     svg.width_px = layer.style.width_px * std::min(camera.width, camera.height) /
                    std::max(1.0, layer.style.reference_size);
