@@ -76,7 +76,8 @@ struct LoadedSurface {
 /// earlier call with the same file (same path, size and modification time)
 /// and the same options, so that `fabrica batch` reads and precomputes an
 /// input once per worker for all its views and styles. The process keeps at
-/// most two meshes, both of the last input read, so memory stays flat.
+/// most two meshes, both of the last input read (for a scene, loaded with
+/// load_scene_surfaces, two per structure of that scene), so memory stays flat.
 /// Throws what prepare_mesh throws.
 std::shared_ptr<const LoadedSurface> load_prepared_surface(const std::filesystem::path& path,
                                                            const PrepareOptions& options);
@@ -109,7 +110,8 @@ bool is_scene_file(const std::filesystem::path& path);
 
 #if __has_include("fabrica/render/renderer.hpp")
 /// The scene's meshes prepared as render::load_scene does, through
-/// load_prepared_surface (so `fabrica batch` reuses them between items).
+/// load_prepared_surface (so `fabrica batch` reuses them between items: the
+/// scene's meshes are cached together as one input).
 render::SceneSurfaces load_scene_surfaces(render::SceneSpec spec);
 
 /// choose_camera for a scene read from `input`: its own camera when no
