@@ -7,3 +7,6 @@ fabrica_add_bench(bench_lines
 add_executable(drive_lines ${CMAKE_CURRENT_LIST_DIR}/drive_lines.cpp)
 target_link_libraries(drive_lines PRIVATE fabrica::lines fabrica::io TBB::tbb fabrica::warnings)
 target_compile_definitions(drive_lines PRIVATE FABRICA_BENCH_DATA="${FABRICA_BENCH_DATA}")
+# Larger meshes from a small one for the scaling benchmark (bench/scale_lines.sh).
+add_executable(scale_mesh ${CMAKE_CURRENT_LIST_DIR}/scale_mesh.cpp)
+target_link_libraries(scale_mesh PRIVATE fabrica::io fabrica::warnings)

@@ -1,6 +1,8 @@
 // `fabrica render MESH_OR_SCENE [--camera FILE | --view NAME] [--style S]
 //  [--lines LIST] [--hybrid-ar] [--context MESH ...] [--size WxH]
-//  [--transparent] [--backend egl|osmesa] [--svg OUT.svg] [--pdf OUT.pdf] -o OUT.png`:
+//  [--transparent] [--backend egl|osmesa] [--svg OUT.svg] [--pdf OUT.pdf]
+//  [--labels] [--legend] [--scale-bar] [--orientation-marker] [--annotate]
+//  [--font-size PX] -o OUT.png`:
 // headless illustration (docs/rendering.md). A mesh is drawn as the focus
 // structure, each --context mesh as a ghosted context structure; a scene
 // JSON describes several structures with their roles and styles.
@@ -20,6 +22,7 @@
 #include "fabrica/core/error.hpp"
 #include "fabrica/core/surface.hpp"
 #include "fabrica/lines/writers.hpp"
+#include "fabrica/render/annotate.hpp"
 #include "fabrica/render/draw.hpp"
 
 namespace fabrica::cli {
@@ -32,6 +35,8 @@ struct RenderArgs {
   std::vector<std::string> context;
   std::optional<double> tau, lambda, threshold, line_width, context_opacity;
   std::optional<int> smooth;
+  std::optional<double> font_size;
+  bool labels = false, legend = false, scale_bar = false, orientation = false, annotate = false;
   bool hybrid = false, transparent = false, no_fade = false, per_fragment = false,
        sign_free = false, float_target = false, quiet = false;
 };
@@ -107,6 +112,17 @@ int run_render(const RenderArgs& a) {
     }
   }
   if (a.transparent) spec.transparent = true;
+  // Annotation (issue 17, item 5): the flags add to the scene's "annotation".
+  render::AnnotationSpec& note = spec.annotation;
+  note.labels = note.labels || a.labels || a.annotate;
+  note.legend = note.legend || a.legend || a.annotate;
+  note.scale_bar = note.scale_bar || a.scale_bar || a.annotate;
+  note.orientation = note.orientation || a.orientation || a.annotate;
+  if (a.font_size) {
+    if (!(*a.font_size >= 4.0 && *a.font_size <= 200.0))
+      throw InputError("--font-size must be between 4 and 200 (pixels at 1024 px)");
+    note.font_size = *a.font_size;
+  }
 
   // 2. Meshes -> prepared Surfaces (cached for `fabrica batch`, cli_common.hpp).
   const render::SceneSurfaces scene = load_scene_surfaces(spec);
@@ -130,16 +146,19 @@ int run_render(const RenderArgs& a) {
   ro.hybrid.sign_free = a.sign_free;
   ro.hybrid.float_target = a.float_target;
   const auto renderer = headless_renderer(ho);  // one GL context per `fabrica batch` worker
-  const render::RenderedScene picture = render::render_scene(*renderer, scene, camera, ro);
+  render::RenderedScene picture = render::render_scene(*renderer, scene, camera, ro);
+  const render::Annotation annotation = render::annotate_scene(scene, camera, spec.annotation);
+  render::draw_annotation(picture.image, annotation.overlay);
   render::write_png(picture.image, out_path);
+  const VectorOverlay* overlay = spec.annotation.any() ? &annotation.overlay : nullptr;
 
   // 5. Vector lines: one layer per structure in its line style, focus over
   // context (render::write_scene_svg); focus lines hidden by opaque
   // structures, context lines by every surface.
   if (!a.svg.empty())
-    render::write_scene_svg(a.svg, scene, picture.scene, camera, ro.line_reference_size);
+    render::write_scene_svg(a.svg, scene, picture.scene, camera, ro.line_reference_size, overlay);
   if (!a.pdf.empty())
-    render::write_scene_pdf(a.pdf, scene, picture.scene, camera, ro.line_reference_size);
+    render::write_scene_pdf(a.pdf, scene, picture.scene, camera, ro.line_reference_size, overlay);
   if (!a.save_scene.empty()) {
     render::SceneSpec saved = spec;
     saved.camera = camera;
@@ -153,6 +172,9 @@ int run_render(const RenderArgs& a) {
                  picture.scene.structures.size(), polylines, camera.width, camera.height,
                  render::to_string(picture.backend), a.output.c_str());
   }
+  if (!a.quiet)
+    for (const auto& why : annotation.skipped)
+      std::fprintf(stderr, "fabrica render: warning: no label for %s\n", why.c_str());
   for (const auto& path : scene.assumed_space)
     if (view_from_space)
       warn_if_space_assumed(SpaceSource::default_assumed, path, "render", a.quiet);
@@ -204,6 +226,17 @@ void add_render_command(CLI::App& app, Action& action) {
   cmd->add_option("--space", args->space, "Coordinate space of untagged meshes: lps or ras");
   cmd->add_option("--save-scene", args->save_scene, "Write the scene (with its camera) as JSON");
   cmd->add_option("--save-camera", args->save_camera, "Write the camera as JSON");
+  cmd->add_flag("--labels", args->labels,
+                "Annotate: a label per structure with a leader line (scene: label per structure)");
+  cmd->add_flag("--legend", args->legend, "Annotate: legend of the structures' colours");
+  cmd->add_flag("--scale-bar", args->scale_bar,
+                "Annotate: scale bar in mm (perspective: at the focus depth)");
+  cmd->add_flag("--orientation-marker", args->orientation,
+                "Annotate: the patient axes (A/P, L/R, S/I) as seen in this view");
+  cmd->add_flag("--annotate", args->annotate,
+                "All four: --labels --legend --scale-bar --orientation-marker");
+  cmd->add_option("--font-size", args->font_size,
+                  "Annotation text size in pixels at 1024 px (18; scaled with the picture)");
   cmd->add_flag("-q,--quiet", args->quiet, "No summary on stderr");
   cmd->callback([args, &action] { action = [args] { return run_render(*args); }; });
 }

@@ -1,6 +1,7 @@
 #include "fabrica/lines/draw.hpp"
 
 #include <cmath>
+#include <memory>
 #include <string>
 
 #include "fabrica/core/error.hpp"
@@ -73,28 +74,71 @@ LineDrawer::LineDrawer(const Surface& surface, DrawLinesOptions options)
       options_((validate(options), std::move(options))),
       extractor_(surface, options_.lines) {}
 
-LineDrawing LineDrawer::draw(const Camera& camera, const DepthBuffer* depth) {
-  const std::vector<SegmentSoup> soups = extractor_.extract(camera);
+namespace {
+
+// Chaining of one view's segment soups; the soups (the view's largest
+// arrays: ~150 B a segment) are freed once chained, before smoothing and the
+// depth raster allocate theirs, so the two do not add up in the peak memory.
+LineDrawing chain_soups(std::vector<SegmentSoup>&& soups, double feature_size, const Camera& camera,
+                        const DrawLinesOptions& options) {
+  const std::vector<SegmentSoup> view = std::move(soups);
   LineDrawing drawing;
-  drawing.feature_size = extractor_.feature_size();
-  for (const auto& s : soups) drawing.segments.emplace_back(s.family, s.segments.size());
+  drawing.feature_size = feature_size;
+  for (const auto& s : view) drawing.segments.emplace_back(s.family, s.segments.size());
   ChainOptions chain;
   chain.camera = camera;
-  chain.min_length_px = options_.min_length_px;
-  drawing.lines = chain_segments(soups, chain);
-  if (options_.smooth > 0) {  // on the surface, before visibility tests the positions
+  chain.min_length_px = options.min_length_px;
+  drawing.lines = chain_segments(view, chain);
+  return drawing;
+}
+
+// Smoothing (on the surface, before visibility tests the positions) and
+// hidden-line removal of a chained drawing.
+void smooth_and_hide(LineDrawing& drawing, const Surface& surface, const Camera& camera,
+                     const DrawLinesOptions& options, const DepthBuffer* depth) {
+  if (options.smooth > 0) {
     LineSmoothingOptions so;
-    so.iterations = options_.smooth;
-    smooth_lines(drawing.lines, *surface_, so);  // polylines it cannot smooth stay as they are
+    so.iterations = options.smooth;
+    smooth_lines(drawing.lines, surface, so);  // polylines it cannot smooth stay as they are
   }
-  if (options_.visibility)
-    compute_visibility(drawing.lines, *surface_, camera, options_.visibility_options, depth);
+  if (options.visibility)
+    compute_visibility(drawing.lines, surface, camera, options.visibility_options, depth);
+}
+
+}  // namespace
+
+LineDrawing LineDrawer::draw(const Camera& camera, const DepthBuffer* depth) {
+  LineDrawing drawing =
+      chain_soups(extractor_.extract(camera), extractor_.feature_size(), camera, options_);
+  smooth_and_hide(drawing, *surface_, camera, options_, depth);
   return drawing;
 }
 
 LineDrawing draw_lines(const Surface& surface, const Camera& camera,
                        const DrawLinesOptions& options) {
-  return LineDrawer(surface, options).draw(camera);
+  // One drawing, so nothing is kept for a next view, and the three phases'
+  // working memory is not alive at once (docs/PERFORMANCE.md, peak memory):
+  // the depth buffer is rendered first and its raster scratch (projected
+  // corners, binned triangles: ~5x the buffer) freed; the extractor (line
+  // precompute, view fields, about half the peak on igea) is freed once the
+  // segments are extracted, before chaining, smoothing and hidden-line
+  // removal.
+  validate(options);
+  // Built first, so that bad options are reported before anything is
+  // computed, as LineDrawer does (its precompute is filled on extraction).
+  auto extractor = std::make_unique<LineExtractor>(surface, options.lines);
+  const double feature_size = extractor->feature_size();
+  DepthBuffer depth;
+  if (options.visibility) {
+    validate_camera(camera);  // as the extraction would, before the raster reads it
+    render_depth(surface.mesh(), camera, depth);
+    depth.scratch = detail::RasterScratchSlot();
+  }
+  std::vector<SegmentSoup> soups = extractor->extract(camera);
+  extractor.reset();
+  LineDrawing drawing = chain_soups(std::move(soups), feature_size, camera, options);
+  smooth_and_hide(drawing, surface, camera, options, options.visibility ? &depth : nullptr);
+  return drawing;
 }
 
 nlohmann::json drawing_header(const LineDrawing& drawing, const Surface& surface,

@@ -127,8 +127,57 @@ void write_pdf(const std::filesystem::path& path, const LineSet& lines, const Ca
 #endif
 }
 
+#ifdef FABRICA_HAVE_CAIRO
+namespace {
+
+void trace(cairo_t* cr, const std::vector<Vec2>& points, bool closed) {
+  cairo_new_path(cr);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (i == 0)
+      cairo_move_to(cr, points[i].x(), points[i].y());
+    else
+      cairo_line_to(cr, points[i].x(), points[i].y());
+  }
+  if (closed) cairo_close_path(cr);
+}
+
+/// The overlay's items in order: paths filled then stroked, texts as their
+/// glyph strokes.
+void draw_overlay(cairo_t* cr, const VectorOverlay& overlay) {
+  cairo_set_dash(cr, nullptr, 0, 0.0);
+  double r, g, b;
+  for (const OverlayItem& it : overlay.items) {
+    if (it.kind == OverlayItem::Kind::path) {
+      if (!it.fill.empty()) {
+        parse_color(it.fill.c_str(), r, g, b);
+        cairo_set_source_rgba(cr, r, g, b, it.opacity);
+        trace(cr, it.points, true);
+        cairo_fill(cr);
+      }
+      if (!it.stroke.empty()) {
+        parse_color(it.stroke.c_str(), r, g, b);
+        cairo_set_source_rgba(cr, r, g, b, it.opacity);
+        cairo_set_line_width(cr, it.stroke_width);
+        trace(cr, it.points, it.closed);
+        cairo_stroke(cr);
+      }
+    } else {
+      parse_color(it.text_color.c_str(), r, g, b);
+      cairo_set_source_rgba(cr, r, g, b, it.opacity);
+      cairo_set_line_width(cr, it.glyph_stroke_width);
+      for (const auto& stroke : it.glyph_strokes) {
+        trace(cr, stroke, false);
+        cairo_stroke(cr);
+      }
+    }
+  }
+}
+
+}  // namespace
+#endif
+
 void write_layered_pdf(const std::filesystem::path& path, const std::vector<LineLayer>& layers,
-                       const Camera& camera) {
+                       const Camera& camera, const VectorOverlay* overlay) {
 #ifdef FABRICA_HAVE_CAIRO
   pdf_page(path, camera, [&](cairo_t* cr) {
     for (const LineLayer& layer : layers) {
@@ -138,10 +187,12 @@ void write_layered_pdf(const std::filesystem::path& path, const std::vector<Line
                  layer.dash * scale, layer.dash * scale, layer.color.c_str(),
                  std::clamp(layer.opacity, 0.0, 1.0));
     }
+    if (overlay) draw_overlay(cr, *overlay);
   });
 #else
   (void)layers;
   (void)camera;
+  (void)overlay;
   no_cairo(path);
 #endif
 }

@@ -126,7 +126,63 @@ void write_svg(const std::filesystem::path& path, const LineSet& lines, const Ca
   write_file_atomically(path, [&](std::ostream& out) { out << text; });
 }
 
-std::string layered_svg_string(const std::vector<LineLayer>& layers, const Camera& camera) {
+namespace {
+
+void write_points(std::ostringstream& out, const std::vector<Vec2>& points, bool closed) {
+  char buf[96];
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    std::snprintf(buf, sizeof buf, "%s%.2f %.2f", i == 0 ? "M" : (i == 1 ? " L" : " "),
+                  points[i].x(), points[i].y());
+    out << buf;
+  }
+  if (closed) out << " Z";
+}
+
+void write_overlay(std::ostringstream& out, const VectorOverlay& overlay) {
+  char buf[320];
+  const std::string name = xml_escape(overlay.name);
+  out << "<g id=\"" << name << "\" inkscape:groupmode=\"layer\" inkscape:label=\"" << name
+      << "\" data-role=\"annotation\">\n";
+  for (const OverlayItem& it : overlay.items) {
+    std::string attrs = " data-role=\"" + xml_escape(it.role) + "\"";
+    if (!it.name.empty()) attrs += " data-name=\"" + xml_escape(it.name) + "\"";
+    if (it.opacity < 1.0) {
+      std::snprintf(buf, sizeof buf, " opacity=\"%.2f\"", it.opacity);
+      attrs += buf;
+    }
+    if (it.kind == OverlayItem::Kind::path) {
+      out << "<path" << attrs << " fill=\"" << (it.fill.empty() ? "none" : xml_escape(it.fill))
+          << "\"";
+      if (it.stroke.empty()) {
+        out << " stroke=\"none\"";
+      } else {
+        std::snprintf(buf, sizeof buf,
+                      " stroke=\"%s\" stroke-width=\"%.2f\" stroke-linecap=\"round\" "
+                      "stroke-linejoin=\"round\"",
+                      xml_escape(it.stroke).c_str(), it.stroke_width);
+        out << buf;
+      }
+      out << " d=\"";
+      write_points(out, it.points, it.closed);
+      out << "\"/>\n";
+    } else {
+      std::snprintf(buf, sizeof buf,
+                    " x=\"%.2f\" y=\"%.2f\" font-size=\"%.2f\" textLength=\"%.2f\" "
+                    "lengthAdjust=\"spacingAndGlyphs\" data-box=\"%.2f %.2f %.2f %.2f\"",
+                    it.position.x(), it.position.y(), it.font_size, it.text_width, it.box[0],
+                    it.box[1], it.box[2], it.box[3]);
+      out << "<text" << attrs << buf << " fill=\"" << xml_escape(it.text_color)
+          << "\" font-family=\"DejaVu Sans, Helvetica, Arial, sans-serif\">" << xml_escape(it.text)
+          << "</text>\n";
+    }
+  }
+  out << "</g>\n";
+}
+
+}  // namespace
+
+std::string layered_svg_string(const std::vector<LineLayer>& layers, const Camera& camera,
+                               const VectorOverlay* overlay) {
   std::ostringstream out;
   char buf[256];
   write_header(out, camera, " xmlns:inkscape=\"http://www.inkscape.org/namespaces/inkscape\"");
@@ -159,13 +215,14 @@ std::string layered_svg_string(const std::vector<LineLayer>& layers, const Camer
     }
     out << "</g>\n";
   }
+  if (overlay) write_overlay(out, *overlay);
   out << "</svg>\n";
   return out.str();
 }
 
 void write_layered_svg(const std::filesystem::path& path, const std::vector<LineLayer>& layers,
-                       const Camera& camera) {
-  const std::string text = layered_svg_string(layers, camera);
+                       const Camera& camera, const VectorOverlay* overlay) {
+  const std::string text = layered_svg_string(layers, camera, overlay);
   write_file_atomically(path, [&](std::ostream& out) { out << text; });
 }
 

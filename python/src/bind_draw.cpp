@@ -7,6 +7,7 @@
 #include "fabrica/hatching/svg_writer.hpp"
 #endif
 #ifdef FABRICA_PY_HAVE_RENDER
+#include "fabrica/render/annotate.hpp"
 #include "fabrica/render/draw.hpp"
 #endif
 
@@ -209,6 +210,8 @@ void bind_render(py::module_& m) {
           render::RenderOptions options;
           options.transparent_background = spec.transparent;
           image = render::render_scene(scene, c, options, headless).image;
+          // The scene's "annotation" (labels, legend, ...), as `fabrica render` draws it.
+          render::draw_annotation(image, render::annotate_scene(scene, c, spec.annotation).overlay);
         }
         return to_numpy(std::move(image));
       },

@@ -154,15 +154,6 @@ std::vector<LineSet> visible_lines(const SceneSurfaces& scene, const Scene& draw
   return out;
 }
 
-std::string hex_color(const Color& c) {
-  auto byte = [](float v) {
-    return static_cast<int>(std::lround(std::clamp(static_cast<double>(v), 0.0, 1.0) * 255.0));
-  };
-  char buf[8];
-  std::snprintf(buf, sizeof buf, "#%02x%02x%02x", byte(c.r), byte(c.g), byte(c.b));
-  return buf;
-}
-
 }  // namespace
 
 LineSet vector_lines(const SceneSurfaces& scene, const Scene& drawn, const Camera& camera) {
@@ -184,7 +175,7 @@ std::vector<LineLayer> vector_layers(const SceneSurfaces& scene, const Scene& dr
       LineLayer layer;
       layer.name = st.name;
       layer.role = to_string(st.role);
-      layer.color = hex_color(ls.color);
+      layer.color = to_hex(ls.color);
       layer.opacity = std::clamp(static_cast<double>(ls.color.a), 0.0, 1.0);
       layer.dash = ls.dash;
       layer.style.width_px = ls.width;
@@ -206,13 +197,15 @@ std::vector<LineLayer> vector_layers(const SceneSurfaces& scene, const Scene& dr
 }
 
 void write_scene_svg(const std::filesystem::path& path, const SceneSurfaces& scene,
-                     const Scene& drawn, const Camera& camera, double reference_size) {
-  write_layered_svg(path, vector_layers(scene, drawn, camera, reference_size), camera);
+                     const Scene& drawn, const Camera& camera, double reference_size,
+                     const VectorOverlay* overlay) {
+  write_layered_svg(path, vector_layers(scene, drawn, camera, reference_size), camera, overlay);
 }
 
 void write_scene_pdf(const std::filesystem::path& path, const SceneSurfaces& scene,
-                     const Scene& drawn, const Camera& camera, double reference_size) {
-  write_layered_pdf(path, vector_layers(scene, drawn, camera, reference_size), camera);
+                     const Scene& drawn, const Camera& camera, double reference_size,
+                     const VectorOverlay* overlay) {
+  write_layered_pdf(path, vector_layers(scene, drawn, camera, reference_size), camera, overlay);
 }
 
 }  // namespace fabrica::render

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -14,6 +15,15 @@
 #include "fabrica/core/suggest.hpp"
 
 namespace fabrica::render {
+
+std::string to_hex(const Color& c) {
+  auto byte = [](float v) {
+    return static_cast<int>(std::lround(std::clamp(static_cast<double>(v), 0.0, 1.0) * 255.0));
+  };
+  char buf[8];
+  std::snprintf(buf, sizeof buf, "#%02x%02x%02x", byte(c.r), byte(c.g), byte(c.b));
+  return buf;
+}
 
 StructureStyle default_style(Role role) {
   StructureStyle s;
@@ -128,12 +138,14 @@ T choice(const nlohmann::json& j, const char* key, Parse parse,
                    did_you_mean(v, choices) + " (use " + list + ")");
 }
 
-const std::vector<std::string> kSceneKeys = {"background", "transparent", "camera",
-                                             "view",       "frame",       "structures"};
+const std::vector<std::string> kSceneKeys = {"background", "transparent", "camera",    "view",
+                                             "frame",      "structures",  "annotation"};
+const std::vector<std::string> kAnnotationKeys = {"labels", "legend", "scale_bar", "orientation",
+                                                  "font_size"};
 const std::vector<std::string> kStructureKeys = {
-    "name",    "mesh",    "role",        "space",  "shading",    "color",
-    "opacity", "ambient", "toon_levels", "lines",  "line_color", "line_width",
-    "taper",   "fade",    "hidden",      "hybrid", "smooth",     "hatching"};
+    "name",    "mesh",        "role",   "space",      "shading",    "color", "opacity",
+    "ambient", "toon_levels", "lines",  "line_color", "line_width", "taper", "fade",
+    "hidden",  "hybrid",      "smooth", "label",      "hatching"};
 const std::vector<std::string> kCameraKeys = {"eye",   "center", "up",   "fov_deg", "projection",
                                               "width", "height", "near", "far"};
 const std::vector<std::string> kViews = {"anterior", "posterior", "left",
@@ -326,6 +338,21 @@ SceneSpec scene_spec_from_json(const nlohmann::json& j, const std::filesystem::p
       spec.view = choice<AnatomicalView>(j, "view", parse_anatomical_view, kViews, what, "");
     if (j.contains("frame"))
       spec.frame = choice<Frame>(j, "frame", parse_frame, {"focus", "all"}, what, "");
+    if (j.contains("annotation")) {
+      const auto& a = j["annotation"];
+      if (!a.is_object())
+        throw InputError(what +
+                         ": annotation must be an object (keys labels, legend, scale_bar, "
+                         "orientation, font_size)");
+      check_keys(a, kAnnotationKeys, what, "annotation");
+      AnnotationSpec& an = spec.annotation;
+      if (a.contains("labels")) an.labels = boolean(a, "labels", what, "annotation");
+      if (a.contains("legend")) an.legend = boolean(a, "legend", what, "annotation");
+      if (a.contains("scale_bar")) an.scale_bar = boolean(a, "scale_bar", what, "annotation");
+      if (a.contains("orientation")) an.orientation = boolean(a, "orientation", what, "annotation");
+      if (a.contains("font_size"))
+        an.font_size = number(a, "font_size", 4.0, 200.0, what, "annotation");
+    }
     if (!j.contains("structures") || !j["structures"].is_array() || j["structures"].empty())
       throw InputError(what + ": 'structures' must be a non-empty array");
     std::vector<std::string> family_names;
@@ -390,6 +417,22 @@ SceneSpec scene_spec_from_json(const nlohmann::json& j, const std::filesystem::p
       if (s.contains("hybrid")) st.style.hybrid_apparent_ridges = boolean(s, "hybrid", what, path);
       if (s.contains("smooth"))
         st.style.smooth = static_cast<int>(number(s, "smooth", 0, 1000, what, path));
+      if (s.contains("label")) {
+        const auto& l = s["label"];
+        if (l.is_boolean()) {
+          st.show_label = l.get<bool>();
+        } else if (l.is_string() && !l.get<std::string>().empty()) {
+          st.label = l.get<std::string>();
+          if (std::any_of(st.label.begin(), st.label.end(),
+                          [](char c) { return static_cast<unsigned char>(c) < 0x20; }))
+            throw InputError(what + ": " + path +
+                             ".label must not contain control characters (tabs, new lines)");
+        } else {
+          throw InputError(what + ": " + path +
+                           ".label must be a non-empty string or true/false (got " +
+                           (l.is_string() ? std::string("an empty string") : type_name(l)) + ")");
+        }
+      }
       if (s.contains("hatching")) st.hatching = boolean(s, "hatching", what, path);
       spec.structures.push_back(std::move(st));
     }
@@ -406,6 +449,12 @@ nlohmann::json scene_spec_to_json(const SceneSpec& spec) {
   if (spec.camera) j["camera"] = camera_to_json(*spec.camera);
   if (spec.view) j["view"] = to_string(*spec.view);
   if (spec.frame) j["frame"] = to_string(*spec.frame);
+  if (spec.annotation.any())
+    j["annotation"] = {{"labels", spec.annotation.labels},
+                       {"legend", spec.annotation.legend},
+                       {"scale_bar", spec.annotation.scale_bar},
+                       {"orientation", spec.annotation.orientation},
+                       {"font_size", spec.annotation.font_size}};
   nlohmann::json list = nlohmann::json::array();
   for (const auto& s : spec.structures) {
     nlohmann::json o;
@@ -428,6 +477,10 @@ nlohmann::json scene_spec_to_json(const SceneSpec& spec) {
     o["hidden"] = to_string(s.style.lines.hidden);
     o["hybrid"] = s.style.hybrid_apparent_ridges;
     if (s.style.smooth > 0) o["smooth"] = s.style.smooth;
+    if (!s.show_label)
+      o["label"] = false;
+    else if (!s.label.empty())
+      o["label"] = s.label;
     if (s.hatching) o["hatching"] = *s.hatching;
     list.push_back(o);
   }

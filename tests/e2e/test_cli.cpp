@@ -665,6 +665,58 @@ INSTANTIATE_TEST_SUITE_P(Meshes, BadInput,
                            return std::get<0>(info.param) + "_" + std::get<1>(info.param);
                          });
 
+// Every malformed-file kind as an input of one batch, beside a good mesh: the
+// batch goes past each bad item (failed, with the reader's one-line reason
+// naming the file), makes the good one, writes nothing for the bad ones and
+// exits 5 — never a signal, never a hang (a FIFO among the inputs).
+TEST(BadInputBatch, EveryBadMeshIsAFailedItemWithTheReasonAndTheGoodOneIsMade) {
+  if (!has_command("batch")) GTEST_SKIP() << "no batch command in this build";
+  const fs::path dir = work_dir();
+  const fs::path in_dir = dir / "in", out_dir = dir / "out";
+  nlohmann::json inputs = nlohmann::json::array();
+  std::vector<fs::path> bad;
+  for (const auto& name : bad_mesh_names()) {
+    const fs::path case_dir = in_dir / name;  // one folder each: some cases share file names
+    fs::create_directories(case_dir);
+    bad.push_back(bad_mesh(name).make(case_dir));
+    inputs.push_back({{"mesh", fs::relative(bad.back(), dir).string()}});
+  }
+  write_bytes(dir / "good.obj", kTetraObj);
+  inputs.push_back({{"mesh", "good.obj"}});
+  const nlohmann::json manifest{
+      {"inputs", inputs},
+      {"views", {"anterior"}},
+      {"styles",
+       {{{"name", "l"}, {"command", "lines"}, {"types", {"contour"}}, {"formats", {"svg"}}}}},
+      {"size", {64, 64}},
+      {"output", "{index}-{style}.{ext}"}};
+  write_bytes(dir / "manifest.json", manifest.dump(2));
+  const Outcome r = run_fabrica(
+      {"batch", (dir / "manifest.json").string(), "-o", out_dir.string(), "--jobs", "2", "--quiet"},
+      std::chrono::seconds(300));
+  ASSERT_LT(r.code, 128) << "killed by a signal\n" << describe(r);
+  ASSERT_EQ(r.code, 5) << describe(r);
+  const auto report = nlohmann::json::parse(read_text(out_dir / "batch-report.json"));
+  ASSERT_EQ(report["items"].size(), bad.size() + 1);
+  EXPECT_EQ(report["summary"]["failed"], bad.size());
+  EXPECT_EQ(report["summary"]["made"], 1);
+  for (std::size_t k = 0; k < report["items"].size(); ++k) {
+    const auto& item = report["items"][k];
+    if (k == bad.size()) {
+      EXPECT_EQ(item["status"], "made") << item.dump();
+      continue;
+    }
+    EXPECT_EQ(item["status"], "failed") << item.dump();
+    const std::string reason = item.value("reason", "");
+    EXPECT_NE(reason.find(bad[k].filename().string()), std::string::npos)
+        << "the reason does not name the file\n"
+        << item.dump();
+    EXPECT_EQ(reason.find('\n'), std::string::npos) << item.dump();
+    for (const auto& o : item["outputs"])
+      EXPECT_FALSE(fs::exists(out_dir / o.get<std::string>())) << o;
+  }
+}
+
 // ------------------------------------------------------ awkward meshes
 // Valid files with defects the commands must survive (exit 0, finite output).
 
@@ -1573,3 +1625,51 @@ TEST(Hardening, EveryOutputKindIsTheSameAtAnyThreadCount) {
 }
 
 }  // namespace
+
+TEST(Render, AnnotationFlagsAndTheirErrors) {
+  // issue 17, item 5: --annotate draws labels, legend, scale bar and marker
+  // into the PNG and an "annotation" layer of real <text> into the SVG, the
+  // same bytes on every run; bad values and misspelt flags exit 2.
+  if (!has_command("render")) GTEST_SKIP() << "no render command in this build";
+  const fs::path scene = fs::path(FABRICA_SOURCE_DIR) / "data" / "aneurysm-scene.json";
+  const fs::path dir = work_dir();
+  auto args = [&](const std::string& stem) {
+    return std::vector<std::string>{
+        "render",     scene.string(), "-o",    (dir / (stem + ".png")).string(),
+        "--size",     "320x240",      "--svg", (dir / (stem + ".svg")).string(),
+        "--annotate", "--font-size",  "24",    "-q"};
+  };
+  const Outcome r = run_fabrica(args("a"));
+  if (r.code == 4) GTEST_SKIP() << "no headless GL: " << r.err;
+  ASSERT_EQ(r.code, 0) << describe(r);
+  ASSERT_EQ(run_fabrica(args("b")).code, 0);
+  EXPECT_EQ(read_text(dir / "a.png"), read_text(dir / "b.png"));
+  EXPECT_EQ(read_text(dir / "a.svg"), read_text(dir / "b.svg"));
+  pugi::xml_document doc;
+  ASSERT_TRUE(doc.load_file((dir / "a.svg").c_str()));
+  const pugi::xml_node layer = doc.child("svg").last_child();
+  EXPECT_EQ(std::string(layer.attribute("inkscape:label").value()), "annotation");
+  std::set<std::string> roles;
+  for (pugi::xml_node n : layer.children()) roles.insert(n.attribute("data-role").value());
+  for (const char* role : {"label", "leader", "legend-text", "legend-swatch", "scale-bar",
+                           "scale-bar-text", "orientation"})
+    EXPECT_TRUE(roles.count(role)) << role;
+  // Without the flags: no annotation layer, and the picture differs.
+  std::vector<std::string> plain = args("c");
+  plain.erase(plain.end() - 4, plain.end() - 1);
+  ASSERT_EQ(run_fabrica(plain).code, 0);
+  EXPECT_EQ(read_text(dir / "c.svg").find("annotation"), std::string::npos);
+  EXPECT_NE(read_text(dir / "a.png"), read_text(dir / "c.png"));
+  for (const auto& extra :
+       {std::vector<std::string>{"--font-size", "0"},
+        std::vector<std::string>{"--font-size", "big"}, std::vector<std::string>{"--scale-bars"}}) {
+    std::vector<std::string> bad = {"render", scene.string(), "-o", (dir / "d.png").string()};
+    bad.insert(bad.end(), extra.begin(), extra.end());
+    const Outcome o = run_fabrica(bad);
+    EXPECT_EQ(o.code, 2) << describe(o);
+    EXPECT_FALSE(fs::exists(dir / "d.png"));
+  }
+  const Outcome typo =
+      run_fabrica({"render", scene.string(), "-o", (dir / "d.png").string(), "--scale-bars"});
+  EXPECT_NE(typo.err.find("--scale-bar"), std::string::npos) << describe(typo);
+}

@@ -17,6 +17,7 @@
 #include "batch.hpp"
 #include "fabrica/core/camera.hpp"
 #include "fabrica/core/error.hpp"
+#include "fabrica/core/input_file.hpp"
 #include "fabrica/io/label_volume.hpp"
 
 namespace fabrica::cli::batch {
@@ -541,6 +542,7 @@ void run_args(const std::vector<std::string>& args) {
 }
 
 std::string file_hash(const fs::path& path) {
+  require_regular_file(path, path.string());  // a FIFO would block the batch forever
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path.string() + ": cannot open for reading");
   std::uint64_t h = 1469598103934665603ull;

@@ -88,7 +88,9 @@ class LineDrawer {
   LineExtractor extractor_;
 };
 
-/// One drawing: LineDrawer(surface, options).draw(camera).
+/// One drawing: the same as LineDrawer(surface, options).draw(camera), with
+/// less memory at the peak (nothing is kept for a next view: the depth
+/// raster's scratch and the extractor are freed as soon as they are done).
 LineDrawing draw_lines(const Surface& surface, const Camera& camera,
                        const DrawLinesOptions& options = {});
 

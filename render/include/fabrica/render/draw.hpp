@@ -102,10 +102,13 @@ LineSet vector_lines(const SceneSurfaces& scene, const Scene& drawn, const Camer
 /// `reference_size` is RenderOptions::line_reference_size.
 std::vector<LineLayer> vector_layers(const SceneSurfaces& scene, const Scene& drawn,
                                      const Camera& camera, double reference_size = 1024.0);
-/// fabrica::write_layered_svg / write_layered_pdf of vector_layers().
+/// fabrica::write_layered_svg / write_layered_pdf of vector_layers(), with
+/// `overlay` (the annotation, render/annotate.hpp) over the structures.
 void write_scene_svg(const std::filesystem::path& path, const SceneSurfaces& scene,
-                     const Scene& drawn, const Camera& camera, double reference_size = 1024.0);
+                     const Scene& drawn, const Camera& camera, double reference_size = 1024.0,
+                     const VectorOverlay* overlay = nullptr);
 void write_scene_pdf(const std::filesystem::path& path, const SceneSurfaces& scene,
-                     const Scene& drawn, const Camera& camera, double reference_size = 1024.0);
+                     const Scene& drawn, const Camera& camera, double reference_size = 1024.0,
+                     const VectorOverlay* overlay = nullptr);
 
 }  // namespace fabrica::render

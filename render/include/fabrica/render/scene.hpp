@@ -23,6 +23,9 @@ struct Color {
   float r = 0.0f, g = 0.0f, b = 0.0f, a = 1.0f;
 };
 
+/// "#rrggbb" of the colour's r, g, b (clamped to [0,1], rounded).
+std::string to_hex(const Color& color);
+
 enum class Role { focus, context };
 /// none: not drawn but still hides lines behind it; flat: constant colour;
 /// lambert: headlight diffuse; toon: headlight diffuse in bands.
@@ -97,10 +100,26 @@ struct StructureSpec {
   Role role = Role::focus;
   StructureStyle style;
   std::optional<Space> space;  ///< override of the file's coordinate tag
+  /// Annotation label (issue 17, item 5): empty = the name with '_' as
+  /// spaces; `show_label` false = no label (still in the legend).
+  std::string label;
+  bool show_label = true;
   /// Hatched by `fabrica hatch SCENE.json`; unset: the focus structures are.
   std::optional<bool> hatching;
   /// Whether `fabrica hatch` hatches this structure.
   bool hatched() const { return hatching.value_or(role == Role::focus); }
+};
+
+/// What the annotation draws over the picture (render/annotate.hpp); every
+/// part off by default. `font_size` is in pixels of a picture whose smaller
+/// side is 1024 (scaled with the output, as line widths are).
+struct AnnotationSpec {
+  bool labels = false;
+  bool legend = false;
+  bool scale_bar = false;
+  bool orientation = false;
+  double font_size = 18.0;
+  bool any() const { return labels || legend || scale_bar || orientation; }
 };
 
 /// What the default camera frames: every structure, or the focus
@@ -116,6 +135,7 @@ struct SceneSpec {
   std::optional<Frame> frame;
   Color background{1.0f, 1.0f, 1.0f, 1.0f};
   bool transparent = false;
+  AnnotationSpec annotation;
 };
 
 const char* to_string(Frame frame);
@@ -153,7 +173,8 @@ std::optional<HiddenLines> parse_hidden_lines(std::string_view s);
 /// transparent, camera {...} (camera JSON), view "anterior"|..., frame
 /// "focus"|"all", structures: [{name, mesh, role, space, shading, color,
 /// opacity, ambient, toon_levels, lines: [families], line_color, line_width,
-/// taper, fade, hidden, hybrid, smooth, hatching}].
+/// taper, fade, hidden, hybrid, smooth, label: "text" | false, hatching}], annotation
+/// {labels, legend, scale_bar, orientation: booleans, font_size: pixels}.
 /// Missing style keys take default_style(role). Relative mesh paths are
 /// resolved against `base_dir`. Validation is strict: an unknown key or a
 /// value of the wrong type throws InputError naming `what`, the JSON path
