@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <deque>
 #include <mutex>
+#include <set>
 #include <sstream>
 
 #include "fabrica/core/error.hpp"
@@ -130,8 +131,15 @@ struct MeshKey {
 struct MeshCache {
   std::mutex mutex;
   std::deque<std::pair<MeshKey, std::shared_ptr<const LoadedSurface>>> entries;  // newest first
-  static constexpr std::size_t capacity = 2;
+  /// The files of the current input when it is a scene (load_scene_surfaces):
+  /// its meshes stay together instead of evicting one another.
+  std::set<std::string> group;
+  std::size_t capacity() const { return 2 * std::max<std::size_t>(1, group.size()); }
 };
+
+std::string cache_path(const std::filesystem::path& path) {
+  return std::filesystem::absolute(path).lexically_normal().string();
+}
 
 MeshCache& mesh_cache() {
   static MeshCache cache;
@@ -144,7 +152,7 @@ std::shared_ptr<const LoadedSurface> load_prepared_surface(const std::filesystem
                                                            const PrepareOptions& options) {
   std::error_code ec_size, ec_time;
   MeshKey key;
-  key.path = std::filesystem::absolute(path).lexically_normal().string();
+  key.path = cache_path(path);
   key.size = std::filesystem::file_size(path, ec_size);
   key.mtime = std::filesystem::last_write_time(path, ec_time);
   key.space = options.space;
@@ -156,7 +164,10 @@ std::shared_ptr<const LoadedSurface> load_prepared_surface(const std::filesystem
     for (const auto& [k, mesh] : cache.entries)
       if (k == key) return mesh;
     // Another input: let go of the previous one before reading (flat memory).
-    std::erase_if(cache.entries, [&](const auto& e) { return e.first.path != key.path; });
+    if (!cache.group.count(key.path)) cache.group.clear();
+    std::erase_if(cache.entries, [&](const auto& e) {
+      return e.first.path != key.path && !cache.group.count(e.first.path);
+    });
   }
   PreparedMesh prepared = prepare_mesh(path, options);
   auto loaded = std::make_shared<LoadedSurface>();
@@ -166,12 +177,75 @@ std::shared_ptr<const LoadedSurface> load_prepared_surface(const std::filesystem
   if (cacheable) {
     const std::lock_guard<std::mutex> lock(cache.mutex);
     cache.entries.emplace_front(key, loaded);
-    while (cache.entries.size() > MeshCache::capacity) cache.entries.pop_back();
+    while (cache.entries.size() > cache.capacity()) cache.entries.pop_back();
   }
   return loaded;
 }
 
+ChosenCamera choose_camera(const std::string& camera_file, const std::string& view,
+                           const std::string& size, std::pair<int, int> default_size,
+                           const ViewFramer& frame, const std::optional<Camera>& given,
+                           const std::string& given_what, const std::string& default_view) {
+  if (!camera_file.empty() && !view.empty())
+    throw InputError("give either --camera FILE or --view NAME, not both");
+  std::optional<std::pair<int, int>> wanted;
+  if (!size.empty()) wanted = parse_size(size);
+  ChosenCamera out;
+  if (!camera_file.empty() || (view.empty() && given)) {
+    // A camera keeps its framing; --size changes only the picture's size.
+    out.camera = !camera_file.empty() ? read_camera(camera_file) : *given;
+    out.what = !camera_file.empty() ? camera_file : given_what;
+    if (wanted) std::tie(out.camera.width, out.camera.height) = *wanted;
+  } else {
+    const std::string name = view.empty() ? default_view : lower(view);
+    const auto [w, h] = wanted.value_or(default_size);
+    out.camera = frame(parse_view(name), w, h);
+    out.what = "--view " + name;
+    out.from_view = true;
+  }
+  validate_camera(out.camera, out.what);
+  return out;
+}
+
+bool is_scene_file(const std::filesystem::path& path) {
+  return lower(path.extension().string()) == ".json";
+}
+
 #if __has_include("fabrica/render/renderer.hpp")
+render::SceneSurfaces load_scene_surfaces(render::SceneSpec spec) {
+  {  // The scene is one input: its meshes are kept together.
+    MeshCache& cache = mesh_cache();
+    const std::lock_guard<std::mutex> lock(cache.mutex);
+    cache.group.clear();
+    for (const auto& s : spec.structures) cache.group.insert(cache_path(s.mesh));
+  }
+  return render::load_scene(std::move(spec), [](const render::StructureSpec& s) {
+    PrepareOptions prepare;
+    prepare.space = s.space;
+    return load_prepared_surface(s.mesh, prepare)->surface;
+  });
+}
+
+ChosenCamera choose_scene_camera(const render::SceneSurfaces& scene, render::Frame frame,
+                                 const std::string& camera_file, const std::string& view,
+                                 const std::string& size, std::pair<int, int> default_size,
+                                 const std::string& input) {
+  return choose_camera(
+      camera_file, view, size, default_size,
+      [&](AnatomicalView v, int w, int h) { return render::view_camera(scene, v, frame, w, h); },
+      scene.spec.camera, input + ": camera",
+      scene.spec.view ? to_string(*scene.spec.view) : "anterior");
+}
+
+render::Frame frame_option(const std::string& text, const render::SceneSpec& spec) {
+  std::optional<render::Frame> frame;
+  if (!text.empty()) {
+    frame = render::parse_frame(lower(text));
+    if (!frame) throw InputError("--frame must be focus or all (got \"" + text + "\")");
+  }
+  return render::default_frame(spec, frame);
+}
+
 namespace {
 struct KeptRenderer {
   bool keep = false;

@@ -3,7 +3,9 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -16,6 +18,7 @@
 #include "fabrica/lines/line_set.hpp"
 #if __has_include("fabrica/render/renderer.hpp")
 #include "fabrica/render/context.hpp"
+#include "fabrica/render/draw.hpp"
 #include "fabrica/render/renderer.hpp"
 #endif
 
@@ -73,12 +76,55 @@ struct LoadedSurface {
 /// earlier call with the same file (same path, size and modification time)
 /// and the same options, so that `fabrica batch` reads and precomputes an
 /// input once per worker for all its views and styles. The process keeps at
-/// most two meshes, both of the last input read, so memory stays flat.
+/// most two meshes, both of the last input read (for a scene, loaded with
+/// load_scene_surfaces, two per structure of that scene), so memory stays flat.
 /// Throws what prepare_mesh throws.
 std::shared_ptr<const LoadedSurface> load_prepared_surface(const std::filesystem::path& path,
                                                            const PrepareOptions& options);
 
+/// A view framed for a width × height picture (e.g. anatomical_camera of a
+/// mesh's box, render::view_camera of a scene).
+using ViewFramer = std::function<Camera(AnatomicalView view, int width, int height)>;
+
+struct ChosenCamera {
+  Camera camera;
+  std::string what;        ///< for messages: the camera file, "--view NAME", ...
+  bool from_view = false;  ///< framed from an anatomical view (depends on the space)
+};
+
+/// How every drawing command (lines, render, hatch; a mesh or a scene) turns
+/// --camera FILE, --view NAME and --size WxH into its camera (docs/cli.md,
+/// "Cameras and sizes"): a camera file, or else `given` (a scene's own
+/// camera) when no --view is named, keeps its framing and takes --size when
+/// given; a view (--view, else `default_view`) is framed by `frame` at the
+/// requested size (--size, else `default_size`), so its framing fits that
+/// aspect ratio. Validated (InputError naming what is wrong).
+ChosenCamera choose_camera(const std::string& camera_file, const std::string& view,
+                           const std::string& size, std::pair<int, int> default_size,
+                           const ViewFramer& frame, const std::optional<Camera>& given = {},
+                           const std::string& given_what = {},
+                           const std::string& default_view = "anterior");
+
+/// True for an input the drawing commands read as a scene (a .json file).
+bool is_scene_file(const std::filesystem::path& path);
+
 #if __has_include("fabrica/render/renderer.hpp")
+/// The scene's meshes prepared as render::load_scene does, through
+/// load_prepared_surface (so `fabrica batch` reuses them between items: the
+/// scene's meshes are cached together as one input).
+render::SceneSurfaces load_scene_surfaces(render::SceneSpec spec);
+
+/// choose_camera for a scene read from `input`: its own camera when no
+/// --camera or --view is given, else its view (default anterior) framed by
+/// render::view_camera with `frame`.
+ChosenCamera choose_scene_camera(const render::SceneSurfaces& scene, render::Frame frame,
+                                 const std::string& camera_file, const std::string& view,
+                                 const std::string& size, std::pair<int, int> default_size,
+                                 const std::string& input);
+
+/// --frame focus|all (empty: the scene's, else render::default_frame).
+render::Frame frame_option(const std::string& text, const render::SceneSpec& spec);
+
 /// A headless renderer for `options`: a new one (its GL context ends with
 /// it), or, once keep_headless_renderer(true) was called (a `fabrica batch`
 /// worker), the process's one, created at first use and kept between items:

@@ -25,15 +25,10 @@
 #include "fabrica/hatching/svg_writer.hpp"
 #include "fabrica/io/prepare.hpp"
 
-#if __has_include("fabrica/lines/draw.hpp")
+// `hatch` is built only with fabrica::render (apps/fabrica/CMakeLists.txt),
+// which brings fabrica::lines.
 #include "fabrica/lines/draw.hpp"
-#define FABRICA_HATCH_WITH_LINES 1
-#endif
-#if __has_include("fabrica/render/draw.hpp")
 #include "fabrica/render/draw.hpp"
-#include "fabrica/render/render_mesh.hpp"
-#define FABRICA_HATCH_WITH_RENDER 1
-#endif
 
 namespace fabrica::cli {
 namespace {
@@ -48,6 +43,7 @@ struct HatchArgs {
   std::string space;
   std::string output;
   std::string with_lines;
+  std::string frame;
   double threshold = 1.0;
   int grid_depth = -1;
   int seed_depth = -1;
@@ -77,7 +73,26 @@ struct HatchArgs {
   bool quiet = false;
 };
 
-#ifdef FABRICA_HATCH_WITH_LINES
+/// The visible runs of `line` projected to image pixels, appended to `out`.
+void append_visible_runs(const Polyline& line, const Camera& camera,
+                         std::vector<std::vector<Vec2>>& out) {
+  std::vector<Vec2> run;
+  auto flush = [&] {
+    if (run.size() >= 2) out.push_back(run);
+    run.clear();
+  };
+  const std::size_t n = line.vertices.size();
+  for (std::size_t k = 0; k < n + (line.closed ? 1 : 0); ++k) {
+    const LineVertex& v = line.vertices[k % n];
+    if (!v.visible) {
+      flush();
+      continue;
+    }
+    run.push_back(project(camera, v.position).pixel);
+  }
+  flush();
+}
+
 /// The feature lines of --with-lines (chained; visible parts only with
 /// `visibility`, else every vertex marked visible for the renderer).
 LineSet feature_lines(const Surface& surface, const Camera& camera, const std::string& list,
@@ -111,86 +126,84 @@ std::vector<hatching::SvgLayer> feature_line_layers(const Surface& surface, cons
     layer.width_px = width;
     for (const Polyline& line : lines.polylines) {
       if (line.family != family) continue;
-      std::vector<Vec2> run;
-      auto flush = [&] {
-        if (run.size() >= 2) layer.polylines.push_back(run);
-        run.clear();
-      };
-      const std::size_t n = line.vertices.size();
-      for (std::size_t k = 0; k < n + (line.closed ? 1 : 0); ++k) {
-        const LineVertex& v = line.vertices[k % n];
-        if (!v.visible) {
-          flush();
-          continue;
-        }
-        run.push_back(project(camera, v.position).pixel);
-      }
-      flush();
+      append_visible_runs(line, camera, layer.polylines);
     }
     layers.push_back(std::move(layer));
   }
   return layers;
 }
-#endif
 
-#ifdef FABRICA_HATCH_WITH_RENDER
-/// The PNG: the surface as white paper (flat, opaque, so it hides what is
-/// behind it), the strokes in black at the SVG's widths (image pixels), the
-/// ridges (red) and feature lines above them, through the renderer's
-/// line-quad pipeline. Returns the backend's name.
-std::string write_hatching_png(const HatchArgs& args, const Surface& surface, const Camera& camera,
-                               const hatching::StrokeSet& strokes) {
+/// The PNG through render::render_scene (as `fabrica render` draws): the
+/// scene's structures as build_scene makes them, each hatched one as white
+/// paper (flat, opaque, so it hides what is behind it) carrying its strokes
+/// in black at the SVG's widths (image pixels), its ridges (red) and its
+/// feature lines above them. `strokes[i]` are structure i's (none when it is
+/// not hatched). For a single mesh (`mesh_lines`) the feature lines are
+/// --with-lines at --line-width in image pixels; a scene's keep their scene
+/// style. Returns the backend's name.
+std::string write_hatching_png(const HatchArgs& args, const render::SceneSurfaces& scene,
+                               const Camera& camera,
+                               const std::vector<std::optional<hatching::StrokeSet>>& strokes,
+                               bool mesh_lines) {
   const render::HeadlessOptions headless = render::headless_options(args.backend);
-  render::Structure structure;
-  structure.name = "surface";
-  structure.style.shading = render::Shading::flat;
-  structure.style.color = {1.0f, 1.0f, 1.0f, 1.0f};
-  structure.style.opacity = 1.0;
-  structure.mesh = std::make_shared<render::RenderMesh>(render::make_render_mesh(surface, false));
-  auto plain = [](double width, render::Color color) {
+  render::RenderOptions options;
+  options.transparent_background = args.transparent || scene.spec.transparent;
+  // A single mesh: widths in image pixels, as in the SVG. A scene keeps its
+  // lines scaled with the image; the strokes are scaled back to image pixels.
+  options.scale_lines_with_image = !mesh_lines;
+  const double to_image =
+      mesh_lines ? 1.0 : options.line_reference_size / std::min(camera.width, camera.height);
+  auto plain = [&](double width, render::Color color) {
     render::LineStyle style;
     style.color = color;
-    style.width = width;
+    style.width = width * to_image;
     style.contour_width_factor = 1.0;
     style.taper = 0.0;  // the SVG's strokes are not tapered either
     style.fade_by_strength = false;
     return style;
   };
-  // One layer per style weight (ConFIS fades towards its masks' borders;
-  // shading strokes are all weight 1), lightest first, as the SVG's runs.
-  std::map<double, render::PolylineLayer> by_weight;
-  for (const hatching::Stroke& stroke : strokes.strokes) {
-    for (const hatching::WeightedRun& run : hatching::weighted_runs(stroke)) {
-      auto it = by_weight.find(run.weight);
-      if (it == by_weight.end()) {
-        const float w = static_cast<float>(run.weight);
-        it = by_weight
-                 .emplace(run.weight,
-                          render::PolylineLayer{
-                              "strokes", plain(args.stroke_width * run.weight, {0, 0, 0, w}), {}})
-                 .first;
+  render::Scene drawn = render::build_scene(scene, camera);
+  for (std::size_t i = 0; i < drawn.structures.size(); ++i) {
+    if (!strokes[i]) continue;
+    render::Structure& structure = drawn.structures[i];
+    structure.style.shading = render::Shading::flat;
+    structure.style.color = {1.0f, 1.0f, 1.0f, 1.0f};
+    structure.style.opacity = 1.0;
+    // One layer per stroke weight (ConFIS fades towards its masks' borders;
+    // shading strokes are all weight 1), lightest first, as the SVG's runs.
+    std::map<double, render::PolylineLayer> by_weight;
+    for (const hatching::Stroke& stroke : strokes[i]->strokes) {
+      for (const hatching::WeightedRun& run : hatching::weighted_runs(stroke)) {
+        auto it = by_weight.find(run.weight);
+        if (it == by_weight.end()) {
+          const float w = static_cast<float>(run.weight);
+          it = by_weight
+                   .emplace(run.weight,
+                            render::PolylineLayer{
+                                "strokes", plain(args.stroke_width * run.weight, {0, 0, 0, w}), {}})
+                   .first;
+        }
+        std::vector<Vec3> points;
+        for (std::size_t k = run.first; k <= run.last; ++k)
+          points.push_back(stroke.vertices[k].position);
+        it->second.polylines.push_back(std::move(points));
       }
-      std::vector<Vec3> points;
-      for (std::size_t k = run.first; k <= run.last; ++k)
-        points.push_back(stroke.vertices[k].position);
-      it->second.polylines.push_back(std::move(points));
     }
+    for (auto& [weight, layer] : by_weight) structure.polyline_layers.push_back(std::move(layer));
+    if (args.draw_ridges) {
+      render::PolylineLayer ridges{
+          "ridges", plain(args.stroke_width, {0.84f, 0.15f, 0.16f, 1}), {}};
+      for (const auto& r : strokes[i]->ridges)
+        ridges.polylines.push_back({r[0].position, r[1].position});
+      structure.polyline_layers.push_back(std::move(ridges));
+    }
+    if (!mesh_lines) continue;
+    structure.style.families.clear();
+    structure.style.lines = plain(args.line_width, {0, 0, 0, 1});
+    if (!args.with_lines.empty())
+      structure.lines = feature_lines(*scene.surfaces[i], camera, args.with_lines,
+                                      structure.style.families, false);
   }
-  for (auto& [weight, layer] : by_weight) structure.polyline_layers.push_back(std::move(layer));
-  if (args.draw_ridges) {
-    render::PolylineLayer ridges{"ridges", plain(args.stroke_width, {0.84f, 0.15f, 0.16f, 1}), {}};
-    for (const auto& r : strokes.ridges) ridges.polylines.push_back({r[0].position, r[1].position});
-    structure.polyline_layers.push_back(std::move(ridges));
-  }
-  structure.style.families.clear();
-  structure.style.lines = plain(args.line_width, {0, 0, 0, 1});
-#ifdef FABRICA_HATCH_WITH_LINES
-  if (!args.with_lines.empty())
-    structure.lines =
-        feature_lines(surface, camera, args.with_lines, structure.style.families, false);
-#endif
-  render::Scene scene;
-  scene.structures.push_back(std::move(structure));
 
   std::shared_ptr<render::Renderer> renderer;  // one GL context per `fabrica batch` worker
   try {
@@ -202,14 +215,59 @@ std::string write_hatching_png(const HatchArgs& args, const Surface& surface, co
                                             "or OSMesa) and none could be created (" +
                                             e.what() + "); write .svg instead");
   }
-  render::RenderOptions options;
-  options.transparent_background = args.transparent;
-  options.scale_lines_with_image = false;  // widths in image pixels, as in the SVG
-  const render::Image image = renderer->render(scene, camera, options);
-  render::write_png(image, args.output);
-  return render::to_string(renderer->context().backend());
+  const render::RenderedScene picture =
+      render::render_scene(*renderer, std::move(drawn), camera, options);
+  render::write_png(picture.image, args.output);
+  return render::to_string(picture.backend);
 }
-#endif
+
+/// A scene's vector lines (render::vector_layers, as `render --svg` draws
+/// them) as layers of the hatching SVG: each structure's visible runs in its
+/// line colour at its width in image pixels.
+std::vector<hatching::SvgLayer> scene_line_layers(const render::SceneSurfaces& scene,
+                                                  const Camera& camera) {
+  const render::Scene drawn = render::build_scene(scene, camera);
+  std::vector<hatching::SvgLayer> out;
+  for (const LineLayer& layer : render::vector_layers(scene, drawn, camera)) {
+    hatching::SvgLayer svg;
+    svg.name = "lines-";  // a class name: letters, digits, '-' and '_'
+    for (const char c : layer.name)
+      svg.name += std::isalnum(static_cast<unsigned char>(c)) || c == '_' ? c : '-';
+    svg.color = layer.color;
+    svg.width_px = layer.style.width_px * std::min(camera.width, camera.height) /
+                   std::max(1.0, layer.style.reference_size);
+    for (const Polyline& line : layer.lines.polylines)
+      append_visible_runs(line, camera, svg.polylines);
+    out.push_back(std::move(svg));
+  }
+  return out;
+}
+
+/// Every hatched structure's strokes as one set (in structure order) for the
+/// SVG and the summary.
+hatching::StrokeSet merged_strokes(const std::vector<std::optional<hatching::StrokeSet>>& sets,
+                                   const Camera& camera) {
+  hatching::StrokeSet all;
+  all.width = camera.width;
+  all.height = camera.height;
+  bool first = true;
+  for (const auto& s : sets) {
+    if (!s) continue;
+    if (first) {
+      all.grid_depth = s->grid_depth;
+      all.seed_depth = s->seed_depth;
+      first = false;
+    }
+    all.strokes.insert(all.strokes.end(), s->strokes.begin(), s->strokes.end());
+    all.ridges.insert(all.ridges.end(), s->ridges.begin(), s->ridges.end());
+    all.stats.candidates += s->stats.candidates;
+    all.stats.seeds += s->stats.seeds;
+    all.stats.short_strokes += s->stats.short_strokes;
+    all.stats.ridge_segments += s->stats.ridge_segments;
+    for (std::size_t k = 0; k < all.stats.ends.size(); ++k) all.stats.ends[k] += s->stats.ends[k];
+  }
+  return all;
+}
 
 int run_hatch(const HatchArgs& args) {
   const HatchingMethod method = parse_hatching_method(args.method);
@@ -224,45 +282,10 @@ int run_hatch(const HatchArgs& args) {
   const std::string ext = lower(std::filesystem::path(args.output).extension().string());
   if (ext != ".svg" && ext != ".png")
     throw InputError("-o " + args.output + ": the output must end in .svg or .png");
-#ifndef FABRICA_HATCH_WITH_RENDER
-  if (ext == ".png")
-    throw Error(ErrorKind::unavailable,
-                "-o " + args.output +
-                    ": PNG output of hatching needs the renderer (fabrica::render), which this "
-                    "build lacks; write .svg (and rasterise it, e.g. with rsvg-convert)");
-#else
   if (ext == ".png")
     render::headless_options(args.backend);  // a bad --backend fails before the work
-#endif
   if (!(args.line_width > 0.0) || !std::isfinite(args.line_width))
     throw InputError("--line-width: must be a positive number of pixels");
-
-  // The same preparation as `fabrica lines`: oriented outward (inward
-  // normals would turn the light's shading inside out). Cached for `fabrica
-  // batch` (cli_common.hpp).
-  PrepareOptions prepare;
-  if (!args.space.empty()) prepare.space = parse_space(args.space);
-  prepare.orient = !args.keep_orientation;
-  const auto loaded = load_prepared_surface(args.mesh, prepare);
-  if (!args.quiet)
-    for (const auto& m : loaded->messages) std::fprintf(stderr, "fabrica hatch: %s\n", m.c_str());
-  const Surface& surface = *loaded->surface;
-  const Space space = surface.mesh().space;
-
-  std::optional<std::pair<int, int>> size;
-  if (!args.size.empty()) size = parse_size(args.size);
-  Camera camera;
-  SpaceSource assumed_space = SpaceSource::file_tag;  // warned about once the work is done
-  if (!args.camera_file.empty()) {
-    camera = read_camera(args.camera_file);
-    if (size) std::tie(camera.width, camera.height) = *size;
-  } else {
-    const AnatomicalView view = parse_view(args.view.empty() ? "anterior" : args.view);
-    const auto [w, h] = size.value_or(std::pair<int, int>{800, 800});
-    camera = anatomical_camera(view, bounding_box(surface.positions()), space, w, h);
-    assumed_space = surface.mesh().space_source;
-  }
-  validate_camera(camera, args.camera_file.empty() ? "camera" : args.camera_file);
 
   DrawHatchingOptions drawing;
   drawing.method = method;
@@ -289,28 +312,73 @@ int run_hatch(const HatchArgs& args) {
   options.min_length_px = args.min_length.value_or(1.0);
   options.ridge_removal = !args.no_ridge_removal;
   options.ridges.min_angle_deg = args.ridge_angle;
-  const hatching::StrokeSet strokes = draw_hatching(surface, camera, drawing);
 
-#ifndef FABRICA_HATCH_WITH_LINES
-  if (!args.with_lines.empty())
-    throw Error(ErrorKind::unavailable,
-                "--with-lines: this build has no line engine (fabrica::lines)");
-#endif
+  // What is hatched: a mesh (one focus structure, prepared as `fabrica
+  // lines` prepares it, oriented outward unless --keep-orientation; cached
+  // for `fabrica batch`), or a scene's structures with "hatching" on (by
+  // default its focus), each with its scene style.
+  const bool scene_input = is_scene_file(args.mesh);
+  render::SceneSurfaces scene;
+  render::Frame frame = render::Frame::all;
+  if (scene_input) {
+    if (args.keep_orientation)
+      throw InputError(
+          "--keep-orientation: a scene's meshes are always oriented outward (as "
+          "`fabrica render` prepares them); hatch the mesh itself instead");
+    render::SceneSpec spec = render::read_scene_spec(args.mesh);
+    const bool any = std::any_of(spec.structures.begin(), spec.structures.end(),
+                                 [](const render::StructureSpec& s) { return s.hatched(); });
+    if (!any)
+      throw InputError(args.mesh +
+                       ": no structure to hatch: set \"hatching\": true on a structure (by "
+                       "default the focus structures are hatched)");
+    for (auto& s : spec.structures) {
+      if (!args.space.empty()) s.space = parse_space(args.space);
+      if (s.hatched() && !args.with_lines.empty())
+        s.style.families = parse_family_list(args.with_lines, "--with-lines", {}, true);
+    }
+    frame = frame_option(args.frame, spec);
+    scene = load_scene_surfaces(std::move(spec));
+  } else {
+    if (!args.frame.empty()) throw InputError("--frame: only for a scene input (SCENE.json)");
+    PrepareOptions prepare;
+    if (!args.space.empty()) prepare.space = parse_space(args.space);
+    prepare.orient = !args.keep_orientation;
+    const auto loaded = load_prepared_surface(args.mesh, prepare);
+    if (!args.quiet)
+      for (const auto& m : loaded->messages) std::fprintf(stderr, "fabrica hatch: %s\n", m.c_str());
+    render::StructureSpec structure;
+    structure.name = "surface";
+    structure.mesh = args.mesh;
+    structure.role = render::Role::focus;  // families empty: its lines are --with-lines
+    if (loaded->surface->mesh().space_source == SpaceSource::default_assumed)
+      scene.assumed_space.push_back(args.mesh);
+    scene.add(std::move(structure), loaded->surface);
+  }
+
+  const ChosenCamera chosen = choose_scene_camera(scene, frame, args.camera_file, args.view,
+                                                  args.size, {800, 800}, args.mesh);
+  const Camera& camera = chosen.camera;
+
+  std::vector<std::optional<hatching::StrokeSet>> per_structure(scene.surfaces.size());
+  for (std::size_t i = 0; i < scene.surfaces.size(); ++i)
+    if (!scene_input || scene.spec.structures[i].hatched())
+      per_structure[i] = draw_hatching(*scene.surfaces[i], camera, drawing);
+  const hatching::StrokeSet strokes = merged_strokes(per_structure, camera);
+
   std::string via;
   if (ext == ".png") {
-#ifdef FABRICA_HATCH_WITH_RENDER
-    via = write_hatching_png(args, surface, camera, strokes);
-#endif
+    via = write_hatching_png(args, scene, camera, per_structure, !scene_input);
   } else {
-    std::vector<hatching::SvgLayer> layers;
-#ifdef FABRICA_HATCH_WITH_LINES
-    if (!args.with_lines.empty())
-      layers = feature_line_layers(surface, camera, args.with_lines, args.line_width);
-#endif
+    const std::vector<hatching::SvgLayer> layers =
+        scene_input ? scene_line_layers(scene, camera)
+        : args.with_lines.empty()
+            ? std::vector<hatching::SvgLayer>{}
+            : feature_line_layers(*scene.surfaces[0], camera, args.with_lines, args.line_width);
     hatching::SvgStyle style;
     style.stroke_width_px = args.stroke_width;
     style.draw_ridges = args.draw_ridges;
-    style.background = !args.transparent;
+    style.background = !(args.transparent || scene.spec.transparent);
     hatching::write_hatching_svg(args.output, strokes, style, layers);
   }
   if (!args.quiet) {
@@ -331,7 +399,9 @@ int run_hatch(const HatchArgs& args) {
                     strokes.stats.ends[static_cast<std::size_t>(k)]);
     std::printf("\n");
   }
-  warn_if_space_assumed(assumed_space, args.mesh, "hatch", args.quiet);
+  if (chosen.from_view)
+    for (const auto& path : scene.assumed_space)
+      warn_if_space_assumed(SpaceSource::default_assumed, path, "hatch", args.quiet);
   return 0;
 }
 
@@ -343,7 +413,10 @@ void add_hatch_command(CLI::App& app, Action& action) {
                                      "Shading strokes (Singh & Schaefer 2010, \"Suggestive "
                                      "Hatching\"), or ConFIS curvature streamlines with --method "
                                      "confis, as SVG or PNG; see docs/hatching.md, docs/confis.md");
-  cmd->add_option("mesh", args->mesh, "Input mesh (OBJ, PLY, STL, OFF, VTP, VTK)")->required();
+  cmd->add_option("mesh", args->mesh,
+                  "Input mesh (OBJ, PLY, STL, OFF, VTP, VTK) or scene .json (hatches the "
+                  "structures with \"hatching\": true, by default the focus)")
+      ->required();
   cmd->add_option("--method", args->method,
                   "shading (default: shading strokes, Singh & Schaefer 2010) or confis "
                   "(curvature streamlines in the contour margin and feature regions, Lawonn et "
@@ -387,6 +460,8 @@ void add_hatch_command(CLI::App& app, Action& action) {
                   "least this many degrees (default 20, the paper's)");
   cmd->add_flag("--draw-ridges", args->draw_ridges,
                 "Also draw the detected intensity ridges (red), for inspection");
+  cmd->add_option("--frame", args->frame,
+                  "Scene input: what the view frames, focus (default with context) or all");
   cmd->add_option(
       "--with-lines", args->with_lines,
       "Comma-separated feature-line families drawn over the strokes, e.g. contour,suggestive");

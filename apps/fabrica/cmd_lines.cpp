@@ -6,8 +6,10 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstdio>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -21,13 +23,18 @@
 #include "fabrica/lines/draw.hpp"
 #include "fabrica/lines/seg_io.hpp"
 #include "fabrica/lines/writers.hpp"
+#if __has_include("fabrica/render/draw.hpp")
+#include "fabrica/render/draw.hpp"
+#define FABRICA_LINES_WITH_SCENES 1
+#endif
 
 namespace fabrica::cli {
 namespace {
 
 struct LinesArgs {
   std::string mesh, camera_file, view, size, types = "default", output, hidden = "omit", light;
-  std::string space;
+  std::string space, frame;
+  std::set<std::string> given;  ///< the options given on the command line (long names)
   double feature_size = 0.0;
   std::optional<double> suggestive_t, highlight_t, ridge_t, valley_t, apparent_t, pel_t,
       laplacian_t, demarcating_t, crease_angle;
@@ -85,6 +92,69 @@ DrawLinesOptions drawing_options(const LinesArgs& a, const std::string& ext) {
   return d;
 }
 
+/// `fabrica lines SCENE.json`: every structure's lines in its scene style,
+/// the layers `fabrica render SCENE.json --svg` writes (render::vector_layers):
+/// context first, focus over it, each structure's colour, width, opacity and
+/// hidden lines. --types, --width, --hidden set the focus structures' lines,
+/// --smooth every structure's, as render's --lines, --line-width, --hidden
+/// and --smooth do.
+int run_lines_scene(const LinesArgs& a, const std::string& ext) {
+#ifdef FABRICA_LINES_WITH_SCENES
+  if (ext != ".svg" && ext != ".pdf")
+    throw InputError("-o " + a.output +
+                     ": a scene's lines are written as .svg or .pdf (a layer per structure); "
+                     ".seg and .json hold the lines of one mesh");
+  for (const char* mesh_only :
+       {"--feature-size", "--suggestive-threshold", "--highlight-threshold", "--ridge-threshold",
+        "--valley-threshold", "--apparent-threshold", "--pel-threshold", "--laplacian-threshold",
+        "--demarcating-threshold", "--crease-angle", "--light", "--mesh-edge-contours",
+        "--no-visibility", "--min-length", "--no-fade", "--no-taper", "--keep-orientation"})
+    if (a.given.count(mesh_only))
+      throw InputError(std::string(mesh_only) + ": only for a mesh input; a scene's structures " +
+                       "are drawn in their scene style (" + a.mesh + ")");
+  if (a.smooth < 0) throw InputError("--smooth must be >= 0 (iterations; 0 = off)");
+  if (!(a.width > 0.0) || !std::isfinite(a.width))
+    throw InputError("--width: must be a positive number of pixels");
+  render::SceneSpec spec = render::read_scene_spec(a.mesh);
+  for (auto& s : spec.structures) {
+    if (!a.space.empty()) s.space = parse_space(a.space);
+    if (a.given.count("--smooth")) s.style.smooth = a.smooth;
+    if (s.role != render::Role::focus) continue;
+    if (a.given.count("--types"))
+      s.style.families = parse_family_list(a.types, "--types", LineOptions{}.families, false);
+    if (a.given.count("--width")) s.style.lines.width = a.width;
+    if (a.given.count("--hidden"))
+      s.style.lines.hidden = *render::parse_hidden_lines(lower(a.hidden));
+  }
+  const render::Frame frame = frame_option(a.frame, spec);
+  const render::SceneSurfaces scene = load_scene_surfaces(spec);
+  const ChosenCamera chosen =
+      choose_scene_camera(scene, frame, a.camera_file, a.view, a.size, {1024, 1024}, a.mesh);
+  const Camera& camera = chosen.camera;
+  const render::Scene drawn = render::build_scene(scene, camera);
+  const std::vector<LineLayer> layers = render::vector_layers(scene, drawn, camera);
+  if (ext == ".svg")
+    write_layered_svg(a.output, layers, camera);
+  else
+    write_layered_pdf(a.output, layers, camera);
+  if (!a.quiet) {
+    std::size_t polylines = 0;
+    for (const auto& l : layers) polylines += l.lines.polylines.size();
+    std::fprintf(stderr, "fabrica lines: %zu structure(s), %zu polylines -> %s\n", layers.size(),
+                 polylines, a.output.c_str());
+  }
+  if (chosen.from_view)
+    for (const auto& path : scene.assumed_space)
+      warn_if_space_assumed(SpaceSource::default_assumed, path, "lines", a.quiet);
+  return 0;
+#else
+  (void)ext;
+  throw Error(ErrorKind::unavailable, a.mesh +
+                                          ": a scene input needs the renderer library "
+                                          "(fabrica::render), which this build lacks");
+#endif
+}
+
 int run_lines(const LinesArgs& a) {
   const std::filesystem::path out_path(a.output);
   const std::string ext = lower(out_path.extension().string());
@@ -94,6 +164,8 @@ int run_lines(const LinesArgs& a) {
     throw Error(ErrorKind::unavailable, "PDF output needs cairo, which this build lacks; use .svg");
   if (!a.camera_file.empty() && !a.view.empty())
     throw InputError("give either --camera FILE or --view NAME, not both");
+  if (is_scene_file(a.mesh)) return run_lines_scene(a, ext);
+  if (!a.frame.empty()) throw InputError("--frame: only for a scene input (SCENE.json)");
   DrawLinesOptions options = drawing_options(a, ext);
 
   // Mesh preparation the lines need (on by default, reported): STL welding
@@ -109,22 +181,14 @@ int run_lines(const LinesArgs& a) {
   const Surface& surface = *loaded->surface;
   const TriangleMesh& mesh = surface.mesh();
 
-  Camera camera;
-  std::string camera_what;
-  SpaceSource assumed_space = SpaceSource::file_tag;  // warned about once the work is done
-  if (!a.camera_file.empty()) {
-    camera = read_camera(a.camera_file);
-    camera_what = a.camera_file;
-  } else {
-    const std::string vname = a.view.empty() ? "anterior" : lower(a.view);
-    const AnatomicalView view = parse_view(vname);
-    assumed_space = mesh.space_source;
-    camera = anatomical_camera(view, bounding_box(mesh.positions), mesh.space);
-    camera_what = "--view " + vname;
-  }
-  if (!a.size.empty()) std::tie(camera.width, camera.height) = parse_size(a.size);
-  validate_camera(camera, camera_what);
-  check_camera_sees_mesh(camera, mesh, camera_what);
+  const ChosenCamera chosen = choose_camera(
+      a.camera_file, a.view, a.size, {1024, 1024}, [&](AnatomicalView v, int w, int h) {
+        return anatomical_camera(v, bounding_box(mesh.positions), mesh.space, w, h);
+      });
+  const Camera& camera = chosen.camera;
+  // Warned about once the work is done.
+  const SpaceSource assumed_space = chosen.from_view ? mesh.space_source : SpaceSource::file_tag;
+  check_camera_sees_mesh(camera, mesh, chosen.what);
 
   options.lines.families = parse_family_list(a.types, "--types", LineOptions{}.families, false);
   if (!a.light.empty()) {
@@ -179,7 +243,10 @@ void add_lines_command(CLI::App& app, Action& action) {
       "lines",
       "Object-space feature lines (contours, suggestive contours, ridges, ...) as "
       "SVG, PDF, .seg or JSON");
-  cmd->add_option("mesh", args->mesh, "Input mesh (OBJ, PLY, STL, OFF, VTP, VTK)")->required();
+  cmd->add_option("mesh", args->mesh,
+                  "Input mesh (OBJ, PLY, STL, OFF, VTP, VTK), or a scene .json (every "
+                  "structure's lines in its scene style, as render --svg)")
+      ->required();
   cmd->add_option("-o,--output", args->output, "Output file: .svg, .pdf, .seg or .json")
       ->required();
   cmd->add_option("--camera", args->camera_file, "Camera JSON (or a reference .seg header)");
@@ -189,6 +256,8 @@ void add_lines_command(CLI::App& app, Action& action) {
   cmd->add_option("--size", args->size, "Image size WxH in pixels (default: camera's, 1024x1024)");
   cmd->add_option("--space", args->space,
                   "Coordinate space of the mesh: lps or ras (default: file tag, else lps)");
+  cmd->add_option("--frame", args->frame,
+                  "Scene input: what the view frames, focus (default with context) or all");
   cmd->add_option("--types", args->types,
                   "Comma-separated families: contour, boundary, crease, suggestive, highlight, "
                   "ridge, valley, apparent, pel, laplacian, demarcating; or default "
@@ -225,7 +294,12 @@ void add_lines_command(CLI::App& app, Action& action) {
   cmd->add_flag("--keep-orientation", args->keep_normals_orientation,
                 "Do not re-orient the mesh outward before extraction");
   cmd->add_flag("-q,--quiet", args->quiet, "No messages on stderr except errors");
-  cmd->callback([&action, args]() { action = [args]() { return run_lines(*args); }; });
+  cmd->callback([&action, args, cmd]() {
+    args->given.clear();
+    for (const CLI::Option* o : cmd->get_options())
+      if (o->count() > 0 && !o->get_lnames().empty()) args->given.insert("--" + o->get_lnames()[0]);
+    action = [args]() { return run_lines(*args); };
+  });
 }
 
 }  // namespace fabrica::cli

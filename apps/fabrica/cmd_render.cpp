@@ -55,8 +55,6 @@ int run_render(const RenderArgs& a) {
     throw Error(ErrorKind::unavailable, "--pdf " + a.pdf +
                                             ": PDF output needs cairo; this fabrica was built "
                                             "without it (write --svg instead)");
-  if (!a.camera_file.empty() && !a.view.empty())
-    throw InputError("give either --camera FILE or --view NAME, not both");
   // Every output's folder must exist before any is written (no half set of outputs).
   for (const std::string& f : {a.output, a.svg, a.pdf, a.save_scene, a.save_camera}) {
     const auto parent = std::filesystem::path(f).parent_path();
@@ -66,8 +64,7 @@ int run_render(const RenderArgs& a) {
 
   // 1. The scene description: a scene JSON, or the mesh as focus plus contexts.
   render::SceneSpec spec;
-  const std::string ext = lower(std::filesystem::path(a.input).extension().string());
-  if (ext == ".json") {
+  if (is_scene_file(a.input)) {
     spec = render::read_scene_spec(a.input);
   } else {
     render::StructureSpec focus;
@@ -89,12 +86,7 @@ int run_render(const RenderArgs& a) {
         render::anatomical_color(s.name).value_or(render::cycle_color(spec.structures.size()));
     spec.structures.push_back(s);
   }
-  std::optional<render::Frame> frame_override;
-  if (!a.frame.empty()) {
-    frame_override = render::parse_frame(a.frame);
-    if (!frame_override) throw InputError("--frame must be focus or all (got \"" + a.frame + "\")");
-  }
-  const render::Frame frame = render::default_frame(spec, frame_override);
+  const render::Frame frame = frame_option(a.frame, spec);
   std::optional<Space> space_override;
   if (!a.space.empty()) space_override = parse_space(a.space);
   if (a.smooth && *a.smooth < 0) throw InputError("--smooth must be >= 0 (iterations; 0 = off)");
@@ -153,31 +145,14 @@ int run_render(const RenderArgs& a) {
   }
 
   // 2. Meshes -> prepared Surfaces (cached for `fabrica batch`, cli_common.hpp).
-  const render::SceneSurfaces scene = render::load_scene(spec, [](const render::StructureSpec& s) {
-    PrepareOptions prepare;
-    prepare.space = s.space;
-    return load_prepared_surface(s.mesh, prepare)->surface;
-  });
-  bool view_from_space = false;
+  const render::SceneSurfaces scene = load_scene_surfaces(spec);
 
-  // 3. Camera: --camera, --view, the scene's camera or view, else anterior.
-  Camera camera;
-  std::string camera_what;
-  if (!a.camera_file.empty()) {
-    camera = read_camera(a.camera_file);
-    camera_what = a.camera_file;
-  } else if (a.view.empty() && spec.camera) {
-    camera = *spec.camera;
-    camera_what = a.input + ": camera";
-  } else {
-    std::string name = a.view;
-    if (name.empty()) name = spec.view ? to_string(*spec.view) : "anterior";
-    camera = render::view_camera(scene, parse_view(name), frame);
-    camera_what = "--view " + name;
-    view_from_space = true;
-  }
-  if (!a.size.empty()) std::tie(camera.width, camera.height) = parse_size(a.size);
-  validate_camera(camera, camera_what);
+  // 3. Camera: --camera, --view, the scene's camera or view, else anterior;
+  // a view framed at --size (cli_common.hpp: choose_camera).
+  const ChosenCamera chosen =
+      choose_scene_camera(scene, frame, a.camera_file, a.view, a.size, {1024, 1024}, a.input);
+  const Camera& camera = chosen.camera;
+  const bool view_from_space = chosen.from_view;
 
   // 4. Lines per structure and the picture (apparent ridges on the GPU with --hybrid-ar).
   const render::HeadlessOptions ho = render::headless_options(a.backend);

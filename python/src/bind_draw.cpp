@@ -249,9 +249,9 @@ void bind_render(py::module_& m) {
                                                    : "anterior";
             const auto v = parse_anatomical_view(name);
             if (!v) throw InputError("view: unknown view \"" + name + "\"");
-            c = render::view_camera(scene, *v, frame);
+            c = render::view_camera(scene, *v, frame, width.value_or(1024), height.value_or(1024));
           }
-          if (width) c.width = *width;  // as --size: after the view is framed
+          if (width) c.width = *width;  // as --size: a camera keeps its framing
           if (height) c.height = *height;
           validate_camera(c, "camera");
           render::RenderOptions options;
@@ -269,8 +269,9 @@ void bind_render(py::module_& m) {
       "Renders a scene JSON (the `fabrica render scene.json` format) to an (h, w, 4) uint8 "
       "array, as `fabrica render scene.json [--camera] [--view] [--size WxH] [--frame]`: the "
       "camera given, else the scene's, else its view (anterior by default), framing the focus "
-      "when the scene has focus and context (frame='all' frames everything); width/height "
-      "change the image size after the view is framed, as --size does.");
+      "when the scene has focus and context (frame='all' frames everything); a view is framed "
+      "at width x height (default 1024), a camera keeps its framing and takes the size, as "
+      "--size does.");
   m.def(
       "write_png",
       [](const py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>& a,

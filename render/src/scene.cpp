@@ -144,9 +144,9 @@ const std::vector<std::string> kAnnotationKeys = {"labels", "legend", "scale_bar
                                                   "font_size"};
 const std::vector<std::string> kLicKeys = {"kernel_length", "noise_scale", "strength"};
 const std::vector<std::string> kStructureKeys = {
-    "name",    "mesh",        "role",   "space",      "shading",    "color", "opacity",
-    "ambient", "toon_levels", "lines",  "line_color", "line_width", "taper", "fade",
-    "hidden",  "hybrid",      "smooth", "lic",        "label"};
+    "name",    "mesh",        "role",   "space",      "shading",    "color",   "opacity",
+    "ambient", "toon_levels", "lines",  "line_color", "line_width", "taper",   "fade",
+    "hidden",  "hybrid",      "smooth", "lic",        "label",      "hatching"};
 const std::vector<std::string> kCameraKeys = {"eye",   "center", "up",   "fov_deg", "projection",
                                               "width", "height", "near", "far"};
 const std::vector<std::string> kViews = {"anterior", "posterior", "left",
@@ -446,6 +446,7 @@ SceneSpec scene_spec_from_json(const nlohmann::json& j, const std::filesystem::p
                            (l.is_string() ? std::string("an empty string") : type_name(l)) + ")");
         }
       }
+      if (s.contains("hatching")) st.hatching = boolean(s, "hatching", what, path);
       spec.structures.push_back(std::move(st));
     }
   } catch (const nlohmann::json::exception& e) {
@@ -499,6 +500,7 @@ nlohmann::json scene_spec_to_json(const SceneSpec& spec) {
       o["label"] = false;
     else if (!s.label.empty())
       o["label"] = s.label;
+    if (s.hatching) o["hatching"] = *s.hatching;
     list.push_back(o);
   }
   j["structures"] = list;

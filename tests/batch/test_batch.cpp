@@ -14,11 +14,14 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <Eigen/Core>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -490,3 +493,248 @@ TEST(BatchManifest, ShardAutoReadsTheSchedulersEnvironment) {
 }
 
 }  // namespace
+
+namespace {
+
+Result run_fabrica(const std::vector<std::string>& args, const fs::path& log) {
+  return fabrica(args, log);
+}
+
+/// A folder with copies of two bundled livers (a.obj, b.obj, c.obj, editable)
+/// and a scene s.json: b the focus, c the context.
+fs::path scene_folder(const std::string& name) {
+  const fs::path root = fabrica::test::temp_dir(name);
+  const fs::path liver = fabrica::test::bundled_data() / "meshes/anatomy/liver";
+  fs::copy_file(liver / "sofa_liver_coarse.obj", root / "a.obj");
+  fs::copy_file(liver / "sofa_liver_coarse.obj", root / "b.obj");
+  fs::copy_file(liver / "sofa_liver2.obj", root / "c.obj");
+  write_text(root / "s.json", json({{"structures",
+                                     {{{"name", "b"}, {"mesh", "b.obj"}, {"role", "focus"}},
+                                      {{"name", "c"}, {"mesh", "c.obj"}, {"role", "context"}}}}})
+                                  .dump(2));
+  return root;
+}
+
+json read_json(const fs::path& p) {
+  return json::parse(read_text(p));
+}
+
+Eigen::Vector3d vec(const json& j) {
+  return {j[0].get<double>(), j[1].get<double>(), j[2].get<double>()};
+}
+
+/// status of every item of a report, by "input/view/style".
+std::map<std::string, std::string> statuses(const fs::path& report) {
+  std::map<std::string, std::string> out;
+  const json r = read_json(report);
+  for (const auto& item : r["items"])
+    out[item["input"].get<std::string>() + "/" + item["view"].get<std::string>() + "/" +
+        item["style"].get<std::string>()] = item["status"].get<std::string>();
+  return out;
+}
+
+}  // namespace
+
+// Orbit views of a scene input (issue 19 with issue 17's scenes): the orbit
+// turns about the first view's up axis through the scene's framing centre;
+// step 0 is the command's own --view; lines, render --svg and hatch styles
+// all draw the scene.
+TEST(BatchScenes, OrbitOfASceneTurnsAboutItsFramingCentre) {
+  const fs::path root = scene_folder("batch-scene-orbit");
+  write_text(root / "m.json",
+             json({{"inputs", {{{"scene", "s.json"}}}},
+                   {"views", {{{"orbit", 4}, {"from", "left"}}}},
+                   {"styles",
+                    {{{"name", "lines"}, {"command", "lines"}},
+                     {{"name", "shaded"}, {"command", "render"}, {"formats", {"png", "svg"}}},
+                     {{"name", "hatch"}, {"command", "hatch"}}}},
+                   {"size", {128, 96}}})
+                 .dump());
+  const auto r = run_fabrica({"batch", (root / "m.json").string(), "-o", (root / "out").string()},
+                             root / "log");
+  ASSERT_EQ(r.code, 0) << r.log;
+  Eigen::Vector3d center0, offset0;
+  for (int k = 0; k < 4; ++k) {
+    const std::string view = "orbit" + std::to_string(k);
+    // A scene's lines style writes render --svg's layers.
+    EXPECT_EQ(read_text(root / "out/s" / ("lines-" + view + ".svg")),
+              read_text(root / "out/s" / ("shaded-" + view + ".svg")))
+        << view;
+    EXPECT_TRUE(fs::exists(root / "out/s" / ("hatch-" + view + ".svg")));
+    const json cam =
+        read_json(root / "out/s" / ("lines-" + view + ".svg.meta.json"))["view"]["camera"];
+    EXPECT_EQ(cam["width"], 128);
+    EXPECT_EQ(cam["height"], 96);
+    const Eigen::Vector3d center = vec(cam["center"]), offset = vec(cam["eye"]) - center;
+    if (k == 0) {
+      center0 = center;
+      offset0 = offset;
+      continue;
+    }
+    EXPECT_LT((center - center0).norm(), 1e-9 * offset0.norm());
+    EXPECT_NEAR(offset.norm(), offset0.norm(), 1e-9 * offset0.norm());
+    const double expected_cos = std::cos(k * M_PI / 2.0);
+    EXPECT_NEAR(offset.dot(offset0) / offset0.squaredNorm(), expected_cos, 1e-9) << view;
+  }
+  // Step 0 is what `--view left` frames at the item's size.
+  const auto by_hand = run_fabrica({"lines", (root / "s.json").string(), "--view", "left", "--size",
+                                    "128x96", "--quiet", "-o", (root / "left.svg").string()},
+                                   root / "hand.log");
+  ASSERT_EQ(by_hand.code, 0) << by_hand.log;
+  EXPECT_EQ(read_text(root / "left.svg"), read_text(root / "out/s/lines-orbit0.svg"));
+  // The framing centre of a scene with focus and context is the focus's box centre.
+  ASSERT_EQ(run_fabrica({"render", (root / "s.json").string(), "--view", "left", "--size", "128x96",
+                         "--quiet", "-o", (root / "left.png").string(), "--save-camera",
+                         (root / "left-camera.json").string()},
+                        root / "hand.log")
+                .code,
+            0);
+  EXPECT_LT((vec(read_json(root / "left-camera.json")["center"]) - center0).norm(), 1e-9);
+}
+
+// --resume re-makes exactly the items whose referenced files changed: a
+// style's --context mesh, a camera view's file, a scene's mesh.
+TEST(BatchResume, EditingAReferencedFileRemakesExactlyTheItemsThatUseIt) {
+  const fs::path root = scene_folder("batch-resume-files");
+  ASSERT_EQ(run_fabrica({"render", (root / "a.obj").string(), "--view", "left", "--size", "96x96",
+                         "--quiet", "-o", (root / "cam.png").string(), "--save-camera",
+                         (root / "cam.json").string()},
+                        root / "cam.log")
+                .code,
+            0);
+  write_text(root / "m.json",
+             json({{"inputs", {{{"mesh", "a.obj"}}, {{"scene", "s.json"}}}},
+                   {"views", {"anterior", {{"camera", "cam.json"}}}},
+                   {"styles",
+                    {{{"name", "plain"}, {"command", "lines"}, {"types", "contour"}},
+                     {{"name", "ctx"},
+                      {"command", "render"},
+                      {"context", {"c.obj"}},
+                      {"lines", "contour"}}}},
+                   {"size", {96, 96}}})
+                 .dump());
+  const std::vector<std::string> run = {
+      "batch", (root / "m.json").string(), "-o", (root / "out").string(), "--resume", "--jobs",
+      "1"};
+  auto check = [&](const std::set<std::string>& remade, const std::string& what) {
+    const auto r = run_fabrica(run, root / "log");
+    ASSERT_EQ(r.code, 0) << what << "\n" << r.log;
+    const auto s = statuses(root / "out/batch-report.json");
+    ASSERT_EQ(s.size(), 8u);
+    for (const auto& [item, status] : s)
+      EXPECT_EQ(status, remade.count(item) ? "made" : "skipped") << what << ": " << item;
+  };
+  const std::set<std::string> all = {"a/anterior/plain", "a/anterior/ctx",   "a/cam/plain",
+                                     "a/cam/ctx",        "s/anterior/plain", "s/anterior/ctx",
+                                     "s/cam/plain",      "s/cam/ctx"};
+  check(all, "first run");
+  check({}, "nothing changed");
+  // The style's context mesh: every "ctx" item, and the scene's items (c is its context).
+  std::ofstream(root / "c.obj", std::ios::app) << "# edited\n";
+  check({"a/anterior/ctx", "a/cam/ctx", "s/anterior/plain", "s/anterior/ctx", "s/cam/plain",
+         "s/cam/ctx"},
+        "context mesh edited");
+  // The camera file: every item of that view.
+  json cam = read_json(root / "cam.json");
+  cam["fov_deg"] = cam["fov_deg"].get<double>() + 3.0;
+  write_text(root / "cam.json", cam.dump(2));
+  check({"a/cam/plain", "a/cam/ctx", "s/cam/plain", "s/cam/ctx"}, "camera edited");
+  // A mesh of the scene: the scene's items.
+  std::ofstream(root / "b.obj", std::ios::app) << "# edited\n";
+  check({"s/anterior/plain", "s/anterior/ctx", "s/cam/plain", "s/cam/ctx"}, "scene mesh edited");
+  // The recorded hash is the file's.
+  const json meta = read_json(root / "out/a/ctx-anterior.png.meta.json");
+  ASSERT_EQ(meta["style"]["files"].size(), 1u);
+  EXPECT_EQ(meta["style"]["files"][0]["path"], "c.obj");
+}
+
+// `lines` and `hatch` take a scene (issue 17, item 3).
+TEST(SceneCommands, LinesDrawsRendersLayersAndHatchHatchesTheFocus) {
+  const fs::path root = scene_folder("scene-commands");
+  const std::string scene = (root / "s.json").string();
+  auto run = [&](std::vector<std::string> args) { return run_fabrica(args, root / "log"); };
+  ASSERT_EQ(
+      run({"lines", scene, "--size", "160x120", "--quiet", "-o", (root / "l.svg").string()}).code,
+      0);
+  ASSERT_EQ(run({"render", scene, "--size", "160x120", "--quiet", "-o", (root / "r.png").string(),
+                 "--svg", (root / "r.svg").string()})
+                .code,
+            0);
+  EXPECT_EQ(read_text(root / "l.svg"), read_text(root / "r.svg"));
+  const std::string svg = read_text(root / "l.svg");
+  EXPECT_NE(svg.find("inkscape:label=\"b\""), std::string::npos);
+  EXPECT_NE(svg.find("inkscape:label=\"c\""), std::string::npos);
+  // Options of a single mesh's drawing, and outputs of one mesh's lines, are refused.
+  auto refused = [&](std::vector<std::string> args, const std::string& says) {
+    const auto r = run(args);
+    EXPECT_EQ(r.code, 2) << r.log;
+    EXPECT_NE(r.log.find(says), std::string::npos) << r.log;
+  };
+  refused({"lines", scene, "-o", (root / "l.seg").string()}, ".svg or .pdf");
+  refused({"lines", scene, "--ridge-threshold", "0.2", "-o", (root / "x.svg").string()},
+          "--ridge-threshold: only for a mesh input");
+
+  // hatch: the focus (b) by default; "hatching" picks other structures.
+  auto strokes = [&](const std::string& log) {
+    const auto at = log.find(" strokes (");
+    return at == std::string::npos ? -1 : std::stoi(log.substr(log.rfind(' ', at - 1) + 1));
+  };
+  const auto focus = run({"hatch", scene, "--size", "160x120", "-o", (root / "h.svg").string()});
+  ASSERT_EQ(focus.code, 0) << focus.log;
+  EXPECT_GT(strokes(focus.log), 0) << focus.log;
+  const std::string hsvg = read_text(root / "h.svg");
+  EXPECT_NE(hsvg.find("class=\"lines-b\""), std::string::npos);
+  EXPECT_NE(hsvg.find("class=\"lines-c\""), std::string::npos);
+  // The focus's strokes alone are those of hatching the focus mesh with the scene's camera.
+  ASSERT_EQ(run({"render", scene, "--size", "160x120", "--quiet", "-o", (root / "c.png").string(),
+                 "--save-camera", (root / "scene-cam.json").string()})
+                .code,
+            0);
+  const auto alone = run({"hatch", (root / "b.obj").string(), "--camera",
+                          (root / "scene-cam.json").string(), "-o", (root / "b.svg").string()});
+  ASSERT_EQ(alone.code, 0) << alone.log;
+  EXPECT_EQ(strokes(alone.log), strokes(focus.log));
+  json s = read_json(root / "s.json");
+  s["structures"][0]["hatching"] = false;
+  s["structures"][1]["hatching"] = true;
+  write_text(root / "s2.json", s.dump());
+  const auto context = run({"hatch", (root / "s2.json").string(), "--size", "160x120", "-o",
+                            (root / "h2.svg").string()});
+  ASSERT_EQ(context.code, 0) << context.log;
+  EXPECT_NE(strokes(context.log), strokes(focus.log));
+  s["structures"][1]["hatching"] = false;
+  write_text(root / "s3.json", s.dump());
+  refused({"hatch", (root / "s3.json").string(), "-o", (root / "h3.svg").string()},
+          "no structure to hatch");
+  const auto png =
+      run({"hatch", scene, "--size", "160x120", "--quiet", "-o", (root / "h.png").string()});
+  EXPECT_EQ(png.code, 0) << png.log;
+  EXPECT_TRUE(fs::exists(root / "h.png"));
+}
+
+// --view with --size frames for the requested size in every command (issue
+// 16): a tall picture's view stands back by sin(half_v) / sin(half_h), with
+// tan(half_h) = tan(half_v) * width / height (anatomical_camera).
+TEST(SceneCommands, ViewsAreFramedAtTheRequestedSize) {
+  const fs::path root = scene_folder("framing");
+  auto distance = [&](const std::string& size, const std::string& command) {
+    const fs::path cam = root / (command + size + ".json");
+    std::vector<std::string> args = {
+        command, (root / "a.obj").string(), "--view", "anterior", "--size", size, "--quiet"};
+    if (command == "lines") {
+      args.insert(args.end(), {"-o", cam.string()});
+    } else {
+      args.insert(args.end(), {"-o", (root / "x.png").string(), "--save-camera", cam.string()});
+    }
+    const auto r = run_fabrica(args, root / "log");
+    EXPECT_EQ(r.code, 0) << r.log;
+    const json j = read_json(cam);
+    return (vec(j["eye"]) - vec(j["center"])).norm();
+  };
+  const double half_v = 15.0 * M_PI / 180.0, half_h = std::atan(std::tan(half_v) * 0.5);
+  for (const char* command : {"lines", "render"}) {
+    const double square = distance("100x100", command), tall = distance("100x200", command);
+    EXPECT_NEAR(tall / square, std::sin(half_v) / std::sin(half_h), 1e-9) << command;
+    EXPECT_NEAR(distance("200x100", command), square, 1e-9 * square) << command;
+  }
+}

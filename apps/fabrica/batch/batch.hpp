@@ -79,6 +79,11 @@ struct Plan {
   static std::string orbit_camera_file(const Item& item);
 };
 
+/// Style options whose values name files (resolved against the manifest's
+/// folder; their contents are hashed into each item's record, so --resume
+/// remakes the items whose files changed).
+bool is_path_option(const std::string& key);
+
 /// Reads and checks a manifest; every problem found (with its JSON path) is
 /// listed in one InputError (exit 2) before any work.
 Plan read_plan(const std::filesystem::path& manifest);

@@ -24,6 +24,13 @@ namespace fabrica::cli::batch {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
+bool is_path_option(const std::string& key) {
+  // Of the options of lines, render and hatch that name files, only these may
+  // be style options; the others (-o, --svg, --pdf, --camera, --save-scene,
+  // --save-camera) are reserved_keys().
+  return key == "context";
+}
+
 namespace {
 
 /// The commands a style may name (those compiled in), each registering
@@ -67,11 +74,6 @@ const std::map<std::string, std::string>& reserved_keys() {
       {"mesh", "inputs are listed in \"inputs\""},
       {"input", "inputs are listed in \"inputs\""}};
   return keys;
-}
-
-/// Style options whose values are files, resolved relative to the manifest.
-bool is_path_option(const std::string& key) {
-  return key == "context";
 }
 
 struct Errors {
@@ -675,15 +677,12 @@ Plan read_plan(const fs::path& manifest) {
   read_styles(doc, plan, errors);
   for (const auto& input : plan.inputs)
     for (const auto& style : plan.styles)
-      if (input.kind == Input::Kind::scene && style.command != "render")
-        errors.add(input.json_path, "a scene can only be drawn by \"render\" styles (" +
-                                        style.json_path + " is \"" + style.command + "\")");
-  for (const auto& view : plan.views)
-    if (view.kind == View::Kind::orbit)
-      for (const auto& input : plan.inputs)
-        if (input.kind == Input::Kind::scene)
-          errors.add(view.json_path,
-                     "orbit views need mesh or volume inputs (" + input.json_path + " is a scene)");
+      for (const auto& f : style.formats)
+        if (input.kind == Input::Kind::scene && style.command == "lines" && f != "svg" &&
+            f != "pdf")
+          errors.add(style.json_path + ".formats",
+                     "a scene's lines are written as svg or pdf (a layer per structure), not " + f +
+                         " (" + input.json_path + " is a scene)");
   if (errors.list.empty()) {  // every output distinct
     std::map<std::string, std::size_t> seen;
     for (std::size_t k = 0; k < plan.item_count(); ++k)

@@ -262,6 +262,21 @@ class Worker {
     throw InputError(in.shown + ": label " + std::to_string(in.label) + " yields no surface");
   }
 
+  /// The files the style's options name (is_path_option), each with its
+  /// content hash: what the item depends on besides its input and camera.
+  json style_files(const Item& item) {
+    json files = json::array();
+    for (const auto& [key, value] : item.style->options) {
+      if (!is_path_option(key)) continue;
+      for (const json& v : value.is_array() ? value : json::array({value}))
+        if (v.is_string())
+          files.push_back({{"option", key},
+                           {"path", v.get<std::string>()},
+                           {"hash", hash(plan_.base / v.get<std::string>())}});
+    }
+    return files;
+  }
+
   /// What the item's result depends on besides the command line: the input's content.
   json input_record(const Item& item) {
     const Input& in = *item.input;
@@ -283,23 +298,41 @@ class Worker {
     return j;
   }
 
-  /// Step `step` of `steps` around the starting view's up axis through its centre.
+  /// Step `step` of `steps` around the starting view's up axis through its
+  /// centre: the centre the command's --view frames (a mesh's bounding box,
+  /// a scene's framing centre: its focus or everything, per --frame).
   Camera orbit_camera(const Item& item) {
-    PrepareOptions prepare;
-    if (const auto s = style_text(item, "space")) prepare.space = parse_space(*s);
-    // The same preparation as the item's command (oriented unless
-    // --keep-orientation), so the command finds it in the cache.
-    prepare.orient = !style_flag(item, "keep-orientation");
-    const auto mesh =
-        load_prepared_surface(item.input->kind == Input::Kind::volume_label
-                                  ? dir_ / ".batch" / "volumes" / (item.input->name + ".ply")
-                                  : item.input->path,
-                              prepare);
     std::pair<int, int> size = plan_.size.value_or(std::pair<int, int>{1024, 1024});
     if (const auto s = style_text(item, "size")) size = parse_size(*s);
-    Camera c = anatomical_camera(*parse_anatomical_view(item.view->anatomical),
-                                 bounding_box(mesh->surface->positions()),
-                                 mesh->surface->mesh().space, size.first, size.second);
+    const AnatomicalView from = *parse_anatomical_view(item.view->anatomical);
+    Camera c;
+    if (item.input->kind == Input::Kind::scene) {
+#ifdef FABRICA_BATCH_WITH_SCENES
+      // The scene as the item's command reads it (cli_common: the same
+      // loader, so the command finds the meshes in the cache).
+      render::SceneSpec spec = render::read_scene_spec(item.input->path);
+      if (const auto s = style_text(item, "space"))
+        for (auto& st : spec.structures) st.space = parse_space(*s);
+      const render::Frame frame = frame_option(style_text(item, "frame").value_or(""), spec);
+      c = render::view_camera(load_scene_surfaces(std::move(spec)), from, frame, size.first,
+                              size.second);
+#else
+      throw Error(ErrorKind::unavailable, "scene inputs need the renderer (fabrica::render)");
+#endif
+    } else {
+      PrepareOptions prepare;
+      if (const auto s = style_text(item, "space")) prepare.space = parse_space(*s);
+      // The same preparation as the item's command (oriented unless
+      // --keep-orientation), so the command finds it in the cache.
+      prepare.orient = !style_flag(item, "keep-orientation");
+      const auto mesh =
+          load_prepared_surface(item.input->kind == Input::Kind::volume_label
+                                    ? dir_ / ".batch" / "volumes" / (item.input->name + ".ply")
+                                    : item.input->path,
+                                prepare);
+      c = anatomical_camera(from, bounding_box(mesh->surface->positions()),
+                            mesh->surface->mesh().space, size.first, size.second);
+    }
     if (item.view->step == 0) return c;
     const double angle = 2.0 * std::numbers::pi * item.view->step / item.view->steps;
     const Vec3 axis = c.true_up();
@@ -353,15 +386,16 @@ class Worker {
     }
     json options = json::object();
     for (const auto& [k, v] : item.style->options) options[k] = v;
-    const json meta = {
-        {"fabrica", FABRICA_VERSION_STRING},
-        {"item", item.index},
-        {"input", input},
-        {"view", view},
-        {"style",
-         {{"name", item.style->name}, {"command", item.style->command}, {"options", options}}},
-        {"commands", commands},
-        {"outputs", item.outputs}};
+    json style = {
+        {"name", item.style->name}, {"command", item.style->command}, {"options", options}};
+    if (const json files = style_files(item); !files.empty()) style["files"] = files;
+    const json meta = {{"fabrica", FABRICA_VERSION_STRING},
+                       {"item", item.index},
+                       {"input", input},
+                       {"view", view},
+                       {"style", style},
+                       {"commands", commands},
+                       {"outputs", item.outputs}};
     auto meta_path = [&](const std::string& rel) {
       fs::path p = dir_ / rel;
       p += ".meta.json";

@@ -58,8 +58,10 @@ SceneSurfaces load_scene(SceneSpec spec, const SurfaceLoader& loader);
 
 /// The anatomical view of the whole scene (its bounding box and space), or,
 /// with Frame::focus and a focus present, fitted to the focus structures
-/// (render::fit_camera).
-Camera view_camera(const SceneSurfaces& scene, AnatomicalView view, Frame frame = Frame::all);
+/// (render::fit_camera), framed for a width × height picture (the framing
+/// depends on the aspect ratio: `--view` with `--size` frames at that size).
+Camera view_camera(const SceneSurfaces& scene, AnatomicalView view, Frame frame = Frame::all,
+                   int width = 1024, int height = 1024);
 
 /// The scene the renderer draws: a render mesh per structure and its
 /// chained feature lines for `camera` (object space, 3 px minimum length,
@@ -78,6 +80,10 @@ struct RenderedScene {
 
 /// build_scene + Renderer::render on `renderer`.
 RenderedScene render_scene(Renderer& renderer, const SceneSurfaces& scene, const Camera& camera,
+                           const RenderOptions& options = {});
+/// Renders a scene already built by build_scene (e.g. with hatching strokes
+/// added as polyline layers: `fabrica hatch -o OUT.png`) on `renderer`.
+RenderedScene render_scene(Renderer& renderer, Scene drawn, const Camera& camera,
                            const RenderOptions& options = {});
 /// The same on a new headless context (Error(unavailable) when none).
 RenderedScene render_scene(const SceneSurfaces& scene, const Camera& camera,

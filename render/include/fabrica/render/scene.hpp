@@ -108,6 +108,10 @@ struct StructureSpec {
   /// spaces; `show_label` false = no label (still in the legend).
   std::string label;
   bool show_label = true;
+  /// Hatched by `fabrica hatch SCENE.json`; unset: the focus structures are.
+  std::optional<bool> hatching;
+  /// Whether `fabrica hatch` hatches this structure.
+  bool hatched() const { return hatching.value_or(role == Role::focus); }
 };
 
 /// What the annotation draws over the picture (render/annotate.hpp); every
@@ -176,9 +180,10 @@ std::optional<HiddenLines> parse_hidden_lines(std::string_view s);
 /// transparent, camera {...} (camera JSON), view "anterior"|..., frame
 /// "focus"|"all", structures: [{name, mesh, role, space, shading, color,
 /// opacity, ambient, toon_levels, lines: [families], line_color, line_width,
-/// taper, fade, hidden, hybrid, smooth, lic, label: "text" | false}],
-/// annotation {labels, legend, scale_bar, orientation: booleans, font_size:
-/// pixels}, lic {kernel_length, noise_scale, strength} (docs/lic.md).
+/// taper, fade, hidden, hybrid, smooth, lic, label: "text" | false,
+/// hatching}], annotation {labels, legend, scale_bar, orientation: booleans,
+/// font_size: pixels}, lic {kernel_length, noise_scale, strength}
+/// (docs/lic.md).
 /// Missing style keys take default_style(role). Relative mesh paths are
 /// resolved against `base_dir`. Validation is strict: an unknown key or a
 /// value of the wrong type throws InputError naming `what`, the JSON path
