@@ -15,8 +15,7 @@
 
 #include "fabrica/core/error.hpp"
 #include "fabrica/io/mesh_io.hpp"
-#include "fabrica/lines/visibility.hpp"
-#include "fabrica/lines/writers.hpp"
+#include "fabrica/render/draw.hpp"
 #include "structure_lines.hpp"
 #include "ui.hpp"
 
@@ -384,7 +383,7 @@ render::Scene Viewer::build_scene(const LinesResult* lines, bool fading) {
     st.name = s.name;
     st.role = s.role;
     st.style = s.style;
-    st.style.families = object_space_families(s.style);
+    st.style.families = render::object_space_families(s.style);
     if (const auto f = fade_from_.find(s.id); fading && f != fade_from_.end())
       st.style.opacity = f->second + t * (s.style.opacity - f->second);
     if (s.style.hybrid_apparent_ridges) {
@@ -553,42 +552,31 @@ render::Image Viewer::screenshot(int width, int height, bool transparent) {
 }
 
 void Viewer::export_svg(const std::filesystem::path& path) {
-  const std::uint64_t version = post_lines(camera_, true);
-  const auto lines = lines_worker_.wait_for(version);
-  // As `fabrica render --svg`: focus lines hidden by opaque structures,
-  // context lines by every surface.
-  TriangleMesh opaque, all;
-  auto append = [](TriangleMesh& dst, const TriangleMesh& src) {
-    const auto base = static_cast<std::int32_t>(dst.positions.size());
-    dst.positions.insert(dst.positions.end(), src.positions.begin(), src.positions.end());
-    for (Face f : src.faces) dst.faces.push_back({f[0] + base, f[1] + base, f[2] + base});
-  };
-  for (const auto& s : structures_) {
-    if (!s.visible) continue;
-    append(all, s.surface->mesh());
-    if (s.style.opacity >= 0.999) append(opaque, s.surface->mesh());
-  }
-  if (all.faces.empty()) throw InputError("export-svg: nothing is shown");
-  const DepthBuffer depth_all = render_depth(all, camera_);
-  const DepthBuffer depth_opaque = opaque.faces.empty() ? depth_all : render_depth(opaque, camera_);
-  LineSet merged;
-  for (const auto& s : structures_) {
-    const auto it = lines->lines.find(s.id);
-    if (!s.visible || it == lines->lines.end()) continue;
-    LineSet ls = it->second;
-    compute_visibility(ls, *s.surface, camera_, {},
-                       s.style.opacity >= 0.999 ? &depth_opaque : &depth_all);
-    merged.polylines.insert(merged.polylines.end(), ls.polylines.begin(), ls.polylines.end());
-  }
   std::string ext = path.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  if (ext == ".pdf")
-    write_pdf(path, merged, camera_, fabrica::LineStyle{});
-  else if (ext == ".svg")
-    write_svg(path, merged, camera_, fabrica::LineStyle{});
-  else
+  if (ext != ".svg" && ext != ".pdf")
     throw InputError(path.string() + ": the lines are written as .svg or .pdf");
+  const std::uint64_t version = post_lines(camera_, true);
+  const auto lines = lines_worker_.wait_for(version);
+  // The shown structures as `fabrica render` holds a scene, drawn as it
+  // draws it: the same layers, styles and CPU visibility (render/draw.hpp).
+  render::SceneSurfaces scene;
+  for (const auto& s : structures_) {
+    if (!s.visible) continue;
+    render::StructureSpec spec;
+    spec.name = s.name;
+    spec.role = s.role;
+    spec.style = s.style;
+    scene.add(std::move(spec), s.surface);
+  }
+  if (scene.surfaces.empty()) throw InputError("export-svg: nothing is shown");
+  const render::Scene drawn = build_scene(lines.get());
+  const double reference = render_options(false).line_reference_size;
+  if (ext == ".pdf")
+    render::write_scene_pdf(path, scene, drawn, camera_, reference);
+  else
+    render::write_scene_svg(path, scene, drawn, camera_, reference);
 }
 
 void Viewer::save_scene(const std::filesystem::path& path) {

@@ -73,6 +73,12 @@ LineDrawer::LineDrawer(const Surface& surface, DrawLinesOptions options)
       options_((validate(options), std::move(options))),
       extractor_(surface, options_.lines) {}
 
+void LineDrawer::set_options(DrawLinesOptions options) {
+  validate(options);
+  options_ = std::move(options);
+  extractor_.set_options(options_.lines);
+}
+
 LineDrawing LineDrawer::draw(const Camera& camera, const DepthBuffer* depth) {
   const std::vector<SegmentSoup> soups = extractor_.extract(camera);
   LineDrawing drawing;

@@ -59,6 +59,25 @@ Camera view_camera(const SceneSurfaces& scene, AnatomicalView view, Frame frame)
   return anatomical_camera(view, scene.box, scene.space);
 }
 
+std::vector<LineFamily> object_space_families(const StructureStyle& style) {
+  std::vector<LineFamily> families = style.families;
+  if (style.hybrid_apparent_ridges)
+    families.erase(std::remove(families.begin(), families.end(), LineFamily::apparent),
+                   families.end());
+  return families;
+}
+
+DrawLinesOptions structure_line_options(const StructureStyle& style,
+                                        const LineOptions& thresholds) {
+  DrawLinesOptions options;
+  options.lines = thresholds;
+  options.lines.families = object_space_families(style);
+  options.min_length_px = 3.0;
+  options.smooth = style.smooth;
+  options.visibility = false;  // the renderer tests depth on the GPU
+  return options;
+}
+
 Scene build_scene(const SceneSurfaces& scene, const Camera& camera) {
   Scene out;
   out.background = scene.spec.background;
@@ -69,21 +88,11 @@ Scene build_scene(const SceneSurfaces& scene, const Camera& camera) {
     st.name = spec.name;
     st.role = spec.role;
     st.style = spec.style;
-    std::vector<LineFamily> families = st.style.families;
-    if (st.style.hybrid_apparent_ridges)
-      families.erase(std::remove(families.begin(), families.end(), LineFamily::apparent),
-                     families.end());
     st.mesh =
         std::make_shared<RenderMesh>(make_render_mesh(surface, st.style.hybrid_apparent_ridges));
-    if (!families.empty()) {
-      DrawLinesOptions options;
-      options.lines.families = families;
-      options.min_length_px = 3.0;
-      options.smooth = st.style.smooth;
-      options.visibility = false;  // the renderer tests depth on the GPU
-      st.lines = draw_lines(surface, camera, options).lines;
-    }
-    st.style.families = families;
+    const DrawLinesOptions options = structure_line_options(st.style);
+    if (!options.lines.families.empty()) st.lines = draw_lines(surface, camera, options).lines;
+    st.style.families = options.lines.families;
     out.structures.push_back(std::move(st));
   }
   return out;

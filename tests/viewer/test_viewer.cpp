@@ -218,6 +218,21 @@ TEST(Viewer, LabelVolumeFocusAndContext) {
   EXPECT_EQ(diff.max_abs, 0) << "mean " << diff.mean_abs << ", fraction " << diff.fraction_over;
 
   EXPECT_NE(read_text(dir / "lines.svg").find("<path"), std::string::npos);
+  // One drawing path for the lines too: `fabrica render --svg` of the saved
+  // scene at the window's size writes the same SVG, byte for byte (layers,
+  // styles, CPU visibility).
+  const Outcome svg =
+      run(shell_quote(FABRICA_EXE) + " render " + shell_quote((dir / "scene.json").string()) +
+              " --size 640x400 -q -o " + shell_quote((dir / "cli640.png").string()) + " --svg " +
+              shell_quote((dir / "cli.svg").string()),
+          dir);
+  ASSERT_EQ(svg.code, 0) << svg.err;
+  const std::string viewer_svg = read_text(dir / "lines.svg"), cli_svg = read_text(dir / "cli.svg");
+  EXPECT_NE(viewer_svg.find("inkscape:label=\"liver\""), std::string::npos);
+  EXPECT_NE(viewer_svg.find("data-role=\"focus\""), std::string::npos);
+  EXPECT_TRUE(viewer_svg == cli_svg)
+      << "the viewer's SVG (" << viewer_svg.size() << " bytes) differs from fabrica render --svg ("
+      << cli_svg.size() << " bytes)";
   EXPECT_EQ(read_text(dir / "lines.pdf").rfind("%PDF", 0), 0u);
 
   // Frame log: a header, then one row per frame, numbered 1, 2, 3, ...;
