@@ -7,3 +7,6 @@ fabrica_add_bench(bench_lines
 add_executable(drive_lines ${CMAKE_CURRENT_LIST_DIR}/drive_lines.cpp)
 target_link_libraries(drive_lines PRIVATE fabrica::lines fabrica::io TBB::tbb fabrica::warnings)
 target_compile_definitions(drive_lines PRIVATE FABRICA_BENCH_DATA="${FABRICA_BENCH_DATA}")
+# Context meshes for the viewer's orbit benchmark (bench/viewer_orbit.sh).
+add_executable(make_context ${CMAKE_CURRENT_LIST_DIR}/make_context.cpp)
+target_link_libraries(make_context PRIVATE fabrica::io fabrica::core fabrica::warnings)

@@ -497,7 +497,17 @@ struct Renderer::Impl {
     const GpuMesh* mesh;
     float scale;
     bool occluder;
+    bool clipped = false;  // a context structure of a scene with a clip
   };
+  // The clipping plane as the shaders take it (common.glsl, clip_at).
+  std::array<float, 4> clip{0.0f, 0.0f, 0.0f, 1.0f};
+  void set_clip(const ShaderProgram& p, bool clipped) {
+    if (clipped)
+      gl().Enable(GL_CLIP_DISTANCE0);
+    else
+      gl().Disable(GL_CLIP_DISTANCE0);
+    p.set("u_clip", clip[0], clip[1], clip[2], clip[3]);
+  }
   void hybrid_stage1(const std::vector<HybridDraw>& draws, const HybridOptions& o,
                      const Matrices& m, const Tile& t, bool bare) {
     const GlFunctions& g = gl();
@@ -530,9 +540,11 @@ struct Renderer::Impl {
         }
       }
       if (!d.occluder) p.set("u_scale", d.scale);
+      set_clip(q, d.clipped);
       g.StencilFunc(GL_ALWAYS, d.occluder ? 0 : 1, 0xFF);
       draw_mesh(*d.mesh);
     }
+    g.Disable(GL_CLIP_DISTANCE0);
     g.Disable(GL_STENCIL_TEST);
   }
 
@@ -645,6 +657,22 @@ float hybrid_scale(const RenderMesh& mesh, const HybridOptions& o) {
 }  // namespace
 
 Image Renderer::render(const Scene& scene, const Camera& camera, const RenderOptions& options) {
+  Image image(camera.width, camera.height);
+  draw(scene, camera, options, &image, nullptr);
+  return image;
+}
+
+void Renderer::render_to_framebuffer(const Scene& scene, const Camera& camera,
+                                     const RenderOptions& options, unsigned int framebuffer,
+                                     int width, int height) {
+  if (width <= 0 || height <= 0)
+    throw InputError("render_to_framebuffer: the target size must be positive");
+  const BlitTarget target{framebuffer, width, height};
+  draw(scene, camera, options, nullptr, &target);
+}
+
+void Renderer::draw(const Scene& scene, const Camera& camera, const RenderOptions& options,
+                    Image* out, const BlitTarget* blit) {
   check_size(camera);
   if (scene.structures.empty()) throw InputError("the scene has no structures to draw");
   for (const auto& s : scene.structures)
@@ -713,6 +741,13 @@ Image Renderer::render(const Scene& scene, const Camera& camera, const RenderOpt
     }
   }
   auto opaque = [&](const Structure& s) { return s.style.opacity >= 0.999; };
+  // Context structures lose the far side of the scene's clipping plane.
+  auto clipped = [&](const Structure& s) { return scene.clip && s.role == Role::context; };
+  if (scene.clip) {
+    const Vec3 n = -scene.clip->normal;  // kept: -n . (p - point) >= 0
+    I.clip = {static_cast<float>(n.x()), static_cast<float>(n.y()), static_cast<float>(n.z()),
+              static_cast<float>(-n.dot(scene.clip->point))};
+  }
 
   // Line geometry: one strip per polyline, batched per structure and style:
   // the polyline layers first (under), then the feature lines per width class.
@@ -816,8 +851,10 @@ Image Renderer::render(const Scene& scene, const Camera& camera, const RenderOpt
     hybrid_region = projected_rect(M, hybrid_meshes, camera.width, camera.height);
   }
 
+  if (blit != nullptr && tiles.size() != 1)
+    throw InputError("render_to_framebuffer: the picture must fit one tile (" +
+                     std::to_string(inner) + " pixels a side)");
   const float bg_alpha = options.transparent_background ? 0.0f : scene.background.a;
-  Image image(camera.width, camera.height);
   for (const Tile& t : tiles) {
     // 1. Opaque structures.
     g.BindFramebuffer(GL_FRAMEBUFFER, I.main_fbo);
@@ -844,6 +881,7 @@ Image Renderer::render(const Scene& scene, const Camera& camera, const RenderOpt
         p.set("u_color", s.style.color.r, s.style.color.g, s.style.color.b, 1.0f);
         p.set("u_ambient", static_cast<float>(s.style.ambient));
         p.set("u_toon_levels", s.style.toon_levels);
+        I.set_clip(p, clipped(s));
         I.draw_mesh(*gpu[i]);
       }
       g.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
@@ -872,8 +910,10 @@ Image Renderer::render(const Scene& scene, const Camera& camera, const RenderOpt
               static_cast<float>(s.style.opacity));
         p.set("u_ambient", static_cast<float>(s.style.ambient));
         p.set("u_toon_levels", s.style.toon_levels);
+        I.set_clip(p, clipped(s));
         I.draw_mesh(*gpu[i]);
       }
+      g.Disable(GL_CLIP_DISTANCE0);
       g.BindFramebuffer(GL_FRAMEBUFFER, I.overlay_fbo);
       I.set_state_overlay();
       const ShaderProgram& c = I.program("oit_composite");
@@ -899,8 +939,12 @@ Image Renderer::render(const Scene& scene, const Camera& camera, const RenderOpt
       const ShaderProgram& p = I.program("depth");
       p.use();
       I.set_common(p, M, t);
-      for (std::size_t i = 0; i < scene.structures.size(); ++i)
-        if (!opaque(scene.structures[i])) I.draw_mesh(*gpu[i]);
+      for (std::size_t i = 0; i < scene.structures.size(); ++i) {
+        if (opaque(scene.structures[i])) continue;
+        I.set_clip(p, clipped(scene.structures[i]));
+        I.draw_mesh(*gpu[i]);
+      }
+      g.Disable(GL_CLIP_DISTANCE0);
     }
     // 4. Hybrid apparent ridges (where the tile meets the hybrid meshes).
     if (any_hybrid && !is_empty(tile_region(t, hybrid_region))) {
@@ -908,9 +952,9 @@ Image Renderer::render(const Scene& scene, const Camera& camera, const RenderOpt
       for (std::size_t i = 0; i < scene.structures.size(); ++i) {
         const Structure& s = scene.structures[i];
         if (s.style.hybrid_apparent_ridges)
-          draws.push_back({gpu[i], hybrid_scale(*s.mesh, options.hybrid), false});
+          draws.push_back({gpu[i], hybrid_scale(*s.mesh, options.hybrid), false, clipped(s)});
         else if (opaque(s))
-          draws.push_back({gpu[i], 1.0f, true});
+          draws.push_back({gpu[i], 1.0f, true, clipped(s)});
       }
       I.hybrid_stage1(draws, options.hybrid, M, t, false);
       I.hybrid_stage2(options.hybrid, t, hybrid_region, false);
@@ -945,16 +989,29 @@ Image Renderer::render(const Scene& scene, const Camera& camera, const RenderOpt
         p.set("u_hidden_mode", static_cast<int>(ls.hidden));
         p.set("u_hidden_opacity", static_cast<float>(ls.hidden_opacity));
         p.set("u_dash_px", static_cast<float>(ls.dash * line_scale));
+        I.set_clip(p, clipped(s));
         g.DrawElements(GL_TRIANGLES, b.count, GL_UNSIGNED_INT,
                        reinterpret_cast<const void*>(std::size_t(b.first) * sizeof(std::uint32_t)));
       }
     }
+    g.Disable(GL_CLIP_DISTANCE0);
     check_gl_error(g, "drawing the scene");
-    I.read_tile(I.main_fbo, t, camera.height, image, true);
+    if (out != nullptr) I.read_tile(I.main_fbo, t, camera.height, *out, true);
+  }
+  if (blit != nullptr) {
+    // On the GPU: no read back, no upload (the viewer's window).
+    const Tile& t = tiles.front();
+    g.BindFramebuffer(GL_READ_FRAMEBUFFER, I.main_fbo);
+    g.ReadBuffer(GL_COLOR_ATTACHMENT0);
+    g.BindFramebuffer(GL_DRAW_FRAMEBUFFER, blit->framebuffer);
+    const bool same = blit->width == t.w && blit->height == t.h;
+    g.BlitFramebuffer(kTileMargin, kTileMargin, kTileMargin + t.w, kTileMargin + t.h, 0, 0,
+                      blit->width, blit->height, GL_COLOR_BUFFER_BIT,
+                      same ? GL_NEAREST : GL_LINEAR);
+    check_gl_error(g, "copying the picture");
   }
   g.BindVertexArray(0);
   g.BindFramebuffer(GL_FRAMEBUFFER, 0);
-  return image;
 }
 
 Image Renderer::render_hybrid(const std::shared_ptr<const RenderMesh>& mesh, const Camera& camera,

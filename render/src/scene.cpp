@@ -128,8 +128,17 @@ T choice(const nlohmann::json& j, const char* key, Parse parse,
                    did_you_mean(v, choices) + " (use " + list + ")");
 }
 
-const std::vector<std::string> kSceneKeys = {"background", "transparent", "camera",
-                                             "view",       "frame",       "structures"};
+const std::vector<std::string> kSceneKeys = {"background", "transparent", "camera", "view",
+                                             "frame",      "structures",  "clip"};
+const std::vector<std::string> kClipKeys = {"point", "normal"};
+
+Vec3 vec3_from_json(const nlohmann::json& j, const std::string& what) {
+  if (!j.is_array() || j.size() != 3 || !j[0].is_number() || !j[1].is_number() || !j[2].is_number())
+    throw InputError(what + " must be an array of three numbers");
+  const Vec3 v(j[0].get<double>(), j[1].get<double>(), j[2].get<double>());
+  if (!v.allFinite()) throw InputError(what + " must be finite");
+  return v;
+}
 const std::vector<std::string> kStructureKeys = {
     "name",    "mesh",    "role",        "space",  "shading",    "color",
     "opacity", "ambient", "toon_levels", "lines",  "line_color", "line_width",
@@ -326,6 +335,18 @@ SceneSpec scene_spec_from_json(const nlohmann::json& j, const std::filesystem::p
       spec.view = choice<AnatomicalView>(j, "view", parse_anatomical_view, kViews, what, "");
     if (j.contains("frame"))
       spec.frame = choice<Frame>(j, "frame", parse_frame, {"focus", "all"}, what, "");
+    if (j.contains("clip")) {
+      const auto& c = j["clip"];
+      if (!c.is_object() || !c.contains("point") || !c.contains("normal"))
+        throw InputError(what + ": clip must be an object with \"point\" and \"normal\"");
+      check_keys(c, kClipKeys, what, "clip");
+      ClipPlane plane;
+      plane.point = vec3_from_json(c["point"], what + ": clip.point");
+      plane.normal = vec3_from_json(c["normal"], what + ": clip.normal");
+      if (!(plane.normal.norm() > 1e-12))
+        throw InputError(what + ": clip.normal must not be the zero vector");
+      spec.clip = plane;
+    }
     if (!j.contains("structures") || !j["structures"].is_array() || j["structures"].empty())
       throw InputError(what + ": 'structures' must be a non-empty array");
     std::vector<std::string> family_names;
@@ -405,6 +426,9 @@ nlohmann::json scene_spec_to_json(const SceneSpec& spec) {
   if (spec.camera) j["camera"] = camera_to_json(*spec.camera);
   if (spec.view) j["view"] = to_string(*spec.view);
   if (spec.frame) j["frame"] = to_string(*spec.frame);
+  if (spec.clip)
+    j["clip"] = {{"point", {spec.clip->point.x(), spec.clip->point.y(), spec.clip->point.z()}},
+                 {"normal", {spec.clip->normal.x(), spec.clip->normal.y(), spec.clip->normal.z()}}};
   nlohmann::json list = nlohmann::json::array();
   for (const auto& s : spec.structures) {
     nlohmann::json o;
