@@ -10,3 +10,6 @@ target_compile_definitions(drive_lines PRIVATE FABRICA_BENCH_DATA="${FABRICA_BEN
 # Larger meshes from a small one for the scaling benchmark (bench/scale_lines.sh).
 add_executable(scale_mesh ${CMAKE_CURRENT_LIST_DIR}/scale_mesh.cpp)
 target_link_libraries(scale_mesh PRIVATE fabrica::io fabrica::warnings)
+# Context meshes for the viewer's orbit benchmark (bench/viewer_orbit.sh).
+add_executable(make_context ${CMAKE_CURRENT_LIST_DIR}/make_context.cpp)
+target_link_libraries(make_context PRIVATE fabrica::io fabrica::core fabrica::warnings)

@@ -1,56 +1,99 @@
 #!/usr/bin/env bash
-# fabrica-viewer orbit benchmark (issue 18): 120 frames at 1280x800 turning
-# once around the bundled igea (c3d_igea.ply, 134k vertices) with contours,
-# suggestive contours and apparent ridges recomputed for every frame; prints
-# the median and 95th percentile of the frame time (and of the lines' time)
-# from the viewer's frame log. Not a timed test: record the figures in
-# docs/PERFORMANCE.md with the CPU model.
+# fabrica-viewer orbit benchmark (issue 18, "Speed"): 120 frames at 1280x800
+# turning once around the bundled igea (c3d_igea.ply, 134k vertices, the
+# focus) with contours, suggestive contours and apparent ridges recomputed
+# for every frame, plus ghosted context structures:
+#   300k  two context structures of 300,508 faces in all (the Stanford bunny
+#         subdivided once, 277,804 faces, and the camel head, 22,704 faces,
+#         both placed around the igea by bench/make_context)
+#   1m    one context of 1,111,216 faces (the bunny subdivided twice)
+#   none  the igea alone
+# Prints, per configuration, the median and 95th percentile of the frame time
+# (and of the drawing and the lines' time) from the viewer's frame log, the
+# CPU time per frame of the whole process (all threads, llvmpipe's included:
+# what a shared machine's load cannot inflate), and the load average. Not a
+# timed test: record the figures in docs/PERFORMANCE.md.
 #
-#   bench/viewer_orbit.sh [BUILD_DIR] [FRAMES] [hybrid]
+#   bench/viewer_orbit.sh [BUILD_DIR] [FRAMES] [object|hybrid|both] [none|300k|1m|all]
 #
-# `hybrid` draws the apparent ridges by the hybrid GPU method instead.
+# Defaults: build 120 both all (the issue's figures: 300k and 1m contexts,
+# object-space and hybrid GPU apparent ridges, and the igea alone).
 # Without a display the viewer runs under xvfb-run.
 set -euo pipefail
-build="${1:-build}" frames="${2:-120}" mode="${3:-object}"
+build="${1:-build}" frames="${2:-120}" modes="${3:-both}" contexts="${4:-all}"
 if ! [[ "$frames" =~ ^[1-9][0-9]*$ ]]; then
   echo "viewer_orbit: FRAMES must be a positive integer (got '$frames')" >&2
   exit 2
 fi
+case "$modes" in object | hybrid) ;; both) modes="object hybrid" ;;
+*) echo "viewer_orbit: mode must be object, hybrid or both (got '$modes')" >&2; exit 2 ;; esac
+case "$contexts" in none | 300k | 1m) ;; all) contexts="300k 1m none" ;;
+*) echo "viewer_orbit: context must be none, 300k, 1m or all (got '$contexts')" >&2; exit 2 ;; esac
 viewer="$build/apps/viewer/fabrica-viewer"
-mesh="$build/test-data/data/meshes/classic/c3d_igea.ply"
-for f in "$viewer" "$mesh"; do
+make_context="$build/bench/make_context"
+data="$build/test-data/data/meshes/classic"
+mesh="$data/c3d_igea.ply"
+for f in "$viewer" "$make_context" "$mesh"; do
   if [ ! -e "$f" ]; then
-    echo "viewer_orbit: $f is missing; build fabrica-viewer in $build first" >&2
+    echo "viewer_orbit: $f is missing; build fabrica-viewer and make_context in $build first" >&2
     exit 2
   fi
 done
-hybrid=false
-[ "$mode" = hybrid ] && hybrid=true
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
-cat >"$work/orbit.txt" <<SCRIPT
-open "$mesh"
+"$make_context" "$data/c3d_stanford-bunny.obj" "$mesh" "$work/skin.ply" 1 1.5 >/dev/null
+"$make_context" "$data/libigl_camelhead.off" "$mesh" "$work/shell.ply" 0 1.2 >/dev/null
+"$make_context" "$data/c3d_stanford-bunny.obj" "$mesh" "$work/skin_fine.ply" 2 1.5 >/dev/null
+
+percentile() {  # log, column, fraction
+  tail -n "$frames" "$1" | cut -d, -f"$2" | sort -g |
+    awk -v p="$3" '{v[NR]=$1} END {i=int(p*(NR-1)+0.5)+1; printf "%.1f", v[i]}'
+}
+# One run: the session's CPU seconds (user + system of the viewer and its
+# threads) with the orbit and without it; their difference over FRAMES is
+# the CPU cost of one orbit frame.
+run_viewer() {  # script, log -> prints CPU seconds
+  local cmd=("$viewer" --size 1280x800 --script "$1" --frame-log "$2")
+  if [ -z "${DISPLAY:-}" ]; then
+    cmd=(xvfb-run -a -s "-screen 0 1600x1200x24" "${cmd[@]}")
+  fi
+  /usr/bin/time -f "%U %S" -o "$work/time" "${cmd[@]}" >/dev/null 2>"$work/stderr.txt" ||
+    { cat "$work/stderr.txt" >&2; exit 1; }
+  awk '{print $1 + $2}' "$work/time"
+}
+cpu="$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')"
+echo "fabrica-viewer orbit: $frames frames at 1280x800 around the igea (focus), contour+suggestive+apparent"
+echo "cpu: $cpu ($(nproc) cores); GL: llvmpipe, LP_NUM_THREADS=${LP_NUM_THREADS:-default}"
+for context in $contexts; do
+  for mode in $modes; do
+    hybrid=false
+    [ "$mode" = hybrid ] && hybrid=true
+    opens="open \"$mesh\""
+    case "$context" in
+      300k) opens+=$'\n'"open \"$work/skin.ply\""$'\n'"open \"$work/shell.ply\"" ;;
+      1m) opens+=$'\n'"open \"$work/skin_fine.ply\"" ;;
+    esac
+    for n in 0 "$frames"; do
+      cat >"$work/orbit$n.txt" <<SCRIPT
+$opens
 wait
+focus c3d_igea
 set c3d_igea lines=contour,suggestive,apparent hybrid=$hybrid
 view anterior
 wait
-orbit 360 $frames
+$([ "$n" -gt 0 ] && echo "orbit 360 $n")
 quit
 SCRIPT
-run=("$viewer" --size 1280x800 --script "$work/orbit.txt" --frame-log "$work/frames.csv")
-if [ -z "${DISPLAY:-}" ]; then
-  run=(xvfb-run -a -s "-screen 0 1600x1200x24" "${run[@]}")
-fi
-"${run[@]}" 2>"$work/stderr.txt" || { cat "$work/stderr.txt" >&2; exit 1; }
-# The orbit is the last FRAMES rows of the log.
-percentile() {  # column, fraction
-  tail -n "$frames" "$work/frames.csv" | cut -d, -f"$1" | sort -g |
-    awk -v p="$2" '{v[NR]=$1} END {i=int(p*(NR-1)+0.5)+1; print v[i]}'
-}
-cpu="$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')"
-echo "fabrica-viewer orbit: $frames frames at 1280x800, igea, contour+suggestive+apparent ($mode)"
-echo "cpu: $cpu ($(nproc) cores)"
-echo "frame ms: median $(percentile 2 0.5), p95 $(percentile 2 0.95)"
-echo "draw ms (render + readback + UI): median $(percentile 3 0.5), p95 $(percentile 3 0.95)"
-echo "lines ms (worker): median $(percentile 4 0.5), p95 $(percentile 4 0.95)"
-echo "lines age (frames): max $(tail -n "$frames" "$work/frames.csv" | cut -d, -f5 | sort -g | tail -1)"
+    done
+    load="$(cut -d' ' -f1-3 /proc/loadavg)"
+    base="$(run_viewer "$work/orbit0.txt" "$work/frames0.csv")"
+    total="$(run_viewer "$work/orbit$frames.txt" "$work/frames.csv")"
+    log="$work/frames.csv"
+    echo "-- context $context, apparent ridges $mode (load average $load)"
+    echo "frame ms: median $(percentile "$log" 2 0.5), p95 $(percentile "$log" 2 0.95)"
+    echo "draw ms (render + UI + swap): median $(percentile "$log" 3 0.5), p95 $(percentile "$log" 3 0.95)"
+    echo "lines ms (worker): median $(percentile "$log" 4 0.5), p95 $(percentile "$log" 4 0.95)"
+    echo "cpu ms per frame (all threads): $(awk -v a="$base" -v b="$total" -v n="$frames" 'BEGIN {printf "%.1f", 1000 * (b - a) / n}')"
+    echo "lines age (frames): max $(tail -n "$frames" "$log" | cut -d, -f5 | sort -g | tail -1)"
+  done
+done

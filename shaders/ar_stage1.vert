@@ -19,6 +19,7 @@ out vec3 v_packed;
 void main() {
   vec4 V = u_model_view * vec4(a_position, 1.0);
   gl_Position = to_tile(u_projection * V);
+  clip_at(a_position);
   vec3 N = normalize(u_normal_matrix * a_normal);
   vec3 e1 = u_normal_matrix * a_e1;
   vec3 e2 = u_normal_matrix * a_e2;

@@ -19,6 +19,7 @@ out float v_strength;
 out float v_arc_px;
 vec2 to_pixels(vec4 c) { return (c.xy / c.w * 0.5 + 0.5) * u_image_size; }
 void main() {
+  clip_at(a_position);
   vec4 cp = u_projection * (u_model_view * vec4(a_position, 1.0));
   vec4 ca = u_projection * (u_model_view * vec4(a_prev, 1.0));
   vec4 cb = u_projection * (u_model_view * vec4(a_next, 1.0));

@@ -11,4 +11,5 @@ void main() {
   v_position = p.xyz;
   v_normal = u_normal_matrix * a_normal;
   gl_Position = to_tile(u_projection * p);
+  clip_at(a_position);
 }

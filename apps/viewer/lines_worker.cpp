@@ -58,8 +58,8 @@ void LinesWorker::run() {
     const auto t0 = std::chrono::steady_clock::now();
     for (auto& item : job->items) {
       try {
-        result->lines[item.id] = structure_lines(*item.source->extractor, *item.source->surface,
-                                                 item.style, item.thresholds, job->camera);
+        result->lines[item.id] =
+            structure_lines(*item.source->drawer, item.style, item.thresholds, job->camera);
         if (item.hatching)
           result->hatching[item.id] =
               structure_hatching(*item.source->surface, job->camera, item.hatching_width);

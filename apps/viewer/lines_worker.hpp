@@ -18,18 +18,18 @@
 
 #include "fabrica/core/camera.hpp"
 #include "fabrica/core/surface.hpp"
-#include "fabrica/lines/extract.hpp"
+#include "fabrica/lines/draw.hpp"
 #include "fabrica/lines/line_set.hpp"
 #include "fabrica/render/scene.hpp"
 
 namespace fabrica::viewer {
 
-/// A structure's geometry as the worker needs it. The extractor (with the
+/// A structure's geometry as the worker needs it. The drawer (with the
 /// view-independent precomputation, built once per mesh by the loader) is
 /// used by the worker thread only.
 struct LineSource {
   std::shared_ptr<const Surface> surface;
-  std::unique_ptr<LineExtractor> extractor;
+  std::unique_ptr<LineDrawer> drawer;
 };
 
 struct LinesJob {

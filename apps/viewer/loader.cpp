@@ -173,7 +173,7 @@ LoadedStructure Loader::build(TriangleMesh mesh, const std::string& name) {
   s.mesh = std::make_shared<render::RenderMesh>(render::make_render_mesh(*surface, false));
   auto source = std::make_shared<LineSource>();
   source->surface = surface;
-  source->extractor = std::make_unique<LineExtractor>(*surface);
+  source->drawer = std::make_unique<LineDrawer>(*surface);
   s.surface = surface;
   s.lines = source;
   return s;

@@ -132,6 +132,24 @@ int run_script(Viewer& v, const std::filesystem::path& path) {
         do {
           v.frame();
         } while (v.transitioning() && !v.should_close());
+      } else if (cmd == "clip") {
+        const char* usage =
+            "clip off | clip view [OFFSET_MM] | clip anterior|posterior|left|right|superior|"
+            "inferior [OFFSET_MM]";
+        expect_args(w, 1, 2, usage);
+        const double offset = w.size() == 3 ? parse_number(w[2], "clip OFFSET_MM") : 0.0;
+        loaded();
+        if (w[1] == "off") {
+          if (w.size() == 3) throw InputError(std::string("usage: ") + usage);
+          v.set_clip(ClipSettings::Mode::off);
+        } else if (w[1] == "view") {
+          v.set_clip(ClipSettings::Mode::view, AnatomicalView::anterior, offset);
+        } else if (const auto side = parse_anatomical_view(w[1])) {
+          v.set_clip(ClipSettings::Mode::side, *side, offset);
+        } else {
+          throw InputError("clip: unknown orientation \"" + w[1] + "\" (" + usage + ")");
+        }
+        v.frame();
       } else if (cmd == "camera") {
         expect_args(w, 1, 1, "camera FILE");
         Camera c = read_camera(w[1]);

@@ -1,38 +1,16 @@
 #include "structure_lines.hpp"
 
-#include <algorithm>
-
 #include "fabrica/hatching/hatching.hpp"
-#include "fabrica/lines/chain.hpp"
-#include "fabrica/lines/smooth.hpp"
+#include "fabrica/render/draw.hpp"
 
 namespace fabrica::viewer {
 
-std::vector<LineFamily> object_space_families(const render::StructureStyle& style) {
-  std::vector<LineFamily> families = style.families;
-  if (style.hybrid_apparent_ridges)
-    families.erase(std::remove(families.begin(), families.end(), LineFamily::apparent),
-                   families.end());
-  return families;
-}
-
-LineSet structure_lines(LineExtractor& extractor, const Surface& surface,
-                        const render::StructureStyle& style, const LineOptions& thresholds,
-                        const Camera& camera) {
-  LineOptions options = thresholds;
-  options.families = object_space_families(style);
-  if (options.families.empty()) return {};
-  extractor.set_options(options);
-  ChainOptions chain;
-  chain.camera = camera;
-  chain.min_length_px = 3.0;
-  LineSet lines = chain_segments(extractor.extract(camera), chain);
-  if (style.smooth > 0) {
-    LineSmoothingOptions smoothing;
-    smoothing.iterations = style.smooth;
-    smooth_lines(lines, surface, smoothing);
-  }
-  return lines;
+LineSet structure_lines(LineDrawer& drawer, const render::StructureStyle& style,
+                        const LineOptions& thresholds, const Camera& camera) {
+  const DrawLinesOptions options = render::structure_line_options(style, thresholds);
+  if (options.lines.families.empty()) return {};
+  drawer.set_options(options);
+  return drawer.draw(camera).lines;
 }
 
 render::PolylineLayer structure_hatching(const Surface& surface, const Camera& camera,

@@ -99,6 +99,34 @@ void menu(Viewer& v) {
   }
   if (ImGui::BeginMenu("Tools")) {
     if (ImGui::MenuItem("Measure distance", "M", &v.measure_mode())) v.measure_points().clear();
+    if (ImGui::BeginMenu("Clipping plane")) {
+      // The context loses what lies beyond a plane through the focus
+      // (script: clip off|view|SIDE [OFFSET_MM]).
+      ClipSettings c = v.clip();
+      bool on = c.mode != ClipSettings::Mode::off, changed = false;
+      if (ImGui::Checkbox("clip the context", &on)) {
+        c.mode = on ? ClipSettings::Mode::view : ClipSettings::Mode::off;
+        changed = true;
+      }
+      const char* orientations[] = {"facing the eye", "anterior", "posterior", "left",
+                                    "right",          "superior", "inferior"};
+      int o = c.mode == ClipSettings::Mode::side ? 1 + static_cast<int>(c.side) : 0;
+      if (c.mode == ClipSettings::Mode::fixed) {
+        ImGui::TextUnformatted("plane from the scene file");
+      } else if (on && ImGui::Combo("orientation", &o, orientations, 7)) {
+        c.mode = o == 0 ? ClipSettings::Mode::view : ClipSettings::Mode::side;
+        if (o > 0) c.side = static_cast<AnatomicalView>(o - 1);
+        changed = true;
+      }
+      float offset = static_cast<float>(c.offset);
+      if (on && c.mode != ClipSettings::Mode::fixed &&
+          ImGui::SliderFloat("offset (mm)", &offset, -200.0f, 200.0f, "%.1f")) {
+        c.offset = offset;
+        changed = true;
+      }
+      if (changed) v.set_clip(c.mode, c.side, c.offset);
+      ImGui::EndMenu();
+    }
     if (ImGui::BeginMenu("Hybrid apparent ridges")) {
       auto& h = v.hybrid();
       float lambda = static_cast<float>(h.lambda), threshold = static_cast<float>(h.threshold);

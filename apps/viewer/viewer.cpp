@@ -15,8 +15,7 @@
 
 #include "fabrica/core/error.hpp"
 #include "fabrica/io/mesh_io.hpp"
-#include "fabrica/lines/visibility.hpp"
-#include "fabrica/lines/writers.hpp"
+#include "fabrica/render/draw.hpp"
 #include "structure_lines.hpp"
 #include "ui.hpp"
 
@@ -86,7 +85,10 @@ Viewer::Viewer(const ViewerOptions& options) : options_(options) {
 Viewer::~Viewer() {
   g_viewer = nullptr;
   window_->make_current();
-  if (texture_ != 0) window_->gl().DeleteTextures(1, &texture_);
+  if (picture_fbo_ != 0) {
+    window_->gl().DeleteFramebuffers(1, &picture_fbo_);
+    window_->gl().DeleteTextures(1, &picture_);
+  }
   ImGui_ImplOpenGL3_Shutdown();
   ImGui_ImplGlfw_Shutdown();
   ImGui::DestroyContext();
@@ -142,6 +144,10 @@ void Viewer::adopt_loaded() {
     if (f.scene) {
       background_ = f.scene->background;
       transparent_ = f.scene->transparent;
+      if (f.scene->clip) {
+        clip_.mode = ClipSettings::Mode::fixed;
+        clip_.fixed = *f.scene->clip;
+      }
       if (f.scene->camera) {
         const int w = camera_.width, h = camera_.height;
         camera_ = *f.scene->camera;
@@ -359,6 +365,31 @@ void Viewer::orbit(double degrees) {
   camera_changed();
 }
 
+std::optional<render::ClipPlane> Viewer::clip_plane() const {
+  if (clip_.mode == ClipSettings::Mode::off || structures_.empty()) return std::nullopt;
+  if (clip_.mode == ClipSettings::Mode::fixed) return clip_.fixed;
+  const BoundingBox box = scene_box(true);
+  const Vec3 centre = 0.5 * (box.min + box.max);
+  Vec3 normal = -camera_.forward();  // towards the eye
+  if (clip_.mode == ClipSettings::Mode::side) {
+    const Camera side = anatomical_camera(clip_.side, box, scene_space());
+    normal = (side.eye - side.center).normalized();
+  }
+  render::ClipPlane plane;
+  plane.normal = normal;
+  plane.point = centre + clip_.offset * normal;
+  return plane;
+}
+
+void Viewer::set_clip(ClipSettings::Mode mode, AnatomicalView side, double offset) {
+  if (!std::isfinite(offset)) throw InputError("clip: the offset must be a finite number of mm");
+  clip_.mode = mode;
+  clip_.side = side;
+  clip_.offset = offset;
+  redraw_ = true;
+  lines_dirty_ = true;
+}
+
 std::uint64_t Viewer::post_lines(const Camera& camera, bool force) {
   if (!force && !lines_dirty_ && posted_revision_ == camera_revision_) return lines_version_;
   LinesJob job;
@@ -378,13 +409,14 @@ render::Scene Viewer::build_scene(const LinesResult* lines, bool fading) {
   const double t = fade_from_.empty() ? 1.0 : std::min(1.0, ms_since(fade_start_) / 300.0);
   render::Scene scene;
   scene.background = background_;
+  scene.clip = clip_plane();
   for (auto& s : structures_) {
     if (!s.visible) continue;
     render::Structure st;
     st.name = s.name;
     st.role = s.role;
     st.style = s.style;
-    st.style.families = object_space_families(s.style);
+    st.style.families = render::object_space_families(s.style);
     if (const auto f = fade_from_.find(s.id); fading && f != fade_from_.end())
       st.style.opacity = f->second + t * (s.style.opacity - f->second);
     if (s.style.hybrid_apparent_ridges) {
@@ -414,18 +446,25 @@ render::RenderOptions Viewer::render_options(bool transparent) const {
   return ro;
 }
 
-void Viewer::upload(const render::Image& image) {
+void Viewer::ensure_picture(int width, int height) {
+  if (picture_fbo_ != 0 && picture_w_ == width && picture_h_ == height) return;
   const auto& g = window_->gl();
-  if (texture_ == 0) g.GenTextures(1, &texture_);
-  g.BindTexture(GL_TEXTURE_2D, texture_);
-  g.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-  g.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-  g.PixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  g.TexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, image.width, image.height, 0, GL_RGBA, GL_UNSIGNED_BYTE,
-               image.rgba.data());
+  if (picture_fbo_ == 0) {
+    g.GenFramebuffers(1, &picture_fbo_);
+    g.GenTextures(1, &picture_);
+  }
+  g.BindTexture(GL_TEXTURE_2D, picture_);
+  g.TexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, width, height, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
+  g.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  g.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
   g.BindTexture(GL_TEXTURE_2D, 0);
-  texture_w_ = image.width;
-  texture_h_ = image.height;
+  g.BindFramebuffer(GL_FRAMEBUFFER, picture_fbo_);
+  g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, picture_, 0);
+  if (g.CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    throw Error(ErrorKind::unavailable, "the OpenGL driver cannot create the window's picture");
+  g.BindFramebuffer(GL_FRAMEBUFFER, 0);
+  picture_w_ = width;
+  picture_h_ = height;
 }
 
 void Viewer::frame() {
@@ -466,7 +505,7 @@ void Viewer::frame() {
     const bool moving = camera_revision_ != last_frame_revision_ || dragging_ || to_.has_value();
     const bool scaled = options_.interactive && moving && moving_scale_ < 0.999f;
     last_frame_revision_ = camera_revision_;
-    if (redraw_ || key != drawn_ || texture_ == 0 || !fade_from_.empty() ||
+    if (redraw_ || key != drawn_ || !has_picture_ || !fade_from_.empty() ||
         scaled != drawn_scaled_) {
       Camera c = camera_;
       if (scaled) {
@@ -475,7 +514,12 @@ void Viewer::frame() {
       }
       drawn_scaled_ = scaled;
       try {
-        upload(renderer_->render(build_scene(lines.get(), true), c, render_options(transparent_)));
+        // Drawn on the GPU into the window's picture (no read back): the
+        // window shows the background colour even for transparent exports.
+        ensure_picture(camera_.width, camera_.height);
+        renderer_->render_to_framebuffer(build_scene(lines.get(), true), c, render_options(false),
+                                         picture_fbo_, picture_w_, picture_h_);
+        has_picture_ = true;
       } catch (const Error& e) {
         report_error(e.what());
       }
@@ -490,10 +534,6 @@ void Viewer::frame() {
     stats_.lines_age = 0;
   }
 
-  if (texture_ != 0 && any)
-    ImGui::GetBackgroundDrawList()->AddImage(
-        reinterpret_cast<ImTextureID>(static_cast<std::uintptr_t>(texture_)), ImVec2(0, 0),
-        ImVec2(static_cast<float>(camera_.width), static_cast<float>(camera_.height)));
   draw_ui(*this);
   ImGui::Render();
   const auto t2 = Clock::now();
@@ -502,6 +542,11 @@ void Viewer::frame() {
   g.Viewport(0, 0, fw, fh);
   g.ClearColor(background_.r, background_.g, background_.b, 1.0f);
   g.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  if (has_picture_ && any && picture_w_ == fw && picture_h_ == fh) {
+    g.BindFramebuffer(GL_READ_FRAMEBUFFER, picture_fbo_);
+    g.BlitFramebuffer(0, 0, fw, fh, 0, 0, fw, fh, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+    g.BindFramebuffer(GL_FRAMEBUFFER, 0);
+  }
   ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
   if (!capture_.empty()) {
     // The window as shown, panels included (documentation pictures).
@@ -553,42 +598,31 @@ render::Image Viewer::screenshot(int width, int height, bool transparent) {
 }
 
 void Viewer::export_svg(const std::filesystem::path& path) {
-  const std::uint64_t version = post_lines(camera_, true);
-  const auto lines = lines_worker_.wait_for(version);
-  // As `fabrica render --svg`: focus lines hidden by opaque structures,
-  // context lines by every surface.
-  TriangleMesh opaque, all;
-  auto append = [](TriangleMesh& dst, const TriangleMesh& src) {
-    const auto base = static_cast<std::int32_t>(dst.positions.size());
-    dst.positions.insert(dst.positions.end(), src.positions.begin(), src.positions.end());
-    for (Face f : src.faces) dst.faces.push_back({f[0] + base, f[1] + base, f[2] + base});
-  };
-  for (const auto& s : structures_) {
-    if (!s.visible) continue;
-    append(all, s.surface->mesh());
-    if (s.style.opacity >= 0.999) append(opaque, s.surface->mesh());
-  }
-  if (all.faces.empty()) throw InputError("export-svg: nothing is shown");
-  const DepthBuffer depth_all = render_depth(all, camera_);
-  const DepthBuffer depth_opaque = opaque.faces.empty() ? depth_all : render_depth(opaque, camera_);
-  LineSet merged;
-  for (const auto& s : structures_) {
-    const auto it = lines->lines.find(s.id);
-    if (!s.visible || it == lines->lines.end()) continue;
-    LineSet ls = it->second;
-    compute_visibility(ls, *s.surface, camera_, {},
-                       s.style.opacity >= 0.999 ? &depth_opaque : &depth_all);
-    merged.polylines.insert(merged.polylines.end(), ls.polylines.begin(), ls.polylines.end());
-  }
   std::string ext = path.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  if (ext == ".pdf")
-    write_pdf(path, merged, camera_, fabrica::LineStyle{});
-  else if (ext == ".svg")
-    write_svg(path, merged, camera_, fabrica::LineStyle{});
-  else
+  if (ext != ".svg" && ext != ".pdf")
     throw InputError(path.string() + ": the lines are written as .svg or .pdf");
+  const std::uint64_t version = post_lines(camera_, true);
+  const auto lines = lines_worker_.wait_for(version);
+  // The shown structures as `fabrica render` holds a scene, drawn as it
+  // draws it: the same layers, styles and CPU visibility (render/draw.hpp).
+  render::SceneSurfaces scene;
+  for (const auto& s : structures_) {
+    if (!s.visible) continue;
+    render::StructureSpec spec;
+    spec.name = s.name;
+    spec.role = s.role;
+    spec.style = s.style;
+    scene.add(std::move(spec), s.surface);
+  }
+  if (scene.surfaces.empty()) throw InputError("export-svg: nothing is shown");
+  const render::Scene drawn = build_scene(lines.get());
+  const double reference = render_options(false).line_reference_size;
+  if (ext == ".pdf")
+    render::write_scene_pdf(path, scene, drawn, camera_, reference);
+  else
+    render::write_scene_svg(path, scene, drawn, camera_, reference);
 }
 
 void Viewer::save_scene(const std::filesystem::path& path) {
@@ -596,6 +630,7 @@ void Viewer::save_scene(const std::filesystem::path& path) {
   spec.background = background_;
   spec.transparent = transparent_;
   spec.camera = camera_;
+  spec.clip = clip_plane();
   const std::filesystem::path dir = path.parent_path();
   const std::string mesh_dir = structure_name_from_file(path) + ".meshes";
   for (const auto& s : structures_) {

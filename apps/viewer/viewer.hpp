@@ -47,6 +47,18 @@ struct SurfacePick {
   double k1 = 0.0, k2 = 0.0;  ///< principal curvatures (1/mm), interpolated
 };
 
+/// The context's clipping plane (issue 18, item 4): off, facing the eye
+/// (follows the camera), facing an anatomical side, or a fixed plane (read
+/// from a scene). The plane passes through the focus's centre moved
+/// `offset` mm along its normal; context on the normal's side is removed.
+struct ClipSettings {
+  enum class Mode { off, view, side, fixed };
+  Mode mode = Mode::off;
+  AnatomicalView side = AnatomicalView::anterior;
+  double offset = 0.0;
+  render::ClipPlane fixed;
+};
+
 struct FrameStats {
   std::uint64_t frame = 0;
   double ms_frame = 0.0, ms_gpu_submit = 0.0, ms_lines = 0.0;
@@ -105,6 +117,14 @@ class Viewer {
   bool transitioning() const { return to_.has_value(); }
   void camera_changed() { ++camera_revision_; }
 
+  // --- clipping plane
+  ClipSettings& clip() { return clip_; }
+  /// The plane for the current camera, if clipping is on.
+  std::optional<render::ClipPlane> clip_plane() const;
+  /// `clip off`, `clip view [OFFSET]`, `clip SIDE [OFFSET]` (script and UI).
+  void set_clip(ClipSettings::Mode mode, AnatomicalView side = AnatomicalView::anterior,
+                double offset = 0.0);
+
   // --- outputs
   render::Image screenshot(int width, int height, bool transparent);
   /// The lines of the current view, hidden lines removed, as SVG or PDF (by extension).
@@ -149,7 +169,8 @@ class Viewer {
   /// exports always draw the styles as they are).
   render::Scene build_scene(const LinesResult* lines, bool fading = false);
   render::RenderOptions render_options(bool transparent) const;
-  void upload(const render::Image& image);
+  /// The window's picture (a texture and its framebuffer) at width x height.
+  void ensure_picture(int width, int height);
   void write_frame_log();
   void handle_input();
 
@@ -168,14 +189,16 @@ class Viewer {
   render::Color background_{1.0f, 1.0f, 1.0f, 1.0f};
   bool transparent_ = false;
   render::HybridOptions hybrid_;
+  ClipSettings clip_;
   std::vector<std::string> errors_;
   std::vector<std::filesystem::path> recent_;
   std::vector<SurfacePick> measure_;
   std::optional<SurfacePick> hover_;
   FrameStats stats_;
   std::ofstream frame_log_;
-  unsigned int texture_ = 0;
-  int texture_w_ = 0, texture_h_ = 0;
+  unsigned int picture_fbo_ = 0, picture_ = 0;
+  int picture_w_ = 0, picture_h_ = 0;
+  bool has_picture_ = false;
   bool close_requested_ = false;
   bool redraw_ = true;
   std::pair<std::uint64_t, std::uint64_t> drawn_{0, 0};

@@ -74,6 +74,12 @@ LineDrawer::LineDrawer(const Surface& surface, DrawLinesOptions options)
       options_((validate(options), std::move(options))),
       extractor_(surface, options_.lines) {}
 
+void LineDrawer::set_options(DrawLinesOptions options) {
+  validate(options);
+  options_ = std::move(options);
+  extractor_.set_options(options_.lines);
+}
+
 namespace {
 
 // Chaining of one view's segment soups; the soups (the view's largest

@@ -60,6 +60,25 @@ Camera view_camera(const SceneSurfaces& scene, AnatomicalView view, Frame frame,
   return anatomical_camera(view, scene.box, scene.space, width, height);
 }
 
+std::vector<LineFamily> object_space_families(const StructureStyle& style) {
+  std::vector<LineFamily> families = style.families;
+  if (style.hybrid_apparent_ridges)
+    families.erase(std::remove(families.begin(), families.end(), LineFamily::apparent),
+                   families.end());
+  return families;
+}
+
+DrawLinesOptions structure_line_options(const StructureStyle& style,
+                                        const LineOptions& thresholds) {
+  DrawLinesOptions options;
+  options.lines = thresholds;
+  options.lines.families = object_space_families(style);
+  options.min_length_px = 3.0;
+  options.smooth = style.smooth;
+  options.visibility = false;  // the renderer tests depth on the GPU
+  return options;
+}
+
 Scene build_scene(const SceneSurfaces& scene, const Camera& camera) {
   Scene out;
   out.background = scene.spec.background;
@@ -70,25 +89,16 @@ Scene build_scene(const SceneSurfaces& scene, const Camera& camera) {
     st.name = spec.name;
     st.role = spec.role;
     st.style = spec.style;
-    std::vector<LineFamily> families = st.style.families;
-    if (st.style.hybrid_apparent_ridges)
-      families.erase(std::remove(families.begin(), families.end(), LineFamily::apparent),
-                     families.end());
     auto mesh =
         std::make_shared<RenderMesh>(make_render_mesh(surface, st.style.hybrid_apparent_ridges));
     if (st.style.lic) set_lic_field(*mesh, surface);
     st.mesh = std::move(mesh);
-    if (!families.empty()) {
-      DrawLinesOptions options;
-      options.lines.families = families;
-      options.min_length_px = 3.0;
-      options.smooth = st.style.smooth;
-      options.visibility = false;  // the renderer tests depth on the GPU
-      st.lines = draw_lines(surface, camera, options).lines;
-    }
-    st.style.families = families;
+    const DrawLinesOptions options = structure_line_options(st.style);
+    if (!options.lines.families.empty()) st.lines = draw_lines(surface, camera, options).lines;
+    st.style.families = options.lines.families;
     out.structures.push_back(std::move(st));
   }
+  out.clip = scene.spec.clip;
   return out;
 }
 
@@ -124,20 +134,66 @@ RenderedScene render_scene(const SceneSurfaces& scene, const Camera& camera,
 
 namespace {
 
+/// The parts of `lines` on the kept side of `plane`: a polyline is cut
+/// where its vertices leave that side (as the GPU clips the line quads).
+LineSet clip_lines(const LineSet& lines, const ClipPlane& plane) {
+  LineSet out;
+  for (const Polyline& pl : lines.polylines) {
+    const std::size_t n = pl.vertices.size();
+    std::size_t kept = 0;
+    for (const auto& v : pl.vertices) kept += plane.keeps(v.position);
+    if (kept == n) {
+      out.polylines.push_back(pl);
+      continue;
+    }
+    for (std::size_t i = 0; i < n;) {
+      if (!plane.keeps(pl.vertices[i].position)) {
+        ++i;
+        continue;
+      }
+      std::size_t j = i;
+      while (j < n && plane.keeps(pl.vertices[j].position)) ++j;
+      if (j - i >= 2) {
+        Polyline part;
+        part.family = pl.family;
+        part.vertices.assign(pl.vertices.begin() + static_cast<std::ptrdiff_t>(i),
+                             pl.vertices.begin() + static_cast<std::ptrdiff_t>(j));
+        if (pl.edge_faces.size() + 1 >= n && pl.edge_faces.size() >= j - 1)
+          part.edge_faces.assign(pl.edge_faces.begin() + static_cast<std::ptrdiff_t>(i),
+                                 pl.edge_faces.begin() + static_cast<std::ptrdiff_t>(j - 1));
+        out.polylines.push_back(std::move(part));
+      }
+      i = j;
+    }
+  }
+  return out;
+}
+
 /// Each drawn structure's lines with CPU visibility: a focus (opaque)
 /// structure's lines hidden by the opaque structures, a ghosted one's by
 /// every surface.
 std::vector<LineSet> visible_lines(const SceneSurfaces& scene, const Scene& drawn,
                                    const Camera& camera) {
   TriangleMesh opaque, all;
-  auto append = [](TriangleMesh& dst, const TriangleMesh& src) {
+  // A clipped (context) structure hides with the faces whose centroid the
+  // plane keeps.
+  auto append = [](TriangleMesh& dst, const TriangleMesh& src, const ClipPlane* clip) {
     const auto base = static_cast<std::int32_t>(dst.positions.size());
     dst.positions.insert(dst.positions.end(), src.positions.begin(), src.positions.end());
-    for (Face f : src.faces) dst.faces.push_back({f[0] + base, f[1] + base, f[2] + base});
+    for (Face f : src.faces) {
+      if (clip != nullptr &&
+          !clip->keeps((src.positions[f[0]] + src.positions[f[1]] + src.positions[f[2]]) / 3.0))
+        continue;
+      dst.faces.push_back({f[0] + base, f[1] + base, f[2] + base});
+    }
+  };
+  auto clip_of = [&](std::size_t i) {
+    return drawn.clip && drawn.structures[i].role == Role::context ? &*drawn.clip : nullptr;
   };
   for (std::size_t i = 0; i < scene.surfaces.size(); ++i) {
-    append(all, scene.surfaces[i]->mesh());
-    if (drawn.structures[i].style.opacity >= 0.999) append(opaque, scene.surfaces[i]->mesh());
+    append(all, scene.surfaces[i]->mesh(), clip_of(i));
+    if (drawn.structures[i].style.opacity >= 0.999)
+      append(opaque, scene.surfaces[i]->mesh(), clip_of(i));
   }
   // When every structure is opaque (a single mesh, say) the two buffers are
   // the same: rasterise once (at 2048² this pass was a tenth of an item).
@@ -148,7 +204,8 @@ std::vector<LineSet> visible_lines(const SceneSurfaces& scene, const Scene& draw
   const DepthBuffer& opaque_depth = opaque.faces.empty() || all_opaque ? depth_all : depth_opaque;
   std::vector<LineSet> out;
   for (std::size_t i = 0; i < scene.surfaces.size(); ++i) {
-    LineSet ls = drawn.structures[i].lines;
+    LineSet ls =
+        clip_of(i) ? clip_lines(drawn.structures[i].lines, *clip_of(i)) : drawn.structures[i].lines;
     compute_visibility(ls, *scene.surfaces[i], camera, {},
                        drawn.structures[i].style.opacity >= 0.999 ? &opaque_depth : &depth_all);
     out.push_back(std::move(ls));

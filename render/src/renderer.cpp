@@ -648,7 +648,17 @@ struct Renderer::Impl {
     const GpuMesh* mesh;
     float scale;
     bool occluder;
+    bool clipped = false;  // a context structure of a scene with a clip
   };
+  // The clipping plane as the shaders take it (common.glsl, clip_at).
+  std::array<float, 4> clip{0.0f, 0.0f, 0.0f, 1.0f};
+  void set_clip(const ShaderProgram& p, bool clipped) {
+    if (clipped)
+      gl().Enable(GL_CLIP_DISTANCE0);
+    else
+      gl().Disable(GL_CLIP_DISTANCE0);
+    p.set("u_clip", clip[0], clip[1], clip[2], clip[3]);
+  }
   void hybrid_stage1(const std::vector<HybridDraw>& draws, const HybridOptions& o,
                      const Matrices& m, const Tile& t, bool bare) {
     const GlFunctions& g = gl();
@@ -672,9 +682,11 @@ struct Renderer::Impl {
         }
       }
       if (!d.occluder) p.set("u_scale", d.scale);
+      set_clip(q, d.clipped);
       g.StencilFunc(GL_ALWAYS, d.occluder ? 0 : 1, 0xFF);
       draw_mesh(*d.mesh);
     }
+    g.Disable(GL_CLIP_DISTANCE0);
     g.Disable(GL_STENCIL_TEST);
   }
 
@@ -835,8 +847,10 @@ struct Renderer::Impl {
       const bool fill = s.style.shading != Shading::none;
       g.ColorMask(fill, fill, fill, fill);
       set_shading(p, s.style, 1.0f);
+      set_clip(p, clipped(F, s));
       draw_mesh(*F.gpu[i]);
     }
+    g.Disable(GL_CLIP_DISTANCE0);
     g.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
   }
 
@@ -874,8 +888,10 @@ struct Renderer::Impl {
       const Structure& s = F.scene.structures[i];
       if (opaque(s) || s.style.shading == Shading::none || s.style.opacity <= 0.0) continue;
       set_shading(p, s.style, static_cast<float>(s.style.opacity));
+      set_clip(p, clipped(F, s));
       draw_mesh(*F.gpu[i]);
     }
+    g.Disable(GL_CLIP_DISTANCE0);
     g.BindFramebuffer(GL_FRAMEBUFFER, overlay_fbo);
     set_state_overlay();
     const ShaderProgram& c = program("oit_composite");
@@ -904,8 +920,12 @@ struct Renderer::Impl {
     const ShaderProgram& p = program("depth");
     p.use();
     set_common(p, F.M, t);
-    for (std::size_t i = 0; i < F.scene.structures.size(); ++i)
-      if (!opaque(F.scene.structures[i])) draw_mesh(*F.gpu[i]);
+    for (std::size_t i = 0; i < F.scene.structures.size(); ++i) {
+      if (opaque(F.scene.structures[i])) continue;
+      set_clip(p, clipped(F, F.scene.structures[i]));
+      draw_mesh(*F.gpu[i]);
+    }
+    g.Disable(GL_CLIP_DISTANCE0);
   }
 
   // Hybrid apparent ridges (where the tile meets the hybrid meshes).
@@ -915,9 +935,9 @@ struct Renderer::Impl {
     for (std::size_t i = 0; i < F.scene.structures.size(); ++i) {
       const Structure& s = F.scene.structures[i];
       if (s.style.hybrid_apparent_ridges)
-        draws.push_back({F.gpu[i], hybrid_scale(*s.mesh, F.options.hybrid), false});
+        draws.push_back({F.gpu[i], hybrid_scale(*s.mesh, F.options.hybrid), false, clipped(F, s)});
       else if (opaque(s))
-        draws.push_back({F.gpu[i], 1.0f, true});
+        draws.push_back({F.gpu[i], 1.0f, true, clipped(F, s)});
     }
     hybrid_stage1(draws, F.options.hybrid, F.M, t, false);
     hybrid_stage2(F.options.hybrid, t, F.hybrid_region, false);
@@ -954,12 +974,18 @@ struct Renderer::Impl {
       p.set("u_hidden_mode", static_cast<int>(ls.hidden));
       p.set("u_hidden_opacity", static_cast<float>(ls.hidden_opacity));
       p.set("u_dash_px", static_cast<float>(ls.dash * F.line_scale));
+      set_clip(p, clipped(F, s));
       g.DrawElements(GL_TRIANGLES, b.count, GL_UNSIGNED_INT,
                      reinterpret_cast<const void*>(std::size_t(b.first) * sizeof(std::uint32_t)));
     }
+    g.Disable(GL_CLIP_DISTANCE0);
   }
 
   static bool opaque(const Structure& s) { return s.style.opacity >= 0.999; }
+  // Context structures lose the far side of the scene's clipping plane.
+  static bool clipped(const FrameState& F, const Structure& s) {
+    return F.scene.clip && s.role == Role::context;
+  }
 
   void set_shading(const ShaderProgram& p, const StructureStyle& st, float alpha) {
     p.set("u_shading", st.shading == Shading::lambert ? 1 : st.shading == Shading::toon ? 2 : 0);
@@ -1069,6 +1095,22 @@ GlContext& Renderer::context() {
 }
 
 Image Renderer::render(const Scene& scene, const Camera& camera, const RenderOptions& options) {
+  Image image(camera.width, camera.height);
+  draw(scene, camera, options, &image, nullptr);
+  return image;
+}
+
+void Renderer::render_to_framebuffer(const Scene& scene, const Camera& camera,
+                                     const RenderOptions& options, unsigned int framebuffer,
+                                     int width, int height) {
+  if (width <= 0 || height <= 0)
+    throw InputError("render_to_framebuffer: the target size must be positive");
+  const BlitTarget target{framebuffer, width, height};
+  draw(scene, camera, options, nullptr, &target);
+}
+
+void Renderer::draw(const Scene& scene, const Camera& camera, const RenderOptions& options,
+                    Image* out, const BlitTarget* blit) {
   check_size(camera);
   if (scene.structures.empty()) throw InputError("the scene has no structures to draw");
   for (const auto& s : scene.structures)
@@ -1173,8 +1215,16 @@ Image Renderer::render(const Scene& scene, const Camera& camera, const RenderOpt
   if (F.any_lic)
     F.lic_region = region_of([](const Structure& s) { return s.style.lic && Impl::opaque(s); });
 
+  if (blit != nullptr && tiles.size() != 1)
+    throw InputError("render_to_framebuffer: the picture must fit one tile (" +
+                     std::to_string(inner) + " pixels a side)");
+  if (scene.clip) {
+    const Vec3 n = -scene.clip->normal;  // kept: -n . (p - point) >= 0
+    I.clip = {static_cast<float>(n.x()), static_cast<float>(n.y()), static_cast<float>(n.z()),
+              static_cast<float>(-n.dot(scene.clip->point))};
+  }
   F.bg_alpha = options.transparent_background ? 0.0f : scene.background.a;
-  Image image(camera.width, camera.height);
+  const GlFunctions& g = I.gl();
   for (const Tile& t : tiles) {
     I.pass_opaque(F, t);
     I.pass_lic(F, t);
@@ -1182,12 +1232,22 @@ Image Renderer::render(const Scene& scene, const Camera& camera, const RenderOpt
     I.pass_depth_b(F, t);
     I.pass_hybrid(F, t);
     I.pass_lines(F, t);
-    check_gl_error(I.gl(), "drawing the scene");
-    I.read_tile(I.main_fbo, t, camera.height, image, true);
+    check_gl_error(g, "drawing the scene");
+    if (out != nullptr) I.read_tile(I.main_fbo, t, camera.height, *out, true);
   }
-  I.gl().BindVertexArray(0);
-  I.gl().BindFramebuffer(GL_FRAMEBUFFER, 0);
-  return image;
+  if (blit != nullptr) {
+    // On the GPU: no read back, no upload (the viewer's window).
+    const Tile& t = tiles.front();
+    g.BindFramebuffer(GL_READ_FRAMEBUFFER, I.main_fbo);
+    g.ReadBuffer(GL_COLOR_ATTACHMENT0);
+    g.BindFramebuffer(GL_DRAW_FRAMEBUFFER, blit->framebuffer);
+    const bool same = blit->width == t.w && blit->height == t.h;
+    g.BlitFramebuffer(t.margin, t.margin, t.margin + t.w, t.margin + t.h, 0, 0, blit->width,
+                      blit->height, GL_COLOR_BUFFER_BIT, same ? GL_NEAREST : GL_LINEAR);
+    check_gl_error(g, "copying the picture");
+  }
+  g.BindVertexArray(0);
+  g.BindFramebuffer(GL_FRAMEBUFFER, 0);
 }
 
 Image Renderer::render_hybrid(const std::shared_ptr<const RenderMesh>& mesh, const Camera& camera,

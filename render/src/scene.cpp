@@ -138,11 +138,20 @@ T choice(const nlohmann::json& j, const char* key, Parse parse,
                    did_you_mean(v, choices) + " (use " + list + ")");
 }
 
-const std::vector<std::string> kSceneKeys = {"background", "transparent", "camera",     "view",
-                                             "frame",      "structures",  "annotation", "lic"};
+const std::vector<std::string> kSceneKeys = {"background", "transparent", "camera", "view", "frame",
+                                             "structures", "annotation",  "lic",    "clip"};
 const std::vector<std::string> kAnnotationKeys = {"labels", "legend", "scale_bar", "orientation",
                                                   "font_size"};
 const std::vector<std::string> kLicKeys = {"kernel_length", "noise_scale", "strength"};
+const std::vector<std::string> kClipKeys = {"point", "normal"};
+
+Vec3 vec3_from_json(const nlohmann::json& j, const std::string& what) {
+  if (!j.is_array() || j.size() != 3 || !j[0].is_number() || !j[1].is_number() || !j[2].is_number())
+    throw InputError(what + " must be an array of three numbers");
+  const Vec3 v(j[0].get<double>(), j[1].get<double>(), j[2].get<double>());
+  if (!v.allFinite()) throw InputError(what + " must be finite");
+  return v;
+}
 const std::vector<std::string> kStructureKeys = {
     "name",    "mesh",        "role",   "space",      "shading",    "color",   "opacity",
     "ambient", "toon_levels", "lines",  "line_color", "line_width", "taper",   "fade",
@@ -365,6 +374,18 @@ SceneSpec scene_spec_from_json(const nlohmann::json& j, const std::filesystem::p
         spec.lic.noise_scale = number(l, "noise_scale", 0.0, 1e6, what, "lic");
       if (l.contains("strength")) spec.lic.strength = number(l, "strength", 0.0, 1.0, what, "lic");
     }
+    if (j.contains("clip")) {
+      const auto& c = j["clip"];
+      if (!c.is_object() || !c.contains("point") || !c.contains("normal"))
+        throw InputError(what + ": clip must be an object with \"point\" and \"normal\"");
+      check_keys(c, kClipKeys, what, "clip");
+      ClipPlane plane;
+      plane.point = vec3_from_json(c["point"], what + ": clip.point");
+      plane.normal = vec3_from_json(c["normal"], what + ": clip.normal");
+      if (!(plane.normal.norm() > 1e-12))
+        throw InputError(what + ": clip.normal must not be the zero vector");
+      spec.clip = plane;
+    }
     if (!j.contains("structures") || !j["structures"].is_array() || j["structures"].empty())
       throw InputError(what + ": 'structures' must be a non-empty array");
     std::vector<std::string> family_names;
@@ -473,6 +494,9 @@ nlohmann::json scene_spec_to_json(const SceneSpec& spec) {
     j["lic"] = {{"kernel_length", spec.lic.kernel_length},
                 {"noise_scale", spec.lic.noise_scale},
                 {"strength", spec.lic.strength}};
+  if (spec.clip)
+    j["clip"] = {{"point", {spec.clip->point.x(), spec.clip->point.y(), spec.clip->point.z()}},
+                 {"normal", {spec.clip->normal.x(), spec.clip->normal.y(), spec.clip->normal.z()}}};
   nlohmann::json list = nlohmann::json::array();
   for (const auto& s : spec.structures) {
     nlohmann::json o;

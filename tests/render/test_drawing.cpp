@@ -356,6 +356,10 @@ TEST(RenderScene, JsonRoundTrip) {
   spec.structures = {a, b};
   spec.view = fabrica::AnatomicalView::anterior;
   spec.transparent = true;
+  fr::ClipPlane clip;
+  clip.point = fabrica::Vec3(1.0 / 3.0, -2.5, 1e-7);
+  clip.normal = fabrica::Vec3(0.0, -1.0, 0.25);
+  spec.clip = clip;
   const auto dir = fabrica::test::temp_dir("render_scene_json");
   fr::write_scene_spec(spec, dir / "scene.json");
   const fr::SceneSpec back = fr::read_scene_spec(dir / "scene.json");
@@ -369,6 +373,25 @@ TEST(RenderScene, JsonRoundTrip) {
   EXPECT_EQ(back.structures[1].style.families, b.style.families);
   EXPECT_EQ(back.view, fabrica::AnatomicalView::anterior);
   EXPECT_TRUE(back.transparent);
+  // The clipping plane comes back exactly (the viewer's export and
+  // `fabrica render` must clip at the same place).
+  ASSERT_TRUE(back.clip.has_value());
+  EXPECT_EQ(back.clip->point, clip.point);
+  EXPECT_EQ(back.clip->normal, clip.normal);
+  EXPECT_TRUE(clip.keeps(clip.point + fabrica::Vec3(0.0, 1.0, 0.0)));
+  EXPECT_FALSE(clip.keeps(clip.point + fabrica::Vec3(0.0, -1.0, 0.0)));
+  for (const char* bad_clip :
+       {R"({"point": [0, 0, 0], "normal": [0, 0, 0]})", R"({"point": [0, 0], "normal": [0, 0, 1]})",
+        R"({"point": [0, 0, 0], "normal": [0, 0, 1], "offset": 2})"}) {
+    nlohmann::json j = fr::scene_spec_to_json(spec);
+    j["clip"] = nlohmann::json::parse(bad_clip);
+    try {
+      fr::scene_spec_from_json(j, dir, "my.json");
+      ADD_FAILURE() << bad_clip;
+    } catch (const fabrica::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("my.json: clip"), std::string::npos) << e.what();
+    }
+  }
   // Errors name the scene and the structure.
   nlohmann::json bad = {{"structures", {{{"mesh", "a.stl"}, {"role", "hero"}}}}};
   try {

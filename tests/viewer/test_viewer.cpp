@@ -218,6 +218,21 @@ TEST(Viewer, LabelVolumeFocusAndContext) {
   EXPECT_EQ(diff.max_abs, 0) << "mean " << diff.mean_abs << ", fraction " << diff.fraction_over;
 
   EXPECT_NE(read_text(dir / "lines.svg").find("<path"), std::string::npos);
+  // One drawing path for the lines too: `fabrica render --svg` of the saved
+  // scene at the window's size writes the same SVG, byte for byte (layers,
+  // styles, CPU visibility).
+  const Outcome svg =
+      run(shell_quote(FABRICA_EXE) + " render " + shell_quote((dir / "scene.json").string()) +
+              " --size 640x400 -q -o " + shell_quote((dir / "cli640.png").string()) + " --svg " +
+              shell_quote((dir / "cli.svg").string()),
+          dir);
+  ASSERT_EQ(svg.code, 0) << svg.err;
+  const std::string viewer_svg = read_text(dir / "lines.svg"), cli_svg = read_text(dir / "cli.svg");
+  EXPECT_NE(viewer_svg.find("inkscape:label=\"liver\""), std::string::npos);
+  EXPECT_NE(viewer_svg.find("data-role=\"focus\""), std::string::npos);
+  EXPECT_TRUE(viewer_svg == cli_svg)
+      << "the viewer's SVG (" << viewer_svg.size() << " bytes) differs from fabrica render --svg ("
+      << cli_svg.size() << " bytes)";
   EXPECT_EQ(read_text(dir / "lines.pdf").rfind("%PDF", 0), 0u);
 
   // Frame log: a header, then one row per frame, numbered 1, 2, 3, ...;
@@ -377,4 +392,52 @@ TEST(Viewer, LabelTableBesideTheVolumeNamesTheStructures) {
   EXPECT_EQ(scene["structures"][0]["name"], "cube");
   EXPECT_EQ(scene["structures"][0]["role"], "focus");
   EXPECT_EQ(scene["structures"][0]["color"], nlohmann::json::parse("[1.0, 0.0, 0.0, 1.0]"));
+}
+
+// The clipping plane (issue 18, item 4): `clip anterior 0` removes the
+// context anterior of the liver's centre, so the pixels over the liver
+// change; the focus is never clipped; a plane beyond the whole scene changes
+// nothing; the saved scene keeps the plane and `fabrica render` draws the
+// same pixels; a bad orientation stops the script with its line number.
+TEST(Viewer, ClippingPlaneRemovesTheContextInFront) {
+  const fs::path dir = work_dir();
+  auto shot = [&](const std::string& name) {
+    return "screenshot " + quote((dir / name).string()) + " 400x300\n";
+  };
+  const std::string script =
+      "open " + quote(volume().string()) + "\nwait\nfocus liver\nview anterior\nwait\n" +
+      shot("plain.png") + "clip anterior 0\nwait\n" + shot("clip.png") + "save-scene " +
+      quote((dir / "scene.json").string()) + "\nclip anterior 5000\nwait\n" + shot("far.png") +
+      "clip off\nwait\n" + shot("off.png") + "clip sideways 2\n";
+  const Outcome r = run_viewer(dir, script, "640x400");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find(":17: clip: unknown orientation \"sideways\""), std::string::npos) << r.err;
+
+  const auto scene = nlohmann::json::parse(read_text(dir / "scene.json"));
+  ASSERT_TRUE(scene.contains("clip")) << scene.dump();
+  Camera camera = camera_from_json(scene["camera"]);
+  camera.width = 400;
+  camera.height = 300;
+  const render::Image plain = render::read_png(dir / "plain.png");
+  const render::Image clip = render::read_png(dir / "clip.png");
+  // A plane beyond the scene, and no plane: the picture without clipping.
+  EXPECT_EQ(render::compare_images(plain, render::read_png(dir / "far.png"), 0).max_abs, 0);
+  EXPECT_EQ(render::compare_images(plain, render::read_png(dir / "off.png"), 0).max_abs, 0);
+  // Over the liver, ghosted context in front of it is gone: its pixels change.
+  const auto liver = label_pixels(5, camera);
+  ASSERT_GT(liver.size(), 500u);
+  std::size_t changed = 0;
+  for (auto [x, y] : liver) {
+    const auto *a = plain.pixel(x, y), *b = clip.pixel(x, y);
+    if (std::abs(a[0] - b[0]) + std::abs(a[1] - b[1]) + std::abs(a[2] - b[2]) > 6) ++changed;
+  }
+  std::printf("liver pixels %zu, changed by the clip %zu\n", liver.size(), changed);
+  EXPECT_GT(changed, liver.size() / 20);
+  // One renderer: the saved scene (with its plane) through `fabrica render`.
+  const Outcome cli =
+      run(shell_quote(FABRICA_EXE) + " render " + shell_quote((dir / "scene.json").string()) +
+              " --size 400x300 -q -o " + shell_quote((dir / "cli.png").string()),
+          dir);
+  ASSERT_EQ(cli.code, 0) << cli.err;
+  EXPECT_EQ(render::compare_images(clip, render::read_png(dir / "cli.png"), 0).max_abs, 0);
 }

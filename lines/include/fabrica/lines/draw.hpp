@@ -76,6 +76,9 @@ class LineDrawer {
   /// Validates `options` (InputError). `surface` must outlive the drawer.
   LineDrawer(const Surface& surface, DrawLinesOptions options = {});
   const DrawLinesOptions& options() const { return options_; }
+  /// Changes families, thresholds, smoothing or visibility (validated;
+  /// InputError) keeping the view-independent precomputation.
+  void set_options(DrawLinesOptions options);
   const Surface& surface() const { return *surface_; }
   double feature_size() const { return extractor_.feature_size(); }
   /// `depth`, when given, is the depth buffer visibility tests against

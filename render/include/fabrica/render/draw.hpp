@@ -19,6 +19,7 @@
 #include "fabrica/core/camera.hpp"
 #include "fabrica/core/mesh.hpp"
 #include "fabrica/core/surface.hpp"
+#include "fabrica/lines/draw.hpp"
 #include "fabrica/lines/line_set.hpp"
 #include "fabrica/lines/writers.hpp"
 #include "fabrica/render/context.hpp"
@@ -62,6 +63,17 @@ SceneSurfaces load_scene(SceneSpec spec, const SurfaceLoader& loader);
 /// depends on the aspect ratio: `--view` with `--size` frames at that size).
 Camera view_camera(const SceneSurfaces& scene, AnatomicalView view, Frame frame = Frame::all,
                    int width = 1024, int height = 1024);
+
+/// The families a structure's style draws on the CPU: its families less
+/// apparent ridges when the hybrid GPU method draws them.
+std::vector<LineFamily> object_space_families(const StructureStyle& style);
+
+/// How `fabrica render`, the batch runner and the viewer draw a structure's
+/// lines (fabrica::LineDrawer): the object-space families with the
+/// thresholds of `thresholds`, chains of at least 3 pixels, the style's
+/// smoothing, no CPU visibility (the renderer tests depth on the GPU).
+DrawLinesOptions structure_line_options(const StructureStyle& style,
+                                        const LineOptions& thresholds = {});
 
 /// The scene the renderer draws: a render mesh per structure and its
 /// chained feature lines for `camera` (object space, 3 px minimum length,

@@ -81,6 +81,15 @@ class Renderer {
   /// memory, Error(internal) on shader failures.
   Image render(const Scene& scene, const Camera& camera, const RenderOptions& options = {});
 
+  /// The same picture without reading it back: drawn on the GPU and copied
+  /// (scaled linearly when the sizes differ) into `framebuffer` of this
+  /// renderer's context, width x height pixels from its origin; colours
+  /// premultiplied by alpha. The picture must fit one tile (at most the GL
+  /// limit, 4096, a side; InputError otherwise). The viewer's window draws
+  /// through this; exports read back through render().
+  void render_to_framebuffer(const Scene& scene, const Camera& camera, const RenderOptions& options,
+                             unsigned int framebuffer, int width, int height);
+
   /// The hybrid method alone on one mesh (stage 1, stage 2, readback), black
   /// lines on white (or transparent). `bare` runs the same passes with
   /// trivial shaders (the benchmark's baseline).
@@ -100,6 +109,12 @@ class Renderer {
                           const LicOptions& options);
 
  private:
+  struct BlitTarget {
+    unsigned int framebuffer;
+    int width, height;
+  };
+  void draw(const Scene& scene, const Camera& camera, const RenderOptions& options, Image* out,
+            const BlitTarget* blit);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

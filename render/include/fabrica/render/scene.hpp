@@ -91,9 +91,22 @@ struct Structure {
   std::vector<PolylineLayer> polyline_layers;
 };
 
+/// A clipping plane for the context (issue 18, item 4): context structures
+/// lose what lies on the side `normal` points to (points p with
+/// (p - point) . normal > 0), so the focus shows through a cut; the focus is
+/// never clipped. Scene JSON: "clip": {"point": [x, y, z], "normal": [x, y, z]}
+/// (mm, the meshes' space; the normal need not be unit length).
+struct ClipPlane {
+  Vec3 point = Vec3::Zero();
+  Vec3 normal = Vec3::UnitZ();
+  /// True where p is kept.
+  bool keeps(const Vec3& p) const { return (p - point).dot(normal) <= 0.0; }
+};
+
 struct Scene {
   std::vector<Structure> structures;
   Color background{1.0f, 1.0f, 1.0f, 1.0f};
+  std::optional<ClipPlane> clip;  ///< applies to context structures
 };
 
 // ------------------------------------------------------------ JSON ----
@@ -143,6 +156,7 @@ struct SceneSpec {
   /// Parameters of the surface LIC of the structures with `lic` (the
   /// caller passes them on as RenderOptions::lic, as `fabrica render` does).
   LicOptions lic;
+  std::optional<ClipPlane> clip;
 };
 
 const char* to_string(Frame frame);
