@@ -107,6 +107,24 @@ std::pair<double, double> clip_planes(const Camera& c, const Vec3& sphere_center
   return {n, f};
 }
 
+namespace {
+
+/// An image side from JSON: a whole number that fits an int (its range is
+/// validate_camera's). A float such as 5e25 converted to int would be
+/// undefined behaviour (fuzz_camera finding), an int64 would wrap.
+int pixel_count(const nlohmann::json& v, const char* key, const std::string& what) {
+  if (!v.is_number())
+    throw InputError(what + ": " + key + " must be a whole number of pixels (got " +
+                     std::string(v.type_name()) + ")");
+  const double d = v.get<double>();
+  if (!(d >= -2147483648.0 && d <= 2147483647.0) || d != std::floor(d))
+    throw InputError(what + ": " + key + " must be a whole number of pixels from 1 to " +
+                     std::to_string(kMaxImageSide) + " (got " + v.dump() + ")");
+  return static_cast<int>(d);
+}
+
+}  // namespace
+
 Camera camera_from_json(const nlohmann::json& j, const std::string& what) {
   if (!j.is_object()) throw InputError(what + ": a camera must be a JSON object");
   Camera c;
@@ -126,8 +144,8 @@ Camera camera_from_json(const nlohmann::json& j, const std::string& what) {
         throw InputError(what + ": projection must be \"perspective\" or \"orthographic\" (got \"" +
                          p + "\")");
     }
-    if (j.contains("width")) c.width = j.at("width").get<int>();
-    if (j.contains("height")) c.height = j.at("height").get<int>();
+    if (j.contains("width")) c.width = pixel_count(j.at("width"), "width", what);
+    if (j.contains("height")) c.height = pixel_count(j.at("height"), "height", what);
     if (j.contains("near")) c.near_plane = j.at("near").get<double>();
     if (j.contains("far")) c.far_plane = j.at("far").get<double>();
   } catch (const nlohmann::json::exception& e) {

@@ -134,6 +134,13 @@ TEST(Camera, BadCamerasAreClearErrors) {
   EXPECT_THROW(validate_camera(c), InputError);
   EXPECT_THROW(camera_from_json(nlohmann::json::parse(R"({"eye":[0,0]})")), InputError);
   EXPECT_THROW(camera_from_json(nlohmann::json::parse(R"({"projection":"fisheye"})")), InputError);
+  // Image sides that are no int: a float too large for one (fuzz_camera
+  // finding, undefined behaviour in the conversion), an int64 that would wrap
+  // to 100, a fraction, a string.
+  for (const char* bad : {R"({"width": 51311111111111111111111381})", R"({"width": 4294967396})",
+                          R"({"height": 512.5})", R"({"height": "512"})", R"({"width": -1e300})"})
+    EXPECT_THROW(camera_from_json(nlohmann::json::parse(bad)), InputError) << bad;
+  EXPECT_EQ(camera_from_json(nlohmann::json::parse(R"({"width": 640.0})")).width, 640);
 }
 
 TEST(Camera, AnatomicalViewsLookFromTheRightSideInLpsAndRas) {

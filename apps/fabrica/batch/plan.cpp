@@ -295,7 +295,8 @@ void read_inputs(const json& doc, Plan& plan, Errors& errors) {
     if (in.contains("labels")) {
       const json& l = in["labels"];
       if (!l.is_array() || l.empty() || !std::all_of(l.begin(), l.end(), [](const json& v) {
-            return v.is_number_integer() && v.get<long long>() > 0;
+            return v.is_number_integer() && v.get<long long>() > 0 &&
+                   v.get<long long>() <= 2147483647;
           })) {
         errors.add(path + ".labels", "expected a non-empty array of positive label values");
         continue;
