@@ -9,39 +9,11 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
-#include <map>
 #include <string>
-#include <utility>
 
 #include "fabrica/core/mesh.hpp"
 #include "fabrica/io/mesh_io.hpp"
-
-namespace {
-
-fabrica::TriangleMesh subdivide(const fabrica::TriangleMesh& in) {
-  fabrica::TriangleMesh out;
-  out.space = in.space;
-  out.space_source = in.space_source;
-  out.positions = in.positions;
-  std::map<std::pair<std::int32_t, std::int32_t>, std::int32_t> midpoint;
-  auto mid = [&](std::int32_t a, std::int32_t b) {
-    const auto key = std::minmax(a, b);
-    const auto [it, added] = midpoint.try_emplace({key.first, key.second},
-                                                  static_cast<std::int32_t>(out.positions.size()));
-    if (added) out.positions.push_back(0.5 * (in.positions[a] + in.positions[b]));
-    return it->second;
-  };
-  for (const fabrica::Face& f : in.faces) {
-    const std::int32_t ab = mid(f[0], f[1]), bc = mid(f[1], f[2]), ca = mid(f[2], f[0]);
-    out.faces.push_back({f[0], ab, ca});
-    out.faces.push_back({ab, f[1], bc});
-    out.faces.push_back({ca, bc, f[2]});
-    out.faces.push_back({ab, bc, ca});
-  }
-  return out;
-}
-
-}  // namespace
+#include "mesh_refine.hpp"
 
 int main(int argc, char** argv) {
   using namespace fabrica;
@@ -58,7 +30,7 @@ int main(int argc, char** argv) {
   try {
     TriangleMesh mesh = io::read_mesh(argv[1]).mesh;
     const TriangleMesh reference = io::read_mesh(argv[2]).mesh;
-    for (int i = 0; i < levels; ++i) mesh = subdivide(mesh);
+    for (int i = 0; i < levels; ++i) bench::split_midpoints(mesh);
     const BoundingBox box = bounding_box(mesh.positions), ref = bounding_box(reference.positions);
     const double factor = scale * (ref.max - ref.min).maxCoeff() / (box.max - box.min).maxCoeff();
     const Vec3 c = 0.5 * (box.min + box.max), rc = 0.5 * (ref.min + ref.max);
