@@ -73,9 +73,10 @@ std::map<int, Answer> read_auto(const std::filesystem::path& path, const nlohman
     } catch (const nlohmann::json::exception&) {
       throw InputError(where + "not a JSON object");
     }
-    if (!j.is_object() || !j.contains("trial") || !j["trial"].is_number_integer())
+    if (!j.is_object() || !j.contains("trial") || !j["trial"].is_number_integer() ||
+        j["trial"].get<long long>() < 0 || j["trial"].get<long long>() > 1000000000)
       throw InputError(where + "expected {\"trial\": N, ...}");
-    const int n = j["trial"].get<int>();
+    const int n = static_cast<int>(j["trial"].get<long long>());
     if (!trials.count(n))
       throw InputError(where + "trial " + std::to_string(n) + " is not in the plan");
     const std::string task = (*trials[n])["task"].get<std::string>();
@@ -90,17 +91,20 @@ std::map<int, Answer> read_auto(const std::filesystem::path& path, const nlohman
           throw InputError(where + "normal must be non-zero");
         a.normal = nv.normalized();
       } else if (key == "choice" && task == "2afc" && v.is_number_integer() &&
-                 (v.get<int>() == 0 || v.get<int>() == 1)) {
+                 (v.get<long long>() == 0 || v.get<long long>() == 1)) {
         a.choice = v.get<int>();
       } else if (key == "rating" && task == "likert" && v.is_number_integer() &&
-                 v.get<int>() >= 1 && v.get<int>() <= (*trials[n])["scale"].get<int>()) {
+                 v.get<long long>() >= 1 &&
+                 v.get<long long>() <= (*trials[n])["scale"].get<long long>()) {
         a.rating = v.get<int>();
       } else if (key == "order" && task == "ranking" && v.is_array() && v.size() == k) {
         std::vector<int> order;
         std::vector<bool> seen(k, false);
         for (const auto& e : v) {
           int idx = -1;
-          if (e.is_number_integer()) idx = e.get<int>();
+          if (e.is_number_integer() && e.get<long long>() >= 0 &&
+              e.get<long long>() < static_cast<long long>(k))
+            idx = static_cast<int>(e.get<long long>());
           for (std::size_t i = 0; e.is_string() && i < k; ++i)
             if ((*trials[n])["techniques"][i] == e || (*trials[n])["stimuli"][i] == e)
               idx = static_cast<int>(i);

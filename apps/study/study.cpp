@@ -343,8 +343,9 @@ Study parse_study(const nlohmann::json& j, const std::filesystem::path& file) {
   if (j.contains("size")) {
     const auto& size = j["size"];
     if (!size.is_array() || size.size() != 2 || !size[0].is_number_integer() ||
-        !size[1].is_number_integer() || size[0].get<int>() < 16 || size[1].get<int>() < 16 ||
-        size[0].get<int>() > 4096 || size[1].get<int>() > 4096)
+        !size[1].is_number_integer() || size[0].get<long long>() < 16 ||
+        size[1].get<long long>() < 16 || size[0].get<long long>() > 4096 ||
+        size[1].get<long long>() > 4096)  // long long: a huge int64 must not wrap into range
       w.at("size").fail("expected [WIDTH, HEIGHT] in pixels, each 16 to 4096");
     s.width = size[0].get<int>();
     s.height = size[1].get<int>();

@@ -128,6 +128,13 @@ def case_plan():
         json.dump(bad, f)
     r = study_bin("plan", os.path.join(d, "bad2.json"), "--participant", "P1", "-o", os.path.join(d, "x.json"))
     check(r.returncode == 2 and "techniques[0].colour" in r.stderr, f"unknown option: {r.stderr}")
+    # A size that wraps to 256 in a 32-bit int (2^32 + 256) is refused, not read as 256.
+    bad = json.load(open(study))
+    bad["size"] = [4294967552, 256]
+    with open(os.path.join(d, "bad3.json"), "w") as f:
+        json.dump(bad, f)
+    r = study_bin("plan", os.path.join(d, "bad3.json"), "--participant", "P1", "-o", os.path.join(d, "x.json"))
+    check(r.returncode == 2 and "size" in r.stderr, f"a wrapping size was accepted: exit {r.returncode}: {r.stderr}")
     r = study_bin("plan", study, "--participant", "../etc", "-o", os.path.join(d, "x.json"))
     check(r.returncode == 2 and "participant" in r.stderr, f"bad participant id accepted: {r.stderr}")
     check(not os.path.exists(os.path.join(d, "x.json")), "a failed plan left a file")
