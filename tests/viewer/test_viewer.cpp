@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "bad_meshes.hpp"
 #include "fabrica/core/camera.hpp"
 #include "fabrica/io/label_volume.hpp"
 #include "fabrica/render/image.hpp"
@@ -350,6 +351,37 @@ TEST(Viewer, BadFileLeavesTheSessionRunning) {
   const render::Image hybrid = render::read_png(dir / "hybrid.png");
   EXPECT_EQ(render::compare_images(hybrid, render::read_png(dir / "cli.png"), 0).max_abs, 0);
   EXPECT_GT(render::compare_images(hybrid, render::read_png(dir / "jumped.png"), 0).max_abs, 0);
+}
+
+// Every malformed-file kind the CLI refuses (tests/support/bad_meshes.hpp),
+// opened one after the other: each gives its one-line message naming the
+// file, nothing hangs (a FIFO among them) or crashes, and a good mesh opened
+// after them is drawn (issue 15: "viewer open").
+TEST(Viewer, EveryMalformedMeshIsRefusedAndTheSessionGoesOn) {
+  const fs::path dir = work_dir();
+  std::string script;
+  std::vector<fs::path> bad;
+  for (const auto& name : test::bad_mesh_names()) {
+    const fs::path case_dir = dir / "in" / name;
+    fs::create_directories(case_dir);
+    bad.push_back(test::bad_mesh(name).make(case_dir));
+    script += "open " + quote(bad.back().string()) + "\nwait\n";
+  }
+  const fs::path good = dir / "good.obj";
+  test::write_bytes(good, test::kTetraObj);
+  script += "open " + quote(good.string()) + "\nwait\nview anterior\nscreenshot " +
+            quote((dir / "after.png").string()) + " 200x150\n";
+  const Outcome r = run_viewer(dir, script, "320x240");
+  ASSERT_EQ(r.code, 0) << r.err;
+  for (const fs::path& b : bad)
+    EXPECT_NE(r.err.find(b.string()), std::string::npos) << "no message names " << b << "\n"
+                                                         << r.err;
+  const render::Image after = render::read_png(dir / "after.png");
+  std::size_t drawn = 0;
+  for (int y = 0; y < after.height; ++y)
+    for (int x = 0; x < after.width; ++x)
+      if (after.pixel(x, y)[0] < 250) ++drawn;
+  EXPECT_GT(drawn, 100u);
 }
 
 // Script errors stop with exit 2 and the line number.
