@@ -10,5 +10,6 @@ out vec3 v_object;
 void main() {
   v_object = a_position;
   v_level = a_level;
+  clip_at(a_position);  // the scene's clipping plane, as the opaque pass
   gl_Position = to_tile(u_projection * (u_model_view * vec4(a_position, 1.0)));
 }

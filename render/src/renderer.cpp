@@ -751,6 +751,7 @@ struct Renderer::Impl {
   struct LicDraw {
     const GpuMesh* mesh;
     bool occluder;
+    bool clipped = false;  // a context structure of a scene with a clip
   };
   void lic_stage1(const std::vector<LicDraw>& draws, const Matrices& m, const Tile& t,
                   float inv_cell, int image_w, int image_h) {
@@ -777,9 +778,11 @@ struct Renderer::Impl {
         }
       }
       if (!d.occluder) g.BindTexture(GL_TEXTURE_BUFFER, d.mesh->field_texture);
+      set_clip(q, d.clipped);
       g.StencilFunc(GL_ALWAYS, d.occluder ? 0 : 1, 0xFF);
       draw_mesh(*d.mesh);
     }
+    g.Disable(GL_CLIP_DISTANCE0);
     g.BindTexture(GL_TEXTURE_BUFFER, 0);
     g.ActiveTexture(GL_TEXTURE0);
     g.Disable(GL_STENCIL_TEST);
@@ -862,7 +865,7 @@ struct Renderer::Impl {
     for (std::size_t i = 0; i < F.scene.structures.size(); ++i) {
       const Structure& s = F.scene.structures[i];
       if (!opaque(s)) continue;
-      draws.push_back({F.gpu[i], !s.style.lic});
+      draws.push_back({F.gpu[i], !s.style.lic, clipped(F, s)});
     }
     lic_stage1(draws, F.M, t, F.lic_inv_cell, F.camera.width, F.camera.height);
     lic_stage2(F.lic_kernel, static_cast<float>(F.options.lic.strength), t, F.lic_region, false);
