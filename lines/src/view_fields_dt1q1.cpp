@@ -140,6 +140,41 @@ inline std::uint64_t candidate_faces(const float* x, const float* y, int m, __m1
 }
 #endif
 
+#if defined(FABRICA_LINES_AVX2)
+// Bit v of words[v / 32] is kQ1Above of sg[v] (v < nv; the words past
+// them 0), 32 sign bytes at a time.
+[[gnu::target("arch=x86-64-v3")]] void q1_above_bits(const std::uint8_t* sg, std::size_t nv,
+                                                     std::vector<std::uint32_t>& words) {
+  static_assert(kQ1Above == 32, "bit 5 is moved to bit 7 of each byte");
+  words.assign((nv + 31) / 32, 0u);
+  std::size_t v = 0;
+  for (; v + 32 <= nv; v += 32) {
+    const __m256i b = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(sg + v));
+    words[v / 32] = static_cast<std::uint32_t>(_mm256_movemask_epi8(_mm256_slli_epi16(b, 2)));
+  }
+  for (; v < nv; ++v) words[v / 32] |= std::uint32_t((sg[v] & kQ1Above) != 0) << (v % 32);
+}
+
+// Whether any of the n ring entries from `vertex` has its bit in `words`:
+// eight entries per gather (the entries past a ring are other rings' or the
+// padding's, valid vertex indices, and masked off).
+[[gnu::target("arch=x86-64-v3")]] inline bool ring_above(const std::uint32_t* words,
+                                                         const std::int32_t* vertex, int n) {
+  const __m256i lanes = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  const __m256i low5 = _mm256_set1_epi32(31), one = _mm256_set1_epi32(1);
+  __m256i any = _mm256_setzero_si256();
+  for (int j = 0; j < n; j += 8) {
+    const __m256i idx = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(vertex + j));
+    const __m256i w =
+        _mm256_i32gather_epi32(reinterpret_cast<const int*>(words), _mm256_srli_epi32(idx, 5), 4);
+    const __m256i bit = _mm256_and_si256(_mm256_srlv_epi32(w, _mm256_and_si256(idx, low5)), one);
+    const __m256i in_ring = _mm256_cmpgt_epi32(_mm256_set1_epi32(n - j), lanes);
+    any = _mm256_or_si256(any, _mm256_and_si256(bit, in_ring));
+  }
+  return !_mm256_testz_si256(any, any);
+}
+#endif
+
 // The sum of the one-sided differences of fan faces j0 and j1 (j1 only when
 // `two`), halved when both count: what the face-order loop gives when they
 // are the only candidates (each lane is crossing_weight and the difference
@@ -288,6 +323,9 @@ struct RingPass {
   double* out;
   ApparentVertex* packed;  // E = out * t1_world, out, q1, pos
   bool cull;
+  // With cull on the AVX2 pass: bit v of the words is kQ1Above of vertex v
+  // (q1_above_bits), so a ring's test is one gather; nullptr otherwise.
+  const std::uint32_t* above = nullptr;
 
   // The faces of vertex i with neighbours (a, b) (relative to the ring) in
   // the order given by `next` (returns false at the end), one at a time, as
@@ -400,6 +438,7 @@ struct RingPass {
     constexpr int kQueue = 16;
     TwoFaces queue[kQueue];
     int nq = 0;
+    std::size_t doubles = 0;  // fans handed to the double search (counted once)
     auto flush = [&] {
 #if defined(FABRICA_LINES_AVX2)
       if constexpr (Wide) {
@@ -424,7 +463,18 @@ struct RingPass {
         // Branch-free over the ring (bytes), by pairs: a ring of odd size
         // is a fan whose last neighbour repeats the first.
         unsigned any = 0;
-        if (je - jb <= kShort) {
+#if defined(FABRICA_LINES_AVX2)
+        if constexpr (Wide) {
+          if (above && !ring_above(above, nbr + jb, je - jb)) {
+            out[i] = 0.0;
+            continue;
+          }
+        }
+        if (Wide && above) {
+          any = kQ1Above;
+        } else
+#endif
+            if (je - jb <= kShort) {
           // Without a loop: the eight entries' bytes in one word, those
           // past the ring masked off (the last entry of an odd ring is a
           // fan's first neighbour again); fewer instructions than masking
@@ -478,7 +528,7 @@ struct RingPass {
               continue;
             }
           }
-          dt1q1_double_path().fetch_add(1, std::memory_order_relaxed);
+          ++doubles;
         }
 #endif
         alignas(16) double p[kMaxFan + 2];
@@ -501,6 +551,7 @@ struct RingPass {
       store(i, result);
     }
     flush();
+    if (doubles) dt1q1_double_path().fetch_add(doubles, std::memory_order_relaxed);
   }
 };
 
@@ -543,7 +594,20 @@ struct Dt1q1Blocks::State {
   std::size_t nv, blocks;
   std::atomic<std::size_t> next{0}, prefix{0};
   std::unique_ptr<std::atomic<bool>[]> done;
+  std::vector<std::uint32_t> above;  // RingPass::above's words
 };
+
+namespace {
+// Gives `pass` the kQ1Above bitmap (in `words`) where the AVX2 pass culls.
+void attach_above_bits(RingPass& pass, const ViewFields& fields,
+                       std::vector<std::uint32_t>& words) {
+#if defined(FABRICA_LINES_AVX2)
+  if (!pass.cull || !cpu_has_avx2()) return;
+  q1_above_bits(fields.signs.data(), fields.signs.size(), words);
+  pass.above = words.data();
+#endif
+}
+}  // namespace
 
 Dt1q1Blocks::Dt1q1Blocks(ViewFields& fields, const Surface& surface, bool cull,
                          const LinePrecompute& precompute) {
@@ -553,7 +617,9 @@ Dt1q1Blocks::Dt1q1Blocks(ViewFields& fields, const Surface& surface, bool cull,
                          blocks,
                          {},
                          {},
-                         std::make_unique<std::atomic<bool>[]>(blocks)});
+                         std::make_unique<std::atomic<bool>[]>(blocks),
+                         {}});
+  attach_above_bits(state_->pass, fields, state_->above);
 }
 
 Dt1q1Blocks::~Dt1q1Blocks() = default;
@@ -612,7 +678,9 @@ void update_dt1q1(ViewFields& fields, const Surface& surface, bool cull,
   const double* q1 = fields.q1.data();
   const std::uint8_t* sg = fields.signs.data();
   if (precompute) {
-    const RingPass pass = ring_pass(fields, surface, cull, *precompute);
+    RingPass pass = ring_pass(fields, surface, cull, *precompute);
+    std::vector<std::uint32_t> above;
+    attach_above_bits(pass, fields, above);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, Dt1q1Blocks::kBlock),
                       [&](const tbb::blocked_range<std::size_t>& r) { pass(r.begin(), r.end()); });
   } else {
