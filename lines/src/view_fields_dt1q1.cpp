@@ -420,8 +420,11 @@ struct RingPass {
     }
   }
 #if defined(FABRICA_LINES_AVX2)
-  // Two vertices at a time (two_faces2), then the odd one.
-  [[gnu::target("arch=x86-64-v3")]] void flush_wide(const TwoFaces* queue, int nq) const {
+  // Two vertices at a time (two_faces2), then the odd one. Not inlined: the
+  // main loop keeps fewer values live (fewer spills; 0.8 M fewer
+  // instructions over 5 igea views).
+  [[gnu::target("arch=x86-64-v3"), gnu::noinline]] void flush_wide(const TwoFaces* queue,
+                                                                   int nq) const {
     int k = 0;
     for (; k + 2 <= nq; k += 2) {
       double ra, rb;
