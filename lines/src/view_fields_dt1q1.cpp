@@ -234,10 +234,8 @@ struct TwoFaces {
   bool two;
 };
 
-#if defined(FABRICA_LINES_AVX2)
-// two_faces for two vertices at once (their faces in the four lanes of
-// 256-bit vectors: A's j0, B's j0, A's j1, B's j1), each lane in the same
-// operations as two_faces', so the same bits; A's and B's sums.
+// What two_faces reads for a queued vertex: its ring from its start, the
+// two faces, t1 = (c, sn), |n·v| and q1 at the vertex.
 struct TwoInputs {
   const float *x, *y;
   const std::int32_t* nbr;
@@ -245,6 +243,8 @@ struct TwoInputs {
   bool two;
   double c, sn, an, q0;
 };
+
+#if defined(FABRICA_LINES_AVX2)
 // (v[j], v[j + 1]) of A's j0, A's j1 | B's j0, B's j1 as doubles: the
 // unpacks give (j0 A, j0 B, j1 A, j1 B) for the faces' first and second
 // corners.
@@ -261,6 +261,9 @@ struct TwoInputs {
   second = _mm256_unpackhi_pd(va, vb);
 }
 
+// two_faces for two vertices at once (their faces in the four lanes of
+// 256-bit vectors: A's j0, B's j0, A's j1, B's j1), each lane in the same
+// operations as two_faces', so the same bits; A's and B's sums.
 [[gnu::target("arch=x86-64-v3"), gnu::always_inline]] inline void two_faces2(
     const TwoInputs& A, const TwoInputs& B, const double* q1, double& ra, double& rb) {
   const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0);
