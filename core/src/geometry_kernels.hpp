@@ -83,6 +83,11 @@ class ScratchArray {
   std::size_t size() const {
     return size_;
   }
+  /// Frees the storage.
+  void release() {
+    data_.reset();
+    size_ = capacity_ = 0;
+  }
   T& operator[](std::size_t i) {
     return data_[i];
   }

@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "analytic.hpp"
+#include "curvature_internal.hpp"  // the AVX2 fits' switch (core/src, private)
 #include "fabrica/core/curvature.hpp"
 #include "fabrica/core/error.hpp"
 #include "fabrica/core/geometry.hpp"
@@ -474,6 +475,24 @@ TEST(Determinism, SameBitsAtOneAndTwoThreads) {
     }
     ASSERT_EQ(one.size(), two.size());
     EXPECT_EQ(std::memcmp(one.data(), two.data(), one.size()), 0);
+  }
+}
+
+// The single-precision curvature fits have a portable and an AVX2 version
+// (core/src/curvature_fit_kernel.hpp); they must give the same bits, also
+// on the partial last block of eight faces (37 x 19 x 2 = 1406 faces).
+TEST(Determinism, Avx2CurvatureFitsMatchPortable) {
+  if (!detail::curvature_avx2_enabled().load()) GTEST_SKIP() << "no AVX2 fits on this CPU/build";
+  for (const TriangleMesh& m :
+       {test::make_torus(16, 4.5, 256, 128, 0.2), test::make_torus(16, 4.5, 37, 19, 0.3)}) {
+    Surface wide(m);
+    wide.precompute();
+    const auto expected = bytes_of(wide);
+    detail::curvature_avx2_enabled() = false;
+    Surface portable(m);
+    portable.precompute();
+    detail::curvature_avx2_enabled() = true;
+    EXPECT_EQ(bytes_of(portable), expected);
   }
 }
 
