@@ -255,10 +255,14 @@ PrincipalCurvatures estimate_curvature(const CurvatureInputs& in, FaceFitScratch
           diagonalize({ku * inv, kuv * inv, kv * inv}, Vec3(F.x[0], F.x[1], F.x[2]),
                       Vec3(F.y[0], F.y[1], F.y[2]), in.vertex_normals[vi]);
       if (!std::isfinite(pf.k1) || !std::isfinite(pf.k2)) continue;
+      // The float frame (u, v) is orthonormal to float rounding only:
+      // e1 is made a unit tangent again in double, e2 = n x e1.
+      const Vec3& n = in.vertex_normals[vi];
+      const Vec3 e1 = (pf.e1 - pf.e1.dot(n) * n).normalized();
       out.k1[vi] = pf.k1;
       out.k2[vi] = pf.k2;
-      out.e1[vi] = pf.e1;
-      out.e2[vi] = pf.e2;
+      out.e1[vi] = e1;
+      out.e2[vi] = n.cross(e1);
       out.valid[vi] = 1;
     }
   });

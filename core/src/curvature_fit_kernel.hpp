@@ -166,6 +166,18 @@ inline V3<L> gather3(const float* base, int offset, const std::int32_t* rec) {
           L::gather(base + offset + 2, rec)};
 }
 
+/// A vertex record's normal n and tangent frame (x, y), for each lane's
+/// record index (in floats) `rec`.
+template <class L>
+struct VertexFrame {
+  V3<L> n, x, y;
+};
+
+template <class L>
+inline VertexFrame<L> gather_frame(const float* base, const std::int32_t* rec) {
+  return {gather3<L>(base, 0, rec), gather3<L>(base, 3, rec), gather3<L>(base, 6, rec)};
+}
+
 /// Coordinates, in the face frame (t, b), of the vertex tangent vectors x
 /// and y after the minimal rotation from the vertex plane (normal n) into
 /// the face plane (normal nT): R x . t = x . t - (nT . x)(n . t)/(1 + c),
@@ -281,6 +293,18 @@ inline void write_slots(const FitArrays& a, const Block& blk,
     }
 }
 
+/// Calls body(block, face frame) for the faces [begin, end), eight at a
+/// time (the last block may be partial).
+template <class L, class Body>
+inline void for_each_block(const FitArrays& a, std::size_t begin, std::size_t end,
+                           const Body& body) {
+  for (std::size_t first = begin; first < end; first += kLanes) {
+    Block blk;
+    load_block(a, first, end, blk);
+    body(blk, face_frame<L>(a, blk));
+  }
+}
+
 /// The II fit over faces [begin, end) (docs/algorithms.md §2.1): per edge
 /// j (head corner j+2, tail j+1), e u + f v = dn . t, f u + g v = dn . b in
 /// the face frame; then II re-expressed in each vertex's reference frame
@@ -288,20 +312,13 @@ inline void write_slots(const FitArrays& a, const Block& blk,
 template <class L>
 void fit_second_fundamental_forms(const FitArrays& a, std::size_t begin, std::size_t end) {
   const float* rec = &a.vertices[0].n[0];
-  for (std::size_t first = begin; first < end; first += kLanes) {
-    Block blk;
-    load_block(a, first, end, blk);
-    const FaceFrame<L> F = face_frame<L>(a, blk);
-    V3<L> n[3], x[3], y[3];
-    for (int k = 0; k < 3; ++k) {
-      n[k] = gather3<L>(rec, 0, blk.rec[k]);
-      x[k] = gather3<L>(rec, 3, blk.rec[k]);
-      y[k] = gather3<L>(rec, 6, blk.rec[k]);
-    }
+  for_each_block<L>(a, begin, end, [&](const Block& blk, const FaceFrame<L>& F) {
+    const VertexFrame<L> V[3] = {gather_frame<L>(rec, blk.rec[0]), gather_frame<L>(rec, blk.rec[1]),
+                                 gather_frame<L>(rec, blk.rec[2])};
     L suu = L::splat(0.0f), suv = suu, svv = suu, r0 = suu, r1 = suu, r2 = suu;
     for (int j = 0; j < 3; ++j) {
       const L u = dot(F.e[j], F.t), v = dot(F.e[j], F.b);
-      const V3<L> dn = sub(n[(j + 2) % 3], n[(j + 1) % 3]);
+      const V3<L> dn = sub(V[(j + 2) % 3].n, V[(j + 1) % 3].n);
       const L dnt = dot(dn, F.t), dnb = dot(dn, F.b);
       suu = suu + u * u;
       suv = suv + u * v;
@@ -321,7 +338,7 @@ void fit_second_fundamental_forms(const FitArrays& a, std::size_t begin, std::si
     for (int k = 0; k < 3; ++k) {
       const L w = L::from_double(a.corner_areas + k, blk.face3);
       const typename L::Mask use = ok & greater(w, zero);
-      const FrameInFace<L> r = frame_in_face(x[k], y[k], n[k], F.nT, F.t, F.b);
+      const FrameInFace<L> r = frame_in_face(V[k].x, V[k].y, V[k].n, F.nT, F.t, F.b);
       const L a1 = r.x1, b1 = r.x2, a2 = r.y1, b2 = r.y2;
       const L v0 = w * ((a1 * a1 * s[0] + two * a1 * b1 * s[1]) + b1 * b1 * s[2]);
       const L v1 = w * ((a1 * a2 * s[0] + (a1 * b2 + a2 * b1) * s[1]) + b1 * b2 * s[2]);
@@ -332,7 +349,7 @@ void fit_second_fundamental_forms(const FitArrays& a, std::size_t begin, std::si
       select(use, w, zero).store(out[k][3]);
     }
     write_slots<3>(a, blk, out);
-  }
+  });
 }
 
 /// The C fit over faces [begin, end) (§2.3): each vertex's II from its
@@ -342,18 +359,13 @@ void fit_second_fundamental_forms(const FitArrays& a, std::size_t begin, std::si
 template <class L>
 void fit_curvature_derivatives(const FitArrays& a, std::size_t begin, std::size_t end) {
   const float* rec = &a.vertices[0].n[0];
-  for (std::size_t first = begin; first < end; first += kLanes) {
-    Block blk;
-    load_block(a, first, end, blk);
-    const FaceFrame<L> F = face_frame<L>(a, blk);
+  for_each_block<L>(a, begin, end, [&](const Block& blk, const FaceFrame<L>& F) {
     FrameInFace<L> r[3];
     L hxx[3], hxy[3], hyy[3];
     for (int k = 0; k < 3; ++k) {
-      const V3<L> n = gather3<L>(rec, 0, blk.rec[k]);
-      const V3<L> x = gather3<L>(rec, 3, blk.rec[k]);
-      const V3<L> y = gather3<L>(rec, 6, blk.rec[k]);
+      const VertexFrame<L> V = gather_frame<L>(rec, blk.rec[k]);
       const L k1 = L::gather(rec + 9, blk.rec[k]), k2 = L::gather(rec + 10, blk.rec[k]);
-      r[k] = frame_in_face(x, y, n, F.nT, F.t, F.b);
+      r[k] = frame_in_face(V.x, V.y, V.n, F.nT, F.t, F.b);
       // II = k1 (c,s)(c,s)ᵀ + k2 (-s,c)(-s,c)ᵀ with (c, s) = e1 in the face frame.
       const L c = r[k].x1, s = r[k].x2;
       hxx[k] = k1 * c * c + k2 * s * s;
@@ -397,7 +409,7 @@ void fit_curvature_derivatives(const FitArrays& a, std::size_t begin, std::size_
       select(use, w, zero).store(out[k][4]);
     }
     write_slots<4>(a, blk, out);
-  }
+  });
 }
 
 }  // namespace fitk

@@ -17,11 +17,9 @@ namespace {
 using test::CurvatureErrors;
 using test::ErrorOptions;
 
-// The Rusinkiewicz fits run in single precision (issue 22; rtsc computes
-// them in float too): where the fit is exact, errors are float rounding.
-constexpr double kFloatRounding = 1e-6;      // II: relative, measured ≤ 3e-7
-constexpr double kFloatRoundingC = 5e-5;     // C: measured ≤ 1.5e-5
-constexpr double kFloatDirectionDeg = 0.01;  // principal directions, degrees
+using test::kFloatDirectionDeg;
+using test::kFloatRounding;
+using test::kFloatRoundingC;
 
 CurvatureErrors run(const std::string& name, TriangleMesh mesh, const test::AnalyticSurface& a,
                     const ErrorOptions& o) {
