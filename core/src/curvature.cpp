@@ -15,10 +15,13 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <limits>
+#include <string>
 #include <vector>
 
 #include "curvature_fit_kernel.hpp"
 #include "curvature_internal.hpp"
+#include "fabrica/core/error.hpp"
 #include "fabrica/core/geometry.hpp"
 #include "geometry_kernels.hpp"
 
@@ -160,6 +163,16 @@ namespace {
 
 FitArrays fit_arrays(const CurvatureInputs& in, const std::uint8_t* valid,
                      FaceFitScratch& scratch) {
+  // The fits address vertex records (12 floats each) and the corners of the
+  // faces (3 each) with 32-bit offsets.
+  constexpr std::size_t kMaxVertices = std::numeric_limits<std::int32_t>::max() / 12;
+  constexpr std::size_t kMaxFaces = std::numeric_limits<std::int32_t>::max() / 3;
+  if (in.mesh.positions.size() > kMaxVertices || in.mesh.faces.size() > kMaxFaces)
+    throw InputError("surface mesh: " + std::to_string(in.mesh.positions.size()) +
+                     " vertices and " + std::to_string(in.mesh.faces.size()) +
+                     " faces; the curvature estimate handles at most " +
+                     std::to_string(kMaxVertices) + " vertices and " + std::to_string(kMaxFaces) +
+                     " faces (split the mesh)");
   return {in.mesh.positions.empty() ? nullptr : in.mesh.positions[0].data(),
           in.mesh.faces.data(),
           in.face_normals.empty() ? nullptr : in.face_normals[0].data(),
