@@ -659,12 +659,18 @@ struct Renderer::Impl {
   };
   // The clipping plane as the shaders take it (common.glsl, clip_at).
   std::array<float, 4> clip{0.0f, 0.0f, 0.0f, 1.0f};
+  // An unclipped draw also gets the plane 0 x + 1 >= 0 (keeps everything):
+  // Mesa's llvmpipe kept clipping a draw after glDisable(GL_CLIP_DISTANCE0)
+  // when the previous draw of the same program had it enabled (a focus
+  // structure after a clipped context one lost its clipped half).
   void set_clip(const ShaderProgram& p, bool clipped) {
-    if (clipped)
+    if (clipped) {
       gl().Enable(GL_CLIP_DISTANCE0);
-    else
+      p.set("u_clip", clip[0], clip[1], clip[2], clip[3]);
+    } else {
       gl().Disable(GL_CLIP_DISTANCE0);
-    p.set("u_clip", clip[0], clip[1], clip[2], clip[3]);
+      p.set("u_clip", 0.0f, 0.0f, 0.0f, 1.0f);
+    }
   }
   void hybrid_stage1(const std::vector<HybridDraw>& draws, const HybridOptions& o,
                      const Matrices& m, const Tile& t, bool bare) {
