@@ -283,7 +283,6 @@ DrawHatchingOptions structure_hatching(const HatchArgs& args, const DrawHatching
       {"spacing", &c.spacing_px},
       {"min_weight", &c.min_weight}};
   const std::map<std::string, std::pair<double*, double*>> common = {
-      {"stroke_width", {&o.hatching.stroke_width_px, &c.stroke_width_px}},
       {"min_length", {&o.hatching.min_length_px, &c.min_length_px}},
       {"max_length", {&o.hatching.max_length_px, &c.max_length_px}}};
   const std::string where = "structures[" + std::to_string(index) + "].hatching.";

@@ -155,8 +155,7 @@ const HatchingNumber kHatchingNumbers[] = {
     {"contour_margin", 0.0, 1.0, false},    {"convex_threshold", 0.0, 1e6, false},
     {"concave_threshold", 0.0, 1e6, false}, {"umbilic_threshold", 0.0, 1e6, true},
     {"spacing", 0.0, 1e6, false},           {"min_weight", 0.0, 1.0, true},
-    {"stroke_width", 0.0, 1e6, false},      {"min_length", 0.0, 1e6, true},
-    {"max_length", 0.0, 1e6, true}};
+    {"min_length", 0.0, 1e6, true},         {"max_length", 0.0, 1e6, true}};
 const std::vector<std::string> kHatchingFlags = {"no_contours", "no_features"};
 const std::vector<std::string> kHatchingMethods = {"shading", "confis"};
 
@@ -208,7 +207,7 @@ HatchingSpec hatching_spec(const nlohmann::json& j, const std::string& what,
   const std::string method = h.method.empty() ? "confis" : h.method;
   if (method == "shading")
     for (const auto& [key, v] : h.numbers)
-      if (key != "stroke_width" && key != "min_length" && key != "max_length")
+      if (key != "min_length" && key != "max_length")
         throw InputError(what + ": " + at(path, key) + ": only for \"method\": \"confis\"");
   if (method == "shading" && !h.flags.empty())
     throw InputError(what + ": " + at(path, h.flags.begin()->first) +

@@ -116,7 +116,7 @@ struct Scene {
 /// `fabrica hatch SCENE.json` hatches the structure, with the names of its
 /// flags ("method"; the ConFIS parameters contour_margin, convex_threshold,
 /// concave_threshold, umbilic_threshold, spacing, min_weight, no_contours,
-/// no_features; and stroke_width, min_length, max_length). A key that is not
+/// no_features; and min_length, max_length). A key that is not
 /// given, or whose flag is given on the command line, takes the command
 /// line's value. Validated when read (range, type, unknown key: InputError
 /// naming the key).
