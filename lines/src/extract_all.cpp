@@ -215,6 +215,7 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
                     [&](const tbb::blocked_range<std::size_t>& r) {
                       for (std::size_t k = r.begin(); k != r.end(); ++k) run(k);
                     });
+  for (auto& soup : out) soup.surface = surface_;  // the ends refer to this mesh
   return out;
 }
 

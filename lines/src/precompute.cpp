@@ -385,14 +385,15 @@ const std::vector<LineSegment>& LinePrecompute::raw_demarcating() const {
     const double cos45 = std::sqrt(0.5);
     auto& out = cache_->demarcating;
     out.reserve(raw.size());
+    const SegmentGeometry geo(s);
     for (auto& seg : raw) {
       const Face& f = s.faces()[static_cast<std::size_t>(seg.face)];
       if (std::abs(g[f[0]].dot(g[f[1]])) < cos45 || std::abs(g[f[1]].dot(g[f[2]])) < cos45 ||
           std::abs(g[f[2]].dot(g[f[0]])) < cos45)
         continue;
-      for (auto& e : seg.end) {
-        const Vec3& bc = e.anchor.bary;
-        e.strength =
+      for (int i = 0; i < 2; ++i) {
+        const Vec3 bc = geo.anchor(seg, i).bary;
+        seg.end[i].strength =
             static_cast<float>(bc[0] * cggg[f[0]] + bc[1] * cggg[f[1]] + bc[2] * cggg[f[2]]);
       }
       out.push_back(seg);

@@ -48,7 +48,7 @@ TEST(Contours, SphereContourIsTheCircleFacingTheEye) {
   Surface sphere(test::make_icosphere(R, 5));
   const auto soups = extract(sphere, camera_at({0, 0, d}), {LineFamily::contour});
   ASSERT_EQ(soups.size(), 1u);
-  const auto& segs = soups[0].segments;
+  const auto& segs = soups[0].resolved();
   ASSERT_GT(segs.size(), 50u);
   // The tangent cone from the eye touches the sphere on the circle z = R²/d,
   // radius R sqrt(1 - R²/d²).
@@ -76,7 +76,7 @@ TEST(Contours, OrthographicSphereContourIsTheGreatCircle) {
   c.projection = Projection::orthographic;
   const auto soups = extract(sphere, c, {LineFamily::contour});
   ASSERT_GT(soups[0].segments.size(), 20u);
-  for (const auto& s : soups[0].segments)
+  for (const auto& s : soups[0].resolved())
     for (const auto& e : s.end) {
       EXPECT_NEAR(e.position.z(), 0.0, 0.02);
       EXPECT_NEAR(e.position.norm(), 2.0, 0.02);
@@ -89,7 +89,7 @@ TEST(Contours, MeshEdgeContoursFollowMeshEdges) {
   o.contour.mesh_edges = true;
   const auto soups = extract(sphere, camera_at({0, 0, 5}), {LineFamily::contour}, o);
   ASSERT_GT(soups[0].segments.size(), 10u);
-  for (const auto& s : soups[0].segments) {
+  for (const auto& s : soups[0].resolved()) {
     EXPECT_EQ(s.end[0].kind, EndKind::vertex);
     EXPECT_NEAR(s.end[0].position.z(), 0.2, 0.15);
   }
@@ -114,7 +114,7 @@ TEST(Suggestive, TorusHasSuggestiveContoursOnItsInnerSide) {
   // 0.01/s_f² = 2.5 removes everything at this scale; s_f = 0.5 gives 0.04.
   o.feature_size = 0.5;
   const auto soups = extract(torus, camera_at({0, -5, 4}), {LineFamily::suggestive}, o);
-  const auto& segs = soups[0].segments;
+  const auto& segs = soups[0].resolved();
   ASSERT_GT(segs.size(), 20u);
   for (const auto& s : segs)
     for (const auto& e : s.end)
@@ -137,7 +137,7 @@ TEST(Ridges, GaussianCrestHasItsRidgeOnTheCrestLine) {
   o.feature_size = 0.5;
   const auto soups = extract(s, camera_at({0.3, -1.0, 8.0}, Vec3::Zero(), Vec3::UnitY()),
                              {LineFamily::ridge, LineFamily::valley}, o);
-  const auto& ridges = soups[0].segments;
+  const auto& ridges = soups[0].resolved();
   ASSERT_GT(ridges.size(), 40u);
   double length = 0.0;
   for (const auto& seg : ridges) {
@@ -149,7 +149,7 @@ TEST(Ridges, GaussianCrestHasItsRidgeOnTheCrestLine) {
   }
   EXPECT_GT(length, 3.5);  // nearly the whole crest (4 long)
   // Valleys lie on both feet, symmetric: mean x close to 0, |x| well away from the crest.
-  const auto& valleys = soups[1].segments;
+  const auto& valleys = soups[1].resolved();
   ASSERT_GT(valleys.size(), 20u);
   double mean_x = 0.0;
   for (const auto& seg : valleys) {
@@ -279,6 +279,11 @@ TEST(Ridges, ThresholdListIsTheRawSegmentsAboveItAndExtractionUsesIt) {
   const double fs = 0.5;
   ro.threshold = t * fs;
   const SegmentSoup ridges = extract_ridges(pre, fields, fs, ro);
+  const std::vector<ResolvedSegment> got_all = ridges.resolved();
+  SegmentSoup raw_soup;
+  raw_soup.surface = &s;
+  raw_soup.segments = pre.raw_ridges();
+  const std::vector<ResolvedSegment> raw_all = raw_soup.resolved();
   std::size_t kept = 0;
   for (std::uint32_t i : expect) {
     const auto& corner = keys[i].corners;
@@ -287,8 +292,8 @@ TEST(Ridges, ThresholdListIsTheRawSegmentsAboveItAndExtractionUsesIt) {
       continue;
     ASSERT_LT(kept, ridges.segments.size());
     // The raw segment, with each end's strength the fade (m - t)/m.
-    const LineSegment& got = ridges.segments[kept];
-    const LineSegment& raw = pre.raw_ridges()[i];
+    const ResolvedSegment& got = got_all[kept];
+    const ResolvedSegment& raw = raw_all[i];
     EXPECT_EQ(got.face, raw.face);
     const float m[2] = {keys[i].m0, keys[i].m1};
     for (int e = 0; e < 2; ++e) {
@@ -337,7 +342,7 @@ TEST(Kernel, NeighbouringFacesShareBitIdenticalEdgePoints) {
   for (const auto& soup : soups) {
     std::map<std::int32_t, Vec3> at_edge;
     std::size_t shared = 0;
-    for (const auto& s : soup.segments)
+    for (const auto& s : soup.resolved())
       for (const auto& e : s.end) {
         if (e.kind != EndKind::edge) continue;
         auto [it, inserted] = at_edge.emplace(e.element, e.position);
