@@ -3,9 +3,11 @@
 // ridges on a Gaussian crest, closed contour loops after chaining, the
 // zero-crossing kernel's edge sharing, the comparison metric.
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <functional>
 
 #include "fabrica/core/camera.hpp"
@@ -333,6 +335,60 @@ TEST(Chaining, ShortChainsAreDropped) {
   EXPECT_TRUE(chain_segments(soups[0], o).empty());
   o.min_length = 1.0;
   EXPECT_EQ(chain_segments(soups[0], o).size(), 1u);
+}
+
+// The lean records of two soups, field by field (an end's t or float
+// barycentrics as their 8 bytes).
+bool same_records(const SegmentSoup& a, const SegmentSoup& b) {
+  if (a.family != b.family || a.segments.size() != b.segments.size()) return false;
+  for (std::size_t i = 0; i < a.segments.size(); ++i) {
+    const LineSegment &x = a.segments[i], &y = b.segments[i];
+    if (x.face != y.face) return false;
+    for (int k = 0; k < 2; ++k)
+      if (x.kind[k] != y.kind[k] || x.end[k].element != y.end[k].element ||
+          std::memcmp(&x.end[k].t, &y.end[k].t, sizeof(double)) != 0 ||
+          x.end[k].strength != y.end[k].strength)
+        return false;
+  }
+  return true;
+}
+
+// A one-shot extractor frees the vertex blocks and the tangent ring during
+// extract() (draw_lines' lower peak memory): the segments are those of a
+// kept extractor, at one thread (the pipelined D_t1 q1 path) and two, and a
+// second view rebuilds what was freed.
+TEST(LineExtractor, OneShotGivesTheSameSegments) {
+  const Surface torus(test::make_torus(2.0, 0.7, 96, 48, 0.05));
+  LineOptions o;
+  o.families = reference_families();
+  const Camera views[2] = {camera_at({0.5, -5, 3}), camera_at({3, 2, 4})};
+  for (const int threads : {1, 2}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
+                              static_cast<std::size_t>(threads));
+    LineExtractor kept(torus, o), once(torus, o);
+    once.set_one_shot(true);
+    for (const Camera& c : views) {
+      const auto want = kept.extract(c);
+      const auto got = once.extract(c);
+      ASSERT_EQ(want.size(), got.size());
+      std::size_t total = 0;
+      for (std::size_t k = 0; k < want.size(); ++k) {
+        EXPECT_TRUE(same_records(want[k], got[k])) << family_name(want[k].family);
+        total += got[k].segments.size();
+      }
+      EXPECT_GT(total, 200u);
+    }
+  }
+  // Released and built again: the same blocks and ring.
+  LinePrecompute pre(torus);
+  const auto blocks = pre.vertex_blocks().block;
+  const auto ring = pre.tangent_ring().x;
+  pre.release_vertex_blocks();
+  pre.release_tangent_ring();
+  const auto& again = pre.vertex_blocks().block;
+  ASSERT_EQ(again.size(), blocks.size());
+  EXPECT_EQ(std::memcmp(again.data(), blocks.data(), blocks.size() * sizeof(blocks[0])), 0);
+  EXPECT_EQ(pre.tangent_ring().x, ring);
 }
 
 TEST(Kernel, NeighbouringFacesShareBitIdenticalEdgePoints) {
