@@ -1020,7 +1020,9 @@ TEST(Render, SceneSvgKeepsAGroupPerStructure) {
       EXPECT_FALSE(f.child("path").empty()) << groups.back()[0];
     }
     EXPECT_TRUE(families.count("contour")) << groups.back()[0];
-    if (groups.back()[1] == "context") EXPECT_EQ(families.size(), 1u);  // "lines": ["contour"]
+    if (groups.back()[1] == "context") {
+      EXPECT_EQ(families.size(), 1u);  // "lines": ["contour"]
+    }
   }
   // data/aneurysm-scene.json: the context wall (line_color 0.25 0.3 0.4, alpha 0.5) first,
   // the focus aneurysm (default black lines) drawn over it.
