@@ -649,6 +649,7 @@ struct Renderer::Impl {
     float scale;
     bool occluder;
     bool clipped = false;  // a context structure of a scene with a clip
+    bool cull = false;     // back faces culled (cullable)
   };
   // The clipping plane as the shaders take it (common.glsl, clip_at).
   std::array<float, 4> clip{0.0f, 0.0f, 0.0f, 1.0f};
@@ -683,10 +684,12 @@ struct Renderer::Impl {
       }
       if (!d.occluder) p.set("u_scale", d.scale);
       set_clip(q, d.clipped);
+      set_cull(d.cull);
       g.StencilFunc(GL_ALWAYS, d.occluder ? 0 : 1, 0xFF);
       draw_mesh(*d.mesh);
     }
     g.Disable(GL_CLIP_DISTANCE0);
+    g.Disable(GL_CULL_FACE);
     g.Disable(GL_STENCIL_TEST);
   }
 
@@ -851,9 +854,11 @@ struct Renderer::Impl {
       g.ColorMask(fill, fill, fill, fill);
       set_shading(p, s.style, 1.0f);
       set_clip(p, clipped(F, s));
+      set_cull(cullable(F, s));
       draw_mesh(*F.gpu[i]);
     }
     g.Disable(GL_CLIP_DISTANCE0);
+    g.Disable(GL_CULL_FACE);
     g.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
   }
 
@@ -938,9 +943,10 @@ struct Renderer::Impl {
     for (std::size_t i = 0; i < F.scene.structures.size(); ++i) {
       const Structure& s = F.scene.structures[i];
       if (s.style.hybrid_apparent_ridges)
-        draws.push_back({F.gpu[i], hybrid_scale(*s.mesh, F.options.hybrid), false, clipped(F, s)});
+        draws.push_back({F.gpu[i], hybrid_scale(*s.mesh, F.options.hybrid), false, clipped(F, s),
+                         opaque(s) && cullable(F, s)});
       else if (opaque(s))
-        draws.push_back({F.gpu[i], 1.0f, true, clipped(F, s)});
+        draws.push_back({F.gpu[i], 1.0f, true, clipped(F, s), cullable(F, s)});
     }
     hybrid_stage1(draws, F.options.hybrid, F.M, t, false);
     hybrid_stage2(F.options.hybrid, t, F.hybrid_region, false);
@@ -985,6 +991,22 @@ struct Renderer::Impl {
   }
 
   static bool opaque(const Structure& s) { return s.style.opacity >= 0.999; }
+  // Back faces of an opaque structure can be culled when its mesh is closed
+  // and outward (RenderMesh::closed_outward), no clipping plane cuts it and
+  // the near plane does not reach its bounding sphere: every pixel then sees
+  // a front face first, so the picture is the same with half the triangles
+  // rasterised (docs/algorithms.md, "Back-face culling").
+  static bool cullable(const FrameState& F, const Structure& s) {
+    if (!s.mesh->closed_outward || clipped(F, s)) return false;
+    const double depth = F.camera.forward().dot(s.mesh->center - F.camera.eye);
+    return depth - s.mesh->radius > F.M.near_plane;
+  }
+  void set_cull(bool cull) {
+    if (cull)
+      gl().Enable(GL_CULL_FACE);  // GL_BACK of counter-clockwise front faces: the defaults
+    else
+      gl().Disable(GL_CULL_FACE);
+  }
   // Context structures lose the far side of the scene's clipping plane.
   static bool clipped(const FrameState& F, const Structure& s) {
     return F.scene.clip && s.role == Role::context;

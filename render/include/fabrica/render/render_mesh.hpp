@@ -32,6 +32,11 @@ struct RenderMesh {
   double radius = 0.0;
   double mean_edge_length = 0.0;
   double feature_size = 0.0;  ///< rtsc feature size (0 = unknown)
+  /// Closed (every edge in exactly two faces), consistently oriented and
+  /// facing outward (positive signed volume): seen from outside its faces
+  /// wind counter-clockwise, and the renderer may cull its back faces where
+  /// nothing cuts it open (docs/algorithms.md, "Back-face culling").
+  bool closed_outward = false;
 
   std::size_t vertex_count() const { return positions.size() / 3; }
   std::size_t triangle_count() const { return indices.size() / 3; }
