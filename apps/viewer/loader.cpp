@@ -176,6 +176,22 @@ LoadedStructure Loader::build(TriangleMesh mesh, const std::string& name) {
   source->drawer = std::make_unique<LineDrawer>(*surface);
   s.surface = surface;
   s.lines = source;
+  if (surface->mesh().face_count() > 2 * kLodFaces) {
+    TriangleMesh coarse = render::cluster_simplify(surface->mesh(), kLodFaces);
+    io::prepare_for_lines(coarse);
+    auto lod_surface = std::make_shared<Surface>(std::move(coarse));
+    lod_surface->precompute();
+    if (cancelled()) throw Cancelled{};
+    auto lod_mesh = render::make_render_mesh(*lod_surface, false);
+    // The full mesh's edge length: the renderer's depth tolerance for lines
+    // stays what the still picture uses.
+    lod_mesh.mean_edge_length = s.mesh->mean_edge_length;
+    s.mesh_lod = std::make_shared<render::RenderMesh>(std::move(lod_mesh));
+    auto lod_source = std::make_shared<LineSource>();
+    lod_source->surface = lod_surface;
+    lod_source->drawer = std::make_unique<LineDrawer>(*lod_surface);
+    s.lines_lod = lod_source;
+  }
   return s;
 }
 

@@ -55,6 +55,13 @@ RenderMesh make_render_mesh(const TriangleMesh& mesh, const std::vector<Vec3>& v
 /// curvatures and directions and feature size.
 RenderMesh make_render_mesh(const Surface& surface, bool with_curvature);
 
+/// A coarse copy of `mesh` with about `target_faces` faces (at most 25% more)
+/// by vertex clustering on a uniform grid (docs/algorithms.md, "Level of
+/// detail for ghosted context"): the viewer draws ghosted context with it
+/// while the camera moves. Returns `mesh` itself when it has no more faces
+/// than that. Deterministic; unreferenced vertices are dropped.
+TriangleMesh cluster_simplify(const TriangleMesh& mesh, std::size_t target_faces);
+
 /// Sets the curvature arrays (sizes must match the vertex count).
 void set_curvature(RenderMesh& mesh, const std::vector<double>& k1, const std::vector<double>& k2,
                    const std::vector<Vec3>& e1, const std::vector<Vec3>& e2);
