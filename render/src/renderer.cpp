@@ -168,6 +168,7 @@ struct FrameState {
   std::vector<LineBatch> batches;
   bool lines_need_depth_b = false;
   PixelRect hybrid_region, lic_region;
+  PixelRect ghost_region;  // what the ghosted (transparent) structures can cover
   LicKernel lic_kernel;
   float lic_inv_cell = 1.0f;
 };
@@ -879,9 +880,15 @@ struct Renderer::Impl {
   // Ghosted structures: weighted blended OIT, then composite.
   void pass_transparent(const FrameState& F, const Tile& t) {
     if (!F.any_transparent) return;
+    // Only where a ghosted structure can be: clear, accumulate and composite
+    // scissored to that rectangle (outside it the composite would discard).
+    const PixelRect r = tile_region(t, F.ghost_region);
+    if (is_empty(r)) return;
     const GlFunctions& g = gl();
     ensure_oit();
     g.BindFramebuffer(GL_FRAMEBUFFER, oit_fbo);
+    g.Enable(GL_SCISSOR_TEST);
+    g.Scissor(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
     const float zero[4] = {0, 0, 0, 0};
     g.ClearBufferfv(GL_COLOR, 0, zero);
     g.ClearBufferfv(GL_COLOR, 1, zero);
@@ -894,7 +901,7 @@ struct Renderer::Impl {
     set_common(p, F.M, t);
     for (std::size_t i = 0; i < F.scene.structures.size(); ++i) {
       const Structure& s = F.scene.structures[i];
-      if (opaque(s) || s.style.shading == Shading::none || s.style.opacity <= 0.0) continue;
+      if (!ghosted(s)) continue;
       set_shading(p, s.style, static_cast<float>(s.style.opacity));
       set_clip(p, clipped(F, s));
       draw_mesh(*F.gpu[i]);
@@ -912,6 +919,7 @@ struct Renderer::Impl {
     c.set("u_reveal", 1);
     draw_fullscreen();
     g.ActiveTexture(GL_TEXTURE0);
+    g.Disable(GL_SCISSOR_TEST);
   }
 
   // Depth of every surface, for lines of ghosted structures.
@@ -991,6 +999,10 @@ struct Renderer::Impl {
   }
 
   static bool opaque(const Structure& s) { return s.style.opacity >= 0.999; }
+  // Drawn by the transparency pass.
+  static bool ghosted(const Structure& s) {
+    return !opaque(s) && s.style.shading != Shading::none && s.style.opacity > 0.0;
+  }
   // Back faces of an opaque structure can be culled when its mesh is closed
   // and outward (RenderMesh::closed_outward), no clipping plane cuts it and
   // the near plane does not reach its bounding sphere: every pixel then sees
@@ -1235,6 +1247,8 @@ void Renderer::draw(const Scene& scene, const Camera& camera, const RenderOption
       if (selected(s)) meshes.push_back(s.mesh.get());
     return projected_rect(F.M, meshes, camera.width, camera.height);
   };
+  if (F.any_transparent)
+    F.ghost_region = region_of([](const Structure& s) { return Impl::ghosted(s); });
   if (F.any_hybrid)
     F.hybrid_region = region_of([](const Structure& s) { return s.style.hybrid_apparent_ridges; });
   if (F.any_lic)
