@@ -92,6 +92,18 @@ SCRIPT
     echo "draw ms (render + UI + swap): median $(percentile "$log" 3 0.5), p95 $(percentile "$log" 3 0.95)"
     echo "lines ms (worker): median $(percentile "$log" 4 0.5), p95 $(percentile "$log" 4 0.95)"
     echo "cpu ms per frame (all threads): $cpu_ms"
+    median="$(percentile "$log" 2 0.5)" p95="$(percentile "$log" 2 0.95)"
+    case "$context" in
+      300k) target_median=33 target_p95=50 ;;
+      1m) target_median=66 target_p95= ;;
+      *) target_median= target_p95= ;;
+    esac
+    if [ -n "$target_median" ]; then
+      verdict="$(awk -v m="$median" -v p="$p95" -v tm="$target_median" -v tp="${target_p95:-1e300}" \
+        'BEGIN {print (m <= tm && p <= tp) ? "met" : "not met"}')"
+      echo "issue 18 target: median <= $target_median ms${target_p95:+, p95 <= $target_p95 ms}: $verdict" \
+        "(median $median, p95 $p95; on $(nproc) cores a frame takes at least cpu / $(nproc) = $(awk -v c="$cpu_ms" -v n="$(nproc)" 'BEGIN {printf "%.1f", c / n}') ms)"
+    fi
     echo "lines age (frames): max $(tail -n "$frames" "$log" | cut -d, -f5 | sort -g | tail -1)"
   done
 done

@@ -1,5 +1,5 @@
 // A coarse copy of a mesh for drawing ghosted context while the camera moves
-// (docs/algorithms.md, "Level of detail for ghosted context").
+// (docs/algorithms.md §15).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>

@@ -1007,7 +1007,7 @@ struct Renderer::Impl {
   // and outward (RenderMesh::closed_outward), no clipping plane cuts it and
   // the near plane does not reach its bounding sphere: every pixel then sees
   // a front face first, so the picture is the same with half the triangles
-  // rasterised (docs/algorithms.md, "Back-face culling").
+  // rasterised (docs/algorithms.md §15).
   static bool cullable(const FrameState& F, const Structure& s) {
     if (!s.mesh->closed_outward || clipped(F, s)) return false;
     const double depth = F.camera.forward().dot(s.mesh->center - F.camera.eye);
