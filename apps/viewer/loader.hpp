@@ -41,7 +41,7 @@ struct LoadedStructure {
 
 /// Faces of a ghosted structure's level of detail; meshes of more than
 /// twice as many faces get one.
-constexpr std::size_t kLodFaces = 30000;
+constexpr std::size_t kLodFaces = 12000;
 
 /// Everything one `open` produced.
 struct LoadedFile {

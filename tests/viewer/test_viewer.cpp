@@ -474,7 +474,7 @@ TEST(Viewer, ClippingPlaneRemovesTheContextInFront) {
   EXPECT_EQ(render::compare_images(clip, render::read_png(dir / "cli.png"), 0).max_abs, 0);
 }
 
-// A ghosted context of more than 2 x 30k faces (the igea as context) is
+// A ghosted context of more than 2 x 12k faces (the igea as context) is
 // drawn from its level of detail while the camera turns and from the full
 // mesh once it stops: the window during the orbit differs from the still
 // window only a little (the coarse ghost), the still window after `wait` is
