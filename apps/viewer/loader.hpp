@@ -78,6 +78,7 @@ class Loader {
   void run();
   LoadedFile load(const std::filesystem::path& path);
   LoadedStructure build(TriangleMesh mesh, const std::string& name);
+  std::shared_ptr<LineSource> line_source(TriangleMesh mesh);
   void set_progress(double fraction);
   bool cancelled() const { return cancel_.load(); }
 
