@@ -1003,13 +1003,14 @@ struct Renderer::Impl {
   static bool ghosted(const Structure& s) {
     return !opaque(s) && s.style.shading != Shading::none && s.style.opacity > 0.0;
   }
-  // Back faces of an opaque structure can be culled when its mesh is closed
-  // and outward (RenderMesh::closed_outward), no clipping plane cuts it and
-  // the near plane does not reach its bounding sphere: every pixel then sees
-  // a front face first, so the picture is the same with half the triangles
-  // rasterised (docs/algorithms.md §15).
+  // Back faces of an opaque focus structure can be culled when its mesh is
+  // closed and outward (RenderMesh::closed_outward) and the near plane does
+  // not reach its bounding sphere: every pixel then sees a front face first,
+  // so the picture is the same with half the triangles rasterised
+  // (docs/algorithms.md §15). Context structures are never culled: the
+  // clipping plane (and any cutaway) opens them.
   static bool cullable(const FrameState& F, const Structure& s) {
-    if (!s.mesh->closed_outward || clipped(F, s)) return false;
+    if (!s.mesh->closed_outward || s.role != Role::focus) return false;
     const double depth = F.camera.forward().dot(s.mesh->center - F.camera.eye);
     return depth - s.mesh->radius > F.M.near_plane;
   }

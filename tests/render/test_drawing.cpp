@@ -439,7 +439,9 @@ TEST(RenderDrawing, BackFaceCullingOfClosedMeshesKeepsThePicture) {
     EXPECT_EQ(fr::compare_images(ia, ib, 0).max_abs, 0) << "camera at " << distance;
     // The sphere covers the middle, the background the corner (outside).
     EXPECT_LT(ia.pixel(80, 60)[1], 250);
-    if (distance > 20.0) EXPECT_EQ(ia.pixel(2, 2)[1], 255);
+    if (distance > 20.0) {
+      EXPECT_EQ(ia.pixel(2, 2)[1], 255);
+    }
   }
 }
 
