@@ -58,8 +58,10 @@ void LinesWorker::run() {
     const auto t0 = std::chrono::steady_clock::now();
     for (auto& item : job->items) {
       try {
+        const LineSource& source = item.lod ? *item.lod : *item.source;
+        if (item.lod) result->lod.push_back(item.id);
         result->lines[item.id] =
-            structure_lines(*item.source->drawer, item.style, item.thresholds, job->camera);
+            structure_lines(*source.drawer, item.style, item.thresholds, job->camera);
         if (item.hatching)
           result->hatching[item.id] =
               structure_hatching(*item.source->surface, job->camera, item.hatching_width);

@@ -38,6 +38,10 @@ struct LinesJob {
   struct Item {
     int id = 0;
     std::shared_ptr<LineSource> source;
+    /// When set, the lines come from this coarse copy of the surface (the
+    /// level of detail a ghosted structure is drawn with while the camera
+    /// moves) instead of `source`; hatching always uses `source`.
+    std::shared_ptr<LineSource> lod;
     render::StructureStyle style;
     LineOptions thresholds;
     bool hatching = false;
@@ -51,8 +55,9 @@ struct LinesResult {
   Camera camera;
   std::map<int, LineSet> lines;                   ///< by structure id
   std::map<int, render::PolylineLayer> hatching;  ///< by structure id, where asked for
-  double ms = 0.0;                                ///< wall time of the extraction
-  std::string error;                              ///< empty unless a structure's lines failed
+  std::vector<int> lod;  ///< ids whose lines come from the level of detail (Item::lod)
+  double ms = 0.0;       ///< wall time of the extraction
+  std::string error;     ///< empty unless a structure's lines failed
 };
 
 class LinesWorker {

@@ -162,20 +162,33 @@ void Loader::run() {
   }
 }
 
-LoadedStructure Loader::build(TriangleMesh mesh, const std::string& name) {
-  if (cancelled()) throw Cancelled{};
+// A prepared surface of `mesh` with its line precomputation.
+std::shared_ptr<LineSource> Loader::line_source(TriangleMesh mesh) {
   io::prepare_for_lines(mesh);
-  LoadedStructure s;
-  s.name = name;
+  auto source = std::make_shared<LineSource>();
   auto surface = std::make_shared<Surface>(std::move(mesh));
   surface->precompute();
   if (cancelled()) throw Cancelled{};
-  s.mesh = std::make_shared<render::RenderMesh>(render::make_render_mesh(*surface, false));
-  auto source = std::make_shared<LineSource>();
-  source->surface = surface;
   source->drawer = std::make_unique<LineDrawer>(*surface);
-  s.surface = surface;
-  s.lines = source;
+  source->surface = std::move(surface);
+  return source;
+}
+
+LoadedStructure Loader::build(TriangleMesh mesh, const std::string& name) {
+  if (cancelled()) throw Cancelled{};
+  LoadedStructure s;
+  s.name = name;
+  s.lines = line_source(std::move(mesh));
+  s.surface = s.lines->surface;
+  s.mesh = std::make_shared<render::RenderMesh>(render::make_render_mesh(*s.surface, false));
+  if (s.surface->mesh().face_count() > 2 * kLodFaces) {
+    s.lines_lod = line_source(render::cluster_simplify(s.surface->mesh(), kLodFaces));
+    auto lod_mesh = render::make_render_mesh(*s.lines_lod->surface, false);
+    // The full mesh's edge length: the renderer's depth tolerance for lines
+    // stays what the still picture uses.
+    lod_mesh.mean_edge_length = s.mesh->mean_edge_length;
+    s.mesh_lod = std::make_shared<render::RenderMesh>(std::move(lod_mesh));
+  }
   return s;
 }
 

@@ -32,7 +32,16 @@ struct LoadedStructure {
   std::shared_ptr<const Surface> surface;
   std::shared_ptr<const render::RenderMesh> mesh;
   std::shared_ptr<LineSource> lines;
+  /// Level of detail for drawing the structure ghosted while the camera
+  /// moves (null when the mesh is small enough): a coarse copy of the mesh
+  /// (render::cluster_simplify) with its own line source.
+  std::shared_ptr<const render::RenderMesh> mesh_lod;
+  std::shared_ptr<LineSource> lines_lod;
 };
+
+/// Faces of a ghosted structure's level of detail; meshes of more than
+/// twice as many faces get one.
+constexpr std::size_t kLodFaces = 12000;
 
 /// Everything one `open` produced.
 struct LoadedFile {
@@ -69,6 +78,7 @@ class Loader {
   void run();
   LoadedFile load(const std::filesystem::path& path);
   LoadedStructure build(TriangleMesh mesh, const std::string& name);
+  std::shared_ptr<LineSource> line_source(TriangleMesh mesh);
   void set_progress(double fraction);
   bool cancelled() const { return cancel_.load(); }
 

@@ -2,6 +2,10 @@
 
 #include "ui.hpp"
 
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -15,6 +19,15 @@
 namespace fabrica::viewer {
 
 namespace {
+
+// CPU seconds of the whole process so far (every thread: the lines worker's
+// and the GL driver's too).
+double process_cpu_seconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
+         1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
 
 double parse_number(const std::string& text, const std::string& what) {
   std::size_t used = 0;
@@ -168,10 +181,20 @@ int run_script(Viewer& v, const std::filesystem::path& path) {
         if (frames < 1 || frames != std::floor(frames) || frames > 1e6)
           throw InputError("orbit FRAMES must be a whole number >= 1");
         loaded();
-        for (int f = 0; f < static_cast<int>(frames) && !v.should_close(); ++f) {
+        const double cpu0 = process_cpu_seconds();
+        const auto wall0 = std::chrono::steady_clock::now();
+        int drawn = 0;
+        for (; drawn < static_cast<int>(frames) && !v.should_close(); ++drawn) {
           v.orbit(degrees / frames);
           v.frame();
         }
+        // What the orbit cost (bench/viewer_orbit.sh reads this line).
+        const double wall =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+        std::printf("orbit: %d frames, %.1f ms per frame, cpu %.1f ms per frame (all threads)\n",
+                    drawn, 1e3 * wall / std::max(drawn, 1),
+                    1e3 * (process_cpu_seconds() - cpu0) / std::max(drawn, 1));
+        std::fflush(stdout);
       } else if (cmd == "wait") {
         expect_args(w, 0, 0, "wait");
         v.wait();

@@ -139,6 +139,8 @@ void Viewer::adopt_loaded() {
       s.surface = l.surface;
       s.mesh = l.mesh;
       s.lines = l.lines;
+      s.mesh_lod = l.mesh_lod;
+      s.lines_lod = l.lines_lod;
       structures_.push_back(std::move(s));
     }
     if (f.scene) {
@@ -167,7 +169,8 @@ void Viewer::adopt_loaded() {
 bool Viewer::lines_pending() const {
   const bool any =
       std::any_of(structures_.begin(), structures_.end(), [](const auto& s) { return s.visible; });
-  return any && camera_set_ && (lines_dirty_ || posted_revision_ != camera_revision_);
+  return any && camera_set_ &&
+         (lines_dirty_ || posted_revision_ != camera_revision_ || posted_lod_);
 }
 
 void Viewer::wait() {
@@ -390,17 +393,24 @@ void Viewer::set_clip(ClipSettings::Mode mode, AnatomicalView side, double offse
   lines_dirty_ = true;
 }
 
-std::uint64_t Viewer::post_lines(const Camera& camera, bool force) {
-  if (!force && !lines_dirty_ && posted_revision_ == camera_revision_) return lines_version_;
+std::uint64_t Viewer::post_lines(const Camera& camera, bool force, bool lod) {
+  if (!force && !lines_dirty_ && posted_revision_ == camera_revision_ && posted_lod_ == lod)
+    return lines_version_;
   LinesJob job;
   job.version = ++lines_version_;
   job.camera = camera;
   for (const auto& s : structures_) {
     if (!s.visible) continue;
-    job.items.push_back({s.id, s.lines, s.style, s.thresholds, s.hatching, s.hatching_width});
+    // Only ghosted structures without hybrid ridges (which need the full
+    // mesh's curvature) are drawn coarse.
+    const bool coarse = lod && s.lines_lod && s.mesh_lod && s.style.opacity < 0.999 &&
+                        !s.style.hybrid_apparent_ridges;
+    job.items.push_back({s.id, s.lines, coarse ? s.lines_lod : nullptr, s.style, s.thresholds,
+                         s.hatching, s.hatching_width});
   }
   lines_worker_.post(std::move(job));
   lines_dirty_ = false;
+  posted_lod_ = lod;
   posted_revision_ = camera_revision_;
   return lines_version_;
 }
@@ -424,6 +434,9 @@ render::Scene Viewer::build_scene(const LinesResult* lines, bool fading) {
         s.mesh_curvature =
             std::make_shared<render::RenderMesh>(render::make_render_mesh(*s.surface, true));
       st.mesh = s.mesh_curvature;
+    } else if (lines != nullptr &&
+               std::find(lines->lod.begin(), lines->lod.end(), s.id) != lines->lod.end()) {
+      st.mesh = s.mesh_lod;  // its lines come from the same coarse mesh
     } else {
       st.mesh = s.mesh;
     }
@@ -492,8 +505,12 @@ void Viewer::frame() {
   const bool any =
       std::any_of(structures_.begin(), structures_.end(), [](const auto& s) { return s.visible; });
   stats_.ms_gpu_submit = 0.0;
+  // While the camera moves ghosted structures may be drawn coarse (their
+  // lines too); once it stops, the full meshes and their lines come back.
+  const bool moving = camera_revision_ != last_frame_revision_ || dragging_ || to_.has_value();
+  last_frame_revision_ = camera_revision_;
   if (any && camera_set_) {
-    const std::uint64_t version = post_lines(camera_, false);
+    const std::uint64_t version = post_lines(camera_, false, moving && simplify_while_moving_);
     lines = lines_worker_.wait_for(version > 1 ? version - 1 : version);
     if (!lines->error.empty() && (errors_.empty() || errors_.back() != lines->error))
       report_error(lines->error);
@@ -502,9 +519,7 @@ void Viewer::frame() {
     // styles): the window's texture still shows it.
     const std::pair<std::uint64_t, std::uint64_t> key{lines->version, camera_revision_};
     // While the camera moves the window may draw fewer pixels (View menu).
-    const bool moving = camera_revision_ != last_frame_revision_ || dragging_ || to_.has_value();
     const bool scaled = options_.interactive && moving && moving_scale_ < 0.999f;
-    last_frame_revision_ = camera_revision_;
     if (redraw_ || key != drawn_ || !has_picture_ || !fade_from_.empty() ||
         scaled != drawn_scaled_) {
       Camera c = camera_;

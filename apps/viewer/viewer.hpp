@@ -38,6 +38,8 @@ struct ViewerStructure {
   std::shared_ptr<const render::RenderMesh> mesh;            ///< without curvature
   std::shared_ptr<const render::RenderMesh> mesh_curvature;  ///< made when hybrid is on
   std::shared_ptr<LineSource> lines;
+  std::shared_ptr<const render::RenderMesh> mesh_lod;  ///< see LoadedStructure
+  std::shared_ptr<LineSource> lines_lod;
 };
 
 /// A point picked on a surface.
@@ -156,6 +158,10 @@ class Viewer {
   /// Fraction of the window's resolution drawn while the camera moves
   /// (1 = full; the still picture is always full resolution).
   float& moving_scale() { return moving_scale_; }
+  /// Ghosted structures drawn with their level of detail (a coarse copy of
+  /// the mesh, and lines from it) while the camera moves; the still picture
+  /// and every export use the full meshes.
+  bool& simplify_while_moving() { return simplify_while_moving_; }
 
  private:
   BoundingBox scene_box(bool focus_only) const;
@@ -163,8 +169,9 @@ class Viewer {
   bool lines_pending() const;
   Space scene_space() const;
   void adopt_loaded();
-  /// Posts a lines job for `camera` when anything changed; returns its version.
-  std::uint64_t post_lines(const Camera& camera, bool force);
+  /// Posts a lines job for `camera` when anything changed; returns its
+  /// version. `lod`: ghosted structures' lines from their level of detail.
+  std::uint64_t post_lines(const Camera& camera, bool force, bool lod = false);
   /// `fading`: opacities on their way after a role change (the window only;
   /// exports always draw the styles as they are).
   render::Scene build_scene(const LinesResult* lines, bool fading = false);
@@ -203,6 +210,8 @@ class Viewer {
   bool redraw_ = true;
   std::pair<std::uint64_t, std::uint64_t> drawn_{0, 0};
   float moving_scale_ = 0.5f;
+  bool simplify_while_moving_ = true;
+  bool posted_lod_ = false;
   std::uint64_t last_frame_revision_ = 0;
   bool drawn_scaled_ = false;
   std::filesystem::path capture_;

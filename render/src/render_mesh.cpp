@@ -38,6 +38,32 @@ void bounding_sphere(RenderMesh& m) {
   m.mean_edge_length = t ? sum / double(3 * t) : 0.0;
 }
 
+// Every directed edge (a, b) once and its twin (b, a) once: closed and
+// consistently oriented; then outward if the signed volume is positive.
+bool is_closed_outward(const RenderMesh& m) {
+  const std::size_t t = m.triangle_count();
+  if (t == 0) return false;
+  std::vector<std::uint64_t> edges;
+  edges.reserve(3 * t);
+  double volume = 0.0;
+  for (std::size_t f = 0; f < t; ++f) {
+    const std::uint32_t* v = &m.indices[3 * f];
+    for (int k = 0; k < 3; ++k) edges.push_back(std::uint64_t(v[k]) << 32 | v[(k + 1) % 3]);
+    auto p = [&](int k) {
+      const float* q = &m.positions[3 * std::size_t(v[k])];
+      return Vec3(q[0], q[1], q[2]);
+    };
+    volume += p(0).dot(p(1).cross(p(2)));
+  }
+  std::sort(edges.begin(), edges.end());
+  for (std::size_t i = 0; i < edges.size(); ++i) {
+    if (i + 1 < edges.size() && edges[i + 1] == edges[i]) return false;  // twice the same way
+    const std::uint64_t twin = edges[i] << 32 | edges[i] >> 32;
+    if (!std::binary_search(edges.begin(), edges.end(), twin)) return false;  // a border
+  }
+  return volume > 0.0;
+}
+
 }  // namespace
 
 RenderMesh make_render_mesh(const TriangleMesh& mesh, const std::vector<Vec3>& normals) {
@@ -67,6 +93,7 @@ RenderMesh make_render_mesh(const TriangleMesh& mesh, const std::vector<Vec3>& n
     }
   }
   bounding_sphere(m);
+  m.closed_outward = is_closed_outward(m);
   return m;
 }
 

@@ -167,6 +167,7 @@ struct FrameState {
   std::vector<LineBatch> batches;
   bool lines_need_depth_b = false;
   PixelRect hybrid_region, lic_region;
+  PixelRect ghost_region;  // what the ghosted (transparent) structures can cover
   LicKernel lic_kernel;
   float lic_inv_cell = 1.0f;
 };
@@ -656,6 +657,7 @@ struct Renderer::Impl {
     float scale;
     bool occluder;
     bool clipped = false;  // a context structure of a scene with a clip
+    bool cull = false;     // back faces culled (cullable)
   };
   // The clipping plane as the shaders take it (common.glsl, clip_at).
   std::array<float, 4> clip{0.0f, 0.0f, 0.0f, 1.0f};
@@ -696,10 +698,12 @@ struct Renderer::Impl {
       }
       if (!d.occluder) p.set("u_scale", d.scale);
       set_clip(q, d.clipped);
+      set_cull(d.cull);
       g.StencilFunc(GL_ALWAYS, d.occluder ? 0 : 1, 0xFF);
       draw_mesh(*d.mesh);
     }
     g.Disable(GL_CLIP_DISTANCE0);
+    g.Disable(GL_CULL_FACE);
     g.Disable(GL_STENCIL_TEST);
   }
 
@@ -872,9 +876,11 @@ struct Renderer::Impl {
       g.ColorMask(fill, fill, fill, fill);
       set_shading(p, s.style, 1.0f);
       set_clip(p, clipped(F, s));
+      set_cull(cullable(F, s));
       draw_mesh(*F.gpu[i]);
     }
     g.Disable(GL_CLIP_DISTANCE0);
+    g.Disable(GL_CULL_FACE);
     g.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
   }
 
@@ -894,9 +900,15 @@ struct Renderer::Impl {
   // Ghosted structures: weighted blended OIT, then composite.
   void pass_transparent(const FrameState& F, const Tile& t) {
     if (!F.any_transparent) return;
+    // Only where a ghosted structure can be: clear, accumulate and composite
+    // scissored to that rectangle (outside it the composite would discard).
+    const PixelRect r = tile_region(t, F.ghost_region);
+    if (is_empty(r)) return;
     const GlFunctions& g = gl();
     ensure_oit();
     g.BindFramebuffer(GL_FRAMEBUFFER, oit_fbo);
+    g.Enable(GL_SCISSOR_TEST);
+    g.Scissor(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
     const float zero[4] = {0, 0, 0, 0};
     g.ClearBufferfv(GL_COLOR, 0, zero);
     g.ClearBufferfv(GL_COLOR, 1, zero);
@@ -909,7 +921,7 @@ struct Renderer::Impl {
     set_common(p, F.M, t);
     for (std::size_t i = 0; i < F.scene.structures.size(); ++i) {
       const Structure& s = F.scene.structures[i];
-      if (opaque(s) || s.style.shading == Shading::none || s.style.opacity <= 0.0) continue;
+      if (!ghosted(s)) continue;
       set_shading(p, s.style, static_cast<float>(s.style.opacity));
       set_clip(p, clipped(F, s));
       draw_mesh(*F.gpu[i]);
@@ -927,6 +939,7 @@ struct Renderer::Impl {
     c.set("u_reveal", 1);
     draw_fullscreen();
     g.ActiveTexture(GL_TEXTURE0);
+    g.Disable(GL_SCISSOR_TEST);
   }
 
   // Depth of every surface, for lines of ghosted structures.
@@ -958,9 +971,10 @@ struct Renderer::Impl {
     for (std::size_t i = 0; i < F.scene.structures.size(); ++i) {
       const Structure& s = F.scene.structures[i];
       if (s.style.hybrid_apparent_ridges)
-        draws.push_back({F.gpu[i], hybrid_scale(*s.mesh, F.options.hybrid), false, clipped(F, s)});
+        draws.push_back({F.gpu[i], hybrid_scale(*s.mesh, F.options.hybrid), false, clipped(F, s),
+                         opaque(s) && cullable(F, s)});
       else if (opaque(s))
-        draws.push_back({F.gpu[i], 1.0f, true, clipped(F, s)});
+        draws.push_back({F.gpu[i], 1.0f, true, clipped(F, s), cullable(F, s)});
     }
     hybrid_stage1(draws, F.options.hybrid, F.M, t, false);
     hybrid_stage2(F.options.hybrid, t, F.hybrid_region, false);
@@ -1005,6 +1019,27 @@ struct Renderer::Impl {
   }
 
   static bool opaque(const Structure& s) { return s.style.opacity >= 0.999; }
+  // Drawn by the transparency pass.
+  static bool ghosted(const Structure& s) {
+    return !opaque(s) && s.style.shading != Shading::none && s.style.opacity > 0.0;
+  }
+  // Back faces of an opaque focus structure can be culled when its mesh is
+  // closed and outward (RenderMesh::closed_outward) and the near plane does
+  // not reach its bounding sphere: every pixel then sees a front face first,
+  // so the picture is the same with half the triangles rasterised
+  // (docs/algorithms.md §15). Context structures are never culled: the
+  // clipping plane (and any cutaway) opens them.
+  static bool cullable(const FrameState& F, const Structure& s) {
+    if (!s.mesh->closed_outward || s.role != Role::focus) return false;
+    const double depth = F.camera.forward().dot(s.mesh->center - F.camera.eye);
+    return depth - s.mesh->radius > F.M.near_plane;
+  }
+  void set_cull(bool cull) {
+    if (cull)
+      gl().Enable(GL_CULL_FACE);  // GL_BACK of counter-clockwise front faces: the defaults
+    else
+      gl().Disable(GL_CULL_FACE);
+  }
   // Context structures lose the far side of the scene's clipping plane.
   static bool clipped(const FrameState& F, const Structure& s) {
     return F.scene.clip && s.role == Role::context;
@@ -1233,6 +1268,8 @@ void Renderer::draw(const Scene& scene, const Camera& camera, const RenderOption
       if (selected(s)) meshes.push_back(s.mesh.get());
     return projected_rect(F.M, meshes, camera.width, camera.height);
   };
+  if (F.any_transparent)
+    F.ghost_region = region_of([](const Structure& s) { return Impl::ghosted(s); });
   if (F.any_hybrid)
     F.hybrid_region = region_of([](const Structure& s) { return s.style.hybrid_apparent_ridges; });
   if (F.any_lic)

@@ -401,3 +401,78 @@ TEST(RenderScene, JsonRoundTrip) {
     EXPECT_NE(std::string(e.what()).find("my.json: structures[0]"), std::string::npos) << e.what();
   }
 }
+
+// Back-face culling (RenderMesh::closed_outward): a closed outward mesh is
+// recognised, an open or inward one is not; culled, the picture is the one
+// drawn without culling, also from inside the mesh (the near plane cuts it:
+// no culling) and with a ghost in front.
+TEST(RenderDrawing, BackFaceCullingOfClosedMeshesKeepsThePicture) {
+  using fabrica::test::make_icosphere;
+  const fabrica::TriangleMesh sphere = make_icosphere(10.0, 4);
+  std::vector<Vec3> normals;
+  for (const Vec3& p : sphere.positions) normals.push_back(p.normalized());
+  EXPECT_TRUE(fr::make_render_mesh(sphere, normals).closed_outward);
+  fabrica::TriangleMesh open = sphere;
+  open.faces.pop_back();
+  EXPECT_FALSE(fr::make_render_mesh(open, normals).closed_outward);
+  fabrica::TriangleMesh inward = sphere;
+  for (auto& f : inward.faces) std::swap(f[1], f[2]);
+  EXPECT_FALSE(fr::make_render_mesh(inward, normals).closed_outward);
+  fabrica::TriangleMesh one_flipped = sphere;
+  std::swap(one_flipped.faces[7][1], one_flipped.faces[7][2]);
+  EXPECT_FALSE(fr::make_render_mesh(one_flipped, normals).closed_outward);
+
+  auto closed = std::make_shared<fr::RenderMesh>(fr::make_render_mesh(sphere, normals));
+  auto unmarked = std::make_shared<fr::RenderMesh>(*closed);
+  unmarked->closed_outward = false;      // the same mesh, never culled
+  for (double distance : {60.0, 5.0}) {  // outside; inside the sphere
+    Camera camera = fabrica::test::front_camera(160, 120, distance, false, 60.0);
+    fr::Scene a, b;
+    fr::Structure s = sphere_structure();
+    s.style.color = {1.0f, 0.0f, 0.0f, 1.0f};
+    fr::Structure ghost = sphere_structure(4.0, fr::Role::context);
+    s.mesh = closed;
+    a.structures = {s, ghost};
+    s.mesh = unmarked;
+    b.structures = {s, ghost};
+    const fr::Image ia = renderer().render(a, camera), ib = renderer().render(b, camera);
+    EXPECT_EQ(fr::compare_images(ia, ib, 0).max_abs, 0) << "camera at " << distance;
+    // The sphere covers the middle, the background the corner (outside).
+    EXPECT_LT(ia.pixel(80, 60)[1], 250);
+    if (distance > 20.0) {
+      EXPECT_EQ(ia.pixel(2, 2)[1], 255);
+    }
+  }
+}
+
+// Level of detail (render::cluster_simplify): about the asked number of
+// faces, vertices on the surface within a cell, the same output every time,
+// the input itself when it is small enough.
+TEST(RenderMeshLod, ClusterSimplifyKeepsTheShapeWithFewerFaces) {
+  const fabrica::TriangleMesh sphere = fabrica::test::make_icosphere(10.0, 5);  // 20,480 faces
+  ASSERT_EQ(sphere.faces.size(), 20480u);
+  const fabrica::TriangleMesh coarse = fr::cluster_simplify(sphere, 2000);
+  EXPECT_LE(coarse.faces.size(), 2500u);
+  EXPECT_GE(coarse.faces.size(), 1000u);
+  // Cells of about sqrt(3 A / 2000) = 3.4 mm: a mean of points within a
+  // cell lies inside the sphere by less than the cell's sagitta.
+  for (const Vec3& p : coarse.positions) {
+    EXPECT_LE(p.norm(), 10.0 + 1e-9);
+    EXPECT_GE(p.norm(), 9.0);
+  }
+  std::size_t outward = 0;
+  for (const auto& f : coarse.faces) {
+    EXPECT_NE(f[0], f[1]);
+    EXPECT_NE(f[1], f[2]);
+    EXPECT_NE(f[0], f[2]);
+    const Vec3 &a = coarse.positions[f[0]], &b = coarse.positions[f[1]],
+               &c = coarse.positions[f[2]];
+    if ((b - a).cross(c - a).dot(a + b + c) > 0.0) ++outward;
+  }
+  // Orientation kept, but for the few sliver faces clustering folds over.
+  EXPECT_GE(outward, coarse.faces.size() * 99 / 100);
+  const fabrica::TriangleMesh again = fr::cluster_simplify(sphere, 2000);
+  EXPECT_EQ(again.faces, coarse.faces);
+  EXPECT_EQ(again.positions, coarse.positions);
+  EXPECT_EQ(fr::cluster_simplify(sphere, 30000).faces, sphere.faces);
+}

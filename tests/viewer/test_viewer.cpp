@@ -473,3 +473,59 @@ TEST(Viewer, ClippingPlaneRemovesTheContextInFront) {
   ASSERT_EQ(cli.code, 0) << cli.err;
   EXPECT_EQ(render::compare_images(clip, render::read_png(dir / "cli.png"), 0).max_abs, 0);
 }
+
+// A ghosted context of more than 2 x 12k faces (the igea as context) is
+// drawn from its level of detail while the camera turns and from the full
+// mesh once it stops: the window during the orbit differs from the still
+// window only a little (the coarse ghost), the still window after `wait` is
+// the full picture again, and the export after an orbit is pixel-identical
+// to `fabrica render` of the saved scene (the full meshes).
+TEST(Viewer, GhostedContextIsCoarseOnlyWhileTheCameraMoves) {
+  const fs::path dir = work_dir();
+  const fs::path classic = test::bundled_data() / "meshes" / "classic";
+  const std::string script = "open " + quote((classic / "libigl_bunny.off").string()) + "\n" +
+                             "open " + quote((classic / "c3d_igea.ply").string()) + "\n" +
+                             "wait\nfocus libigl_bunny\ncontext c3d_igea\n"
+                             "set c3d_igea opacity=0.4\nview anterior\nwait\n"
+                             "screenshot-window " +
+                             quote((dir / "still0.png").string()) + "\n" +
+                             "orbit 360 4\n"
+                             "screenshot-window " +
+                             quote((dir / "moving.png").string()) + "\n" +
+                             "wait\n"
+                             "screenshot-window " +
+                             quote((dir / "still.png").string()) + "\n" + "screenshot " +
+                             quote((dir / "view.png").string()) + "\n" + "save-scene " +
+                             quote((dir / "scene.json").string()) + "\nquit\n";
+  const Outcome r = run_viewer(dir, script, "800x600");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const render::Image still0 = render::read_png(dir / "still0.png");
+  const render::Image moving = render::read_png(dir / "moving.png");
+  const render::Image still = render::read_png(dir / "still.png");
+  // The picture right of the Structures panel and above the HUD: largest
+  // channel difference, and the fraction of pixels differing by more than 8.
+  auto differ = [](const render::Image& a, const render::Image& b) {
+    int most = 0, over = 0, count = 0;
+    for (int y = 40; y < 520; ++y)
+      for (int x = 380; x < 800; ++x, ++count) {
+        int m = 0;
+        for (int c = 0; c < 3; ++c) m = std::max(m, std::abs(a.pixel(x, y)[c] - b.pixel(x, y)[c]));
+        most = std::max(most, m);
+        over += m > 8;
+      }
+    return std::make_pair(most, double(over) / count);
+  };
+  // A full turn: the same camera before and after, the same still picture.
+  EXPECT_EQ(differ(still0, still).first, 0);
+  const auto [most, fraction] = differ(moving, still);
+  EXPECT_GT(most, 0) << "the ghost was not drawn coarse while moving";
+  EXPECT_LT(fraction, 0.05) << "the coarse ghost should look like the full one";
+  const Outcome cli =
+      run(shell_quote(FABRICA_EXE) + " render " + shell_quote((dir / "scene.json").string()) +
+              " --size 800x600 -q -o " + shell_quote((dir / "cli.png").string()),
+          dir);
+  ASSERT_EQ(cli.code, 0) << cli.err;
+  const auto same = render::compare_images(render::read_png(dir / "view.png"),
+                                           render::read_png(dir / "cli.png"), 0);
+  EXPECT_EQ(same.max_abs, 0) << "mean " << same.mean_abs;
+}

@@ -32,6 +32,12 @@ struct RenderMesh {
   double radius = 0.0;
   double mean_edge_length = 0.0;
   double feature_size = 0.0;  ///< rtsc feature size (0 = unknown)
+  /// Closed (every edge in exactly two faces), consistently oriented and
+  /// facing outward (positive signed volume): seen from outside its faces
+  /// wind counter-clockwise, and the renderer may cull its back faces where
+  /// nothing cuts it open (a focus structure beyond the near plane;
+  /// docs/algorithms.md §15).
+  bool closed_outward = false;
 
   std::size_t vertex_count() const { return positions.size() / 3; }
   std::size_t triangle_count() const { return indices.size() / 3; }
@@ -49,6 +55,12 @@ RenderMesh make_render_mesh(const TriangleMesh& mesh, const std::vector<Vec3>& v
 /// From a Surface: its vertex normals and, if `with_curvature`, its principal
 /// curvatures and directions and feature size.
 RenderMesh make_render_mesh(const Surface& surface, bool with_curvature);
+
+/// A coarse copy of `mesh` with about `target_faces` faces (at most 25% more)
+/// by vertex clustering on a uniform grid (docs/algorithms.md §15): the
+/// viewer draws ghosted context with it while the camera moves. Returns `mesh` itself when it has
+/// no more faces than that. Deterministic; unreferenced vertices are dropped.
+TriangleMesh cluster_simplify(const TriangleMesh& mesh, std::size_t target_faces);
 
 /// Sets the curvature arrays (sizes must match the vertex count).
 void set_curvature(RenderMesh& mesh, const std::vector<double>& k1, const std::vector<double>& k2,
