@@ -1,3 +1,6 @@
 // Surface LIC, stage 1: opaque structures without LIC hide it (mask 0).
 layout(location = 0) out vec4 o_data;
-void main() { o_data = vec4(0.0); }
+void main() {
+  cutaway_discard();
+  o_data = vec4(0.0);
+}

@@ -15,6 +15,7 @@ in vec3 v_object;
 in float v_level;
 layout(location = 0) out vec4 o_data;
 void main() {
+  cutaway_discard();
   vec4 f = texelFetch(u_field, gl_PrimitiveID);
   float noise = lic_noise(v_object * u_inv_cell);
   vec4 c = u_mvp * vec4(v_object, 1.0);

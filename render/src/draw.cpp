@@ -99,6 +99,7 @@ Scene build_scene(const SceneSurfaces& scene, const Camera& camera) {
     out.structures.push_back(std::move(st));
   }
   out.clip = scene.spec.clip;
+  out.cutaway = scene.spec.cutaway;
   return out;
 }
 

@@ -170,6 +170,7 @@ struct FrameState {
   PixelRect hybrid_region, lic_region;
   LicKernel lic_kernel;
   float lic_inv_cell = 1.0f;
+  bool cut = false;  // a cutaway with focus and context (pass_cutaway)
 };
 
 void check_size(const Camera& camera) {
@@ -191,6 +192,30 @@ float hybrid_scale(const RenderMesh& mesh, const HybridOptions& o) {
   if (!std::isfinite(tau)) throw InputError("hybrid apparent ridges: tau must be finite");
   return static_cast<float>(std::exp2(tau));
 }
+
+// The cutaway (docs/algorithms.md §15): on when enabled and the scene has
+// both focus and context structures.
+bool cutaway_applies(const Scene& scene) {
+  if (!scene.cutaway.enabled) return false;
+  bool focus = false, context = false;
+  for (const auto& s : scene.structures) (s.role == Role::focus ? focus : context) = true;
+  return focus && context;
+}
+
+// How far (pixels of the picture) the cutaway reaches from the focus's
+// footprint: margin + fade (+ rim), `scale` the line scale.
+double cutaway_reach(const Cutaway& c, double scale) {
+  return (c.margin_px + c.fade_px + (c.rim ? kCutawayRimPx : 0.0)) * scale;
+}
+
+// Tiles' margin with a cutaway: every pixel of a tile sees the focus
+// pixels within reach (the distance field is computed per tile).
+int cutaway_margin(const Cutaway& c, double scale) {
+  return static_cast<int>(std::ceil(cutaway_reach(c, scale))) + 2;
+}
+
+// Texture units the cutaway's textures stay bound to while a tile is drawn.
+constexpr int kCutSeedUnit = 5, kCutDepthUnit = 6;
 
 }  // namespace
 
@@ -217,6 +242,14 @@ struct Renderer::Impl {
   // the depth-stencil lic_depth (stencil 1 where a LIC mesh is visible);
   // stage 2 multiplies into main_color through lic_out_fbo (lic_stage2).
   GLuint lic_fbo = 0, lic_color = 0, lic_depth = 0, lic_out_fbo = 0;
+  // Cutaway (pass_cutaway): the focus's front depth (cut_depth, drawn
+  // through cut_fbo) and the jump-flooding ping-pong of nearest focus
+  // pixels (cut_seeds, RG32F); cut_params = (margin, fade, rim width) in
+  // pixels of the picture, as cutaway.glsl takes them.
+  GLuint cut_fbo = 0, cut_depth = 0;
+  GLuint cut_seeds[2] = {0, 0}, cut_seed_fbos[2] = {0, 0};
+  std::array<float, 3> cut_params{};
+  Color cut_rim_color;
 
   explicit Impl(std::unique_ptr<GlContext> c) : ctx(std::move(c)) {
     ctx->make_current();
@@ -258,25 +291,25 @@ struct Renderer::Impl {
     };
     std::vector<ShaderStage> stages;
     if (key == "mesh")
-      stages = {vs({"mesh.vert"}), fs({"shading.glsl", "mesh.frag"})};
+      stages = {vs({"mesh.vert"}), fs({"shading.glsl", "cutaway.glsl", "mesh.frag"})};
     else if (key == "mesh_oit")
-      stages = {vs({"mesh.vert"}), fs({"shading.glsl", "mesh_oit.frag"})};
+      stages = {vs({"mesh.vert"}), fs({"shading.glsl", "cutaway.glsl", "mesh_oit.frag"})};
     else if (key == "depth")
-      stages = {vs({"mesh.vert"}), fs({"depth.frag"})};
+      stages = {vs({"mesh.vert"}), fs({"cutaway.glsl", "depth.frag"})};
     else if (key == "oit_composite")
       stages = {vs({"fullscreen.vert"}), fs({"oit_composite.frag"})};
     else if (key == "lines")
-      stages = {vs({"lines.vert"}), fs({"lines.frag"})};
+      stages = {vs({"lines.vert"}), fs({"cutaway.glsl", "lines.frag"})};
     else if (key == "ar1")
       stages = {vs({"apparent_ridges.glsl", "ar_stage1.vert"}),
-                fs({"apparent_ridges.glsl", "ar_stage1.frag"})};
+                fs({"apparent_ridges.glsl", "cutaway.glsl", "ar_stage1.frag"})};
     else if (key == "ar1_per_fragment")
       stages = {vs({"apparent_ridges.glsl", "ar_stage1.vert"}, {"PER_FRAGMENT"}),
-                fs({"apparent_ridges.glsl", "ar_stage1.frag"}, {"PER_FRAGMENT"})};
+                fs({"apparent_ridges.glsl", "cutaway.glsl", "ar_stage1.frag"}, {"PER_FRAGMENT"})};
     else if (key == "ar2")
       stages = {vs({"fullscreen.vert"}), fs({"ar_stage2.frag"})};
     else if (key == "ar_occluder")
-      stages = {vs({"mesh.vert"}), fs({"ar_occluder.frag"})};
+      stages = {vs({"mesh.vert"}), fs({"cutaway.glsl", "ar_occluder.frag"})};
     else if (key == "ar_mask")
       stages = {vs({"fullscreen.vert"}), fs({"ar_mask.frag"})};
     else if (key == "ar_bare1")
@@ -284,9 +317,9 @@ struct Renderer::Impl {
     else if (key == "ar_bare2")
       stages = {vs({"fullscreen.vert"}), fs({"ar_bare_stage2.frag"})};
     else if (key == "lic1")
-      stages = {vs({"lic_stage1.vert"}), fs({"lic_noise.glsl", "lic_stage1.frag"})};
+      stages = {vs({"lic_stage1.vert"}), fs({"lic_noise.glsl", "cutaway.glsl", "lic_stage1.frag"})};
     else if (key == "lic_occluder")
-      stages = {vs({"lic_stage1.vert"}), fs({"lic_occluder.frag"})};
+      stages = {vs({"lic_stage1.vert"}), fs({"cutaway.glsl", "lic_occluder.frag"})};
     else if (key == "lic_mask")
       stages = {vs({"fullscreen.vert"}), fs({"lic_mask.frag"})};
     else if (key == "lic2")
@@ -294,6 +327,8 @@ struct Renderer::Impl {
     else if (key == "lic2_value")
       stages = {vs({"fullscreen.vert"}),
                 fs({"lic_stage2.frag"}, {kLicMaxStepsDefine, "LIC_VALUE"})};
+    else if (key == "cut_jfa")
+      stages = {vs({"fullscreen.vert"}), fs({"cutaway_jfa.frag"})};
     else
       throw Error(ErrorKind::internal, "unknown program " + key);
     return programs.emplace(key, ShaderProgram(gl(), key, stages)).first->second;
@@ -429,6 +464,7 @@ struct Renderer::Impl {
     main_fbo = overlay_fbo = oit_fbo = depthb_fbo = ar_fbo = ar_out_fbo = 0;
     main_color = depth_a = accum = reveal = depth_b = ar_color = ar_depth = 0;
     lic_fbo = lic_out_fbo = lic_color = lic_depth = 0;
+    release_cutaway();
     target_w = target_h = 0;
   }
 
@@ -581,6 +617,46 @@ struct Renderer::Impl {
     make_two_stage_targets(lic_color, lic_depth, lic_fbo, lic_out_fbo, "LIC");
   }
 
+  void ensure_cutaway() {
+    if (cut_fbo != 0) return;
+    const GlFunctions& g = gl();
+    cut_depth =
+        make_texture(GL_DEPTH_COMPONENT24, GL_DEPTH_COMPONENT, GL_UNSIGNED_INT, target_w, target_h);
+    g.GenFramebuffers(1, &cut_fbo);
+    g.BindFramebuffer(GL_FRAMEBUFFER, cut_fbo);
+    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, cut_depth, 0);
+    const GLenum none = GL_NONE;
+    g.DrawBuffers(1, &none);
+    g.ReadBuffer(GL_NONE);
+    check_fbo("cutaway depth framebuffer");
+    g.GenFramebuffers(2, cut_seed_fbos);
+    for (int k = 0; k < 2; ++k) {
+      cut_seeds[k] = make_texture(GL_RG32F, GL_RG, GL_FLOAT, target_w, target_h);
+      g.BindFramebuffer(GL_FRAMEBUFFER, cut_seed_fbos[k]);
+      g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, cut_seeds[k], 0);
+      check_fbo("cutaway distance framebuffer");
+    }
+  }
+
+  void release_cutaway() {
+    const GlFunctions& g = gl();
+    g.DeleteFramebuffers(1, &cut_fbo);
+    g.DeleteFramebuffers(2, cut_seed_fbos);
+    g.DeleteTextures(1, &cut_depth);
+    g.DeleteTextures(2, cut_seeds);
+    cut_fbo = cut_depth = 0;
+    cut_seeds[0] = cut_seeds[1] = cut_seed_fbos[0] = cut_seed_fbos[1] = 0;
+  }
+
+  // The cutaway's uniforms (cutaway.glsl) on every program set_common sets
+  // up; u_cutaway itself is set per draw (set_clip).
+  void set_cut_uniforms(const ShaderProgram& p) {
+    p.set("u_cut_seeds", kCutSeedUnit);
+    p.set("u_cut_depth", kCutDepthUnit);
+    p.set("u_cut", cut_params[0], cut_params[1], cut_params[2]);
+    p.set("u_cut_rim_color", cut_rim_color.r, cut_rim_color.g, cut_rim_color.b, cut_rim_color.a);
+  }
+
   // ------------------------------------------------------------- helpers
   int tile_inner_size(int requested, int margin = kTileMargin) const {
     int limit = std::min(ctx->max_framebuffer_size(), 4096);
@@ -594,6 +670,7 @@ struct Renderer::Impl {
     p.set_mat3("u_normal_matrix", m.normal.data());
     p.set("u_tile", t.transform[0], t.transform[1], t.transform[2], t.transform[3]);
     p.set("u_orthographic", m.orthographic ? 1 : 0);
+    set_cut_uniforms(p);
   }
 
   void draw_fullscreen() {
@@ -649,15 +726,18 @@ struct Renderer::Impl {
     float scale;
     bool occluder;
     bool clipped = false;  // a context structure of a scene with a clip
+    bool cut = false;      // a context structure of a frame with a cutaway
   };
   // The clipping plane as the shaders take it (common.glsl, clip_at).
   std::array<float, 4> clip{0.0f, 0.0f, 0.0f, 1.0f};
-  void set_clip(const ShaderProgram& p, bool clipped) {
+  // `cut`: a context structure of a frame with a cutaway (cutaway.glsl).
+  void set_clip(const ShaderProgram& p, bool clipped, bool cut = false) {
     if (clipped)
       gl().Enable(GL_CLIP_DISTANCE0);
     else
       gl().Disable(GL_CLIP_DISTANCE0);
     p.set("u_clip", clip[0], clip[1], clip[2], clip[3]);
+    p.set("u_cutaway", cut ? 1 : 0);
   }
   void hybrid_stage1(const std::vector<HybridDraw>& draws, const HybridOptions& o,
                      const Matrices& m, const Tile& t, bool bare) {
@@ -682,7 +762,7 @@ struct Renderer::Impl {
         }
       }
       if (!d.occluder) p.set("u_scale", d.scale);
-      set_clip(q, d.clipped);
+      set_clip(q, d.clipped, d.cut);
       g.StencilFunc(GL_ALWAYS, d.occluder ? 0 : 1, 0xFF);
       draw_mesh(*d.mesh);
     }
@@ -752,6 +832,7 @@ struct Renderer::Impl {
     const GpuMesh* mesh;
     bool occluder;
     bool clipped = false;  // a context structure of a scene with a clip
+    bool cut = false;      // a context structure of a frame with a cutaway
   };
   void lic_stage1(const std::vector<LicDraw>& draws, const Matrices& m, const Tile& t,
                   float inv_cell, int image_w, int image_h) {
@@ -778,7 +859,7 @@ struct Renderer::Impl {
         }
       }
       if (!d.occluder) g.BindTexture(GL_TEXTURE_BUFFER, d.mesh->field_texture);
-      set_clip(q, d.clipped);
+      set_clip(q, d.clipped, d.cut);
       g.StencilFunc(GL_ALWAYS, d.occluder ? 0 : 1, 0xFF);
       draw_mesh(*d.mesh);
     }
@@ -850,7 +931,7 @@ struct Renderer::Impl {
       const bool fill = s.style.shading != Shading::none;
       g.ColorMask(fill, fill, fill, fill);
       set_shading(p, s.style, 1.0f);
-      set_clip(p, clipped(F, s));
+      set_clip(p, clipped(F, s), cut(F, s));
       draw_mesh(*F.gpu[i]);
     }
     g.Disable(GL_CLIP_DISTANCE0);
@@ -865,7 +946,7 @@ struct Renderer::Impl {
     for (std::size_t i = 0; i < F.scene.structures.size(); ++i) {
       const Structure& s = F.scene.structures[i];
       if (!opaque(s)) continue;
-      draws.push_back({F.gpu[i], !s.style.lic, clipped(F, s)});
+      draws.push_back({F.gpu[i], !s.style.lic, clipped(F, s), cut(F, s)});
     }
     lic_stage1(draws, F.M, t, F.lic_inv_cell, F.camera.width, F.camera.height);
     lic_stage2(F.lic_kernel, static_cast<float>(F.options.lic.strength), t, F.lic_region, false);
@@ -889,9 +970,11 @@ struct Renderer::Impl {
     set_common(p, F.M, t);
     for (std::size_t i = 0; i < F.scene.structures.size(); ++i) {
       const Structure& s = F.scene.structures[i];
-      if (opaque(s) || s.style.shading == Shading::none || s.style.opacity <= 0.0) continue;
+      // Opaque context with a cutaway: the fade of its cut (mesh_oit.frag).
+      if ((opaque(s) && !cut(F, s)) || s.style.shading == Shading::none || s.style.opacity <= 0.0)
+        continue;
       set_shading(p, s.style, static_cast<float>(s.style.opacity));
-      set_clip(p, clipped(F, s));
+      set_clip(p, clipped(F, s), cut(F, s));
       draw_mesh(*F.gpu[i]);
     }
     g.Disable(GL_CLIP_DISTANCE0);
@@ -907,6 +990,65 @@ struct Renderer::Impl {
     c.set("u_reveal", 1);
     draw_fullscreen();
     g.ActiveTexture(GL_TEXTURE0);
+  }
+
+  // The cutaway (docs/algorithms.md §15), before anything context is drawn:
+  // the focus structures' front depth, then the nearest focus pixel of
+  // every pixel within reach by jump flooding (log2 of the reach passes and
+  // one more of step 1), left bound to kCutSeedUnit and kCutDepthUnit for
+  // the tile's passes (cutaway.glsl).
+  void pass_cutaway(const FrameState& F, const Tile& t) {
+    if (!F.cut) return;
+    const GlFunctions& g = gl();
+    ensure_cutaway();
+    const Cutaway& c = F.scene.cutaway;
+    const double scale = F.line_scale;
+    cut_params = {static_cast<float>(c.margin_px * scale), static_cast<float>(c.fade_px * scale),
+                  static_cast<float>(c.rim ? kCutawayRimPx * scale : 0.0)};
+    cut_rim_color = c.rim_color;
+    for (int unit : {kCutSeedUnit, kCutDepthUnit}) {  // drawn into below
+      g.ActiveTexture(static_cast<GLenum>(GL_TEXTURE0 + unit));
+      g.BindTexture(GL_TEXTURE_2D, 0);
+    }
+    g.ActiveTexture(GL_TEXTURE0);
+    g.BindFramebuffer(GL_FRAMEBUFFER, cut_fbo);
+    g.Viewport(0, 0, t.render_w, t.render_h);
+    set_state_opaque();
+    g.ClearDepth(1.0);
+    g.Clear(GL_DEPTH_BUFFER_BIT);
+    const ShaderProgram& d = program("depth");
+    d.use();
+    set_common(d, F.M, t);
+    set_clip(d, false, false);
+    for (std::size_t i = 0; i < F.scene.structures.size(); ++i)
+      if (F.scene.structures[i].role == Role::focus) draw_mesh(*F.gpu[i]);
+    g.Disable(GL_DEPTH_TEST);
+    g.DepthMask(GL_FALSE);
+    const ShaderProgram& j = program("cut_jfa");
+    j.use();
+    j.set("u_input", 0);
+    j.set("u_size", static_cast<float>(t.render_w), static_cast<float>(t.render_h));
+    int current = 0;
+    auto flood = [&](int step, GLuint input, int into) {
+      g.BindFramebuffer(GL_FRAMEBUFFER, cut_seed_fbos[into]);
+      g.BindTexture(GL_TEXTURE_2D, input);
+      j.set("u_step", step);
+      draw_fullscreen();
+      current = into;
+    };
+    flood(0, cut_depth, 0);
+    int step = 1;
+    while (2.0 * step <= cutaway_reach(c, scale)) step *= 2;
+    for (; step >= 1; step /= 2) flood(step, cut_seeds[current], 1 - current);
+    flood(1, cut_seeds[current], 1 - current);
+    g.BindTexture(GL_TEXTURE_2D, 0);
+    g.ActiveTexture(static_cast<GLenum>(GL_TEXTURE0 + kCutSeedUnit));
+    g.BindTexture(GL_TEXTURE_2D, cut_seeds[current]);
+    g.ActiveTexture(static_cast<GLenum>(GL_TEXTURE0 + kCutDepthUnit));
+    g.BindTexture(GL_TEXTURE_2D, cut_depth);
+    g.ActiveTexture(GL_TEXTURE0);
+    g.DepthMask(GL_TRUE);
+    check_gl_error(g, "drawing the cutaway");
   }
 
   // Depth of every surface, for lines of ghosted structures.
@@ -925,7 +1067,7 @@ struct Renderer::Impl {
     set_common(p, F.M, t);
     for (std::size_t i = 0; i < F.scene.structures.size(); ++i) {
       if (opaque(F.scene.structures[i])) continue;
-      set_clip(p, clipped(F, F.scene.structures[i]));
+      set_clip(p, clipped(F, F.scene.structures[i]), cut(F, F.scene.structures[i]));
       draw_mesh(*F.gpu[i]);
     }
     g.Disable(GL_CLIP_DISTANCE0);
@@ -938,9 +1080,10 @@ struct Renderer::Impl {
     for (std::size_t i = 0; i < F.scene.structures.size(); ++i) {
       const Structure& s = F.scene.structures[i];
       if (s.style.hybrid_apparent_ridges)
-        draws.push_back({F.gpu[i], hybrid_scale(*s.mesh, F.options.hybrid), false, clipped(F, s)});
+        draws.push_back(
+            {F.gpu[i], hybrid_scale(*s.mesh, F.options.hybrid), false, clipped(F, s), cut(F, s)});
       else if (opaque(s))
-        draws.push_back({F.gpu[i], 1.0f, true, clipped(F, s)});
+        draws.push_back({F.gpu[i], 1.0f, true, clipped(F, s), cut(F, s)});
     }
     hybrid_stage1(draws, F.options.hybrid, F.M, t, false);
     hybrid_stage2(F.options.hybrid, t, F.hybrid_region, false);
@@ -977,7 +1120,7 @@ struct Renderer::Impl {
       p.set("u_hidden_mode", static_cast<int>(ls.hidden));
       p.set("u_hidden_opacity", static_cast<float>(ls.hidden_opacity));
       p.set("u_dash_px", static_cast<float>(ls.dash * F.line_scale));
-      set_clip(p, clipped(F, s));
+      set_clip(p, clipped(F, s), cut(F, s));
       g.DrawElements(GL_TRIANGLES, b.count, GL_UNSIGNED_INT,
                      reinterpret_cast<const void*>(std::size_t(b.first) * sizeof(std::uint32_t)));
     }
@@ -988,6 +1131,10 @@ struct Renderer::Impl {
   // Context structures lose the far side of the scene's clipping plane.
   static bool clipped(const FrameState& F, const Structure& s) {
     return F.scene.clip && s.role == Role::context;
+  }
+  // Context structures lose what is in front of the focus (pass_cutaway).
+  static bool cut(const FrameState& F, const Structure& s) {
+    return F.cut && s.role == Role::context;
   }
 
   void set_shading(const ShaderProgram& p, const StructureStyle& st, float alpha) {
@@ -1187,6 +1334,8 @@ void Renderer::draw(const Scene& scene, const Camera& camera, const RenderOption
       lic_radius = std::max(lic_radius, s.mesh->radius);
     }
   }
+  F.cut = cutaway_applies(scene);
+  if (F.cut) F.any_transparent = true;  // the fade of a cut is blended (pass_transparent)
   F.batches = I.upload_lines(scene);
   for (const auto& b : F.batches)
     if (!Impl::opaque(scene.structures[b.structure])) F.lines_need_depth_b = true;
@@ -1202,6 +1351,7 @@ void Renderer::draw(const Scene& scene, const Camera& camera, const RenderOption
     margin = std::max(
         margin, static_cast<int>(std::ceil(F.lic_kernel.steps * double(F.lic_kernel.step_px))) + 2);
   }
+  if (F.cut) margin = std::max(margin, cutaway_margin(scene.cutaway, F.line_scale));
   const int inner = I.tile_inner_size(options.max_tile_size, margin);
   const auto tiles = make_tiles(camera.width, camera.height, inner, margin);
 
@@ -1229,6 +1379,7 @@ void Renderer::draw(const Scene& scene, const Camera& camera, const RenderOption
   F.bg_alpha = options.transparent_background ? 0.0f : scene.background.a;
   const GlFunctions& g = I.gl();
   for (const Tile& t : tiles) {
+    I.pass_cutaway(F, t);
     I.pass_opaque(F, t);
     I.pass_lic(F, t);
     I.pass_transparent(F, t);
