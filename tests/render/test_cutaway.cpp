@@ -8,6 +8,8 @@
 #include <nlohmann/json.hpp>
 
 #include "fabrica/core/error.hpp"
+#include "fabrica/core/projector.hpp"
+#include "fabrica/render/draw.hpp"
 #include "fabrica/render/renderer.hpp"
 #include "render_test_util.hpp"
 
@@ -262,4 +264,65 @@ TEST(RenderCutaway, SceneKeys) {
   EXPECT_DOUBLE_EQ(fr::cutaway_keep(c, 12.0), 0.5);
   EXPECT_EQ(fr::cutaway_keep(c, 6.0, 2.0), 0.0);  // 6 px <= the 20 px margin
   EXPECT_DOUBLE_EQ(fr::cutaway_keep(c, 24.0, 2.0), 0.5);
+}
+
+// Vector output: a context line across the front of the context sphere
+// loses its part over the focus and the margin (where the cutaway keeps
+// less than half), the rest stays; the focus's line, hidden by the opaque
+// context without the cutaway, is visible through the cut.
+TEST(RenderCutaway, VectorLinesAreCutToo) {
+  fr::SceneSurfaces scene;
+  fr::StructureSpec context, focus;
+  context.name = "context";
+  context.role = fr::Role::context;
+  context.style = fr::default_style(fr::Role::context);
+  context.style.opacity = 1.0;
+  focus.name = "focus";
+  focus.role = fr::Role::focus;
+  focus.style = fr::default_style(fr::Role::focus);
+  scene.add(context,
+            std::make_shared<const fabrica::Surface>(fabrica::test::make_icosphere(10, 4)));
+  scene.add(focus, std::make_shared<const fabrica::Surface>(fabrica::test::make_icosphere(5, 4)));
+  const Camera cam = camera();
+  fr::Scene drawn = fr::build_scene(scene, cam);
+  // A line over the context's front (z = 9.9 mm at x = 0, on the sphere
+  // near the middle row) and one over the focus's front (z = 4.9 mm).
+  auto across = [](double r, double z_front) {
+    fabrica::Polyline pl;
+    pl.family = fabrica::LineFamily::ridge;
+    for (int i = -40; i <= 40; ++i) {
+      const double x = r * 0.9 * i / 40.0;
+      fabrica::LineVertex v;
+      v.position = Vec3(x, 0.0, std::sqrt(std::max(0.0, z_front * z_front - x * x)));
+      pl.vertices.push_back(v);
+    }
+    return pl;
+  };
+  drawn.structures[0].lines.polylines = {across(10.0, 9.95)};
+  drawn.structures[1].lines.polylines = {across(5.0, 4.95)};
+  drawn.structures[0].style.families.clear();
+  drawn.structures[1].style.families.clear();
+  auto visible_x = [&](const fabrica::LineSet& ls) {
+    std::vector<double> xs;
+    const fabrica::Projector proj(cam);
+    for (const auto& pl : ls.polylines)
+      for (const auto& v : pl.vertices)
+        if (v.visible) xs.push_back(proj(v.position).pixel.x() - kSize / 2.0);
+    return xs;
+  };
+  const auto off = fr::vector_layers(scene, drawn, cam, kSize);
+  drawn.cutaway.enabled = true;
+  const auto on = fr::vector_layers(scene, drawn, cam, kSize);
+  ASSERT_EQ(off.size(), 2u);
+  ASSERT_EQ(on.size(), 2u);
+  EXPECT_EQ(off[0].role, "context");
+  EXPECT_EQ(visible_x(off[0].lines).size(), 81u);  // the whole context line
+  EXPECT_TRUE(visible_x(off[1].lines).empty());    // the focus hidden by the context
+  // With the cutaway: the context line outside 40 px + margin + fade / 2
+  // (where the smoothstep passes 0.5), within a pixel and a vertex spacing.
+  const auto cut = visible_x(on[0].lines);
+  EXPECT_GT(cut.size(), 10u);
+  EXPECT_LT(cut.size(), 40u);
+  for (double x : cut) EXPECT_GT(std::abs(x), 40.0 + 12.0 + 4.0 - 1.5) << x;
+  EXPECT_EQ(visible_x(on[1].lines).size(), 81u);  // the focus line, all of it
 }
