@@ -1028,6 +1028,10 @@ struct Renderer::Impl {
     j.use();
     j.set("u_input", 0);
     j.set("u_size", static_cast<float>(t.render_w), static_cast<float>(t.render_h));
+    // The picture's pixels in the tile: only they seed (tiling changes nothing).
+    const float ox = static_cast<float>(t.x - t.margin), oy = static_cast<float>(t.y - t.margin);
+    j.set("u_picture", -ox, -oy, static_cast<float>(F.camera.width) - ox,
+          static_cast<float>(F.camera.height) - oy);
     int current = 0;
     auto flood = [&](int step, GLuint input, int into) {
       g.BindFramebuffer(GL_FRAMEBUFFER, cut_seed_fbos[into]);
@@ -1351,7 +1355,13 @@ void Renderer::draw(const Scene& scene, const Camera& camera, const RenderOption
     margin = std::max(
         margin, static_cast<int>(std::ceil(F.lic_kernel.steps * double(F.lic_kernel.step_px))) + 2);
   }
-  if (F.cut) margin = std::max(margin, cutaway_margin(scene.cutaway, F.line_scale));
+  // With a cutaway and several tiles, margins as wide as it reaches (one
+  // tile sees the whole picture: the cut seeds only on the picture's pixels).
+  if (F.cut) {
+    const int one = I.tile_inner_size(options.max_tile_size, margin);
+    if (camera.width > one || camera.height > one)
+      margin = std::max(margin, cutaway_margin(scene.cutaway, F.line_scale));
+  }
   const int inner = I.tile_inner_size(options.max_tile_size, margin);
   const auto tiles = make_tiles(camera.width, camera.height, inner, margin);
 
