@@ -503,18 +503,23 @@ struct Renderer::Impl {
     check_fbo("transparency framebuffer");
   }
 
-  void ensure_depth_b() {
-    if (depthb_fbo != 0) return;
+  // A depth texture of the target size and a framebuffer drawing only into it.
+  void make_depth_target(GLuint& texture, GLuint& fbo, const char* name) {
     const GlFunctions& g = gl();
-    depth_b =
+    texture =
         make_texture(GL_DEPTH_COMPONENT24, GL_DEPTH_COMPONENT, GL_UNSIGNED_INT, target_w, target_h);
-    g.GenFramebuffers(1, &depthb_fbo);
-    g.BindFramebuffer(GL_FRAMEBUFFER, depthb_fbo);
-    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, depth_b, 0);
+    g.GenFramebuffers(1, &fbo);
+    g.BindFramebuffer(GL_FRAMEBUFFER, fbo);
+    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, texture, 0);
     const GLenum none = GL_NONE;
     g.DrawBuffers(1, &none);
     g.ReadBuffer(GL_NONE);
-    check_fbo("depth framebuffer");
+    check_fbo(name);
+  }
+
+  void ensure_depth_b() {
+    if (depthb_fbo != 0) return;
+    make_depth_target(depth_b, depthb_fbo, "depth framebuffer");
   }
 
   void ensure_ar(bool float_target) {
@@ -620,15 +625,7 @@ struct Renderer::Impl {
   void ensure_cutaway() {
     if (cut_fbo != 0) return;
     const GlFunctions& g = gl();
-    cut_depth =
-        make_texture(GL_DEPTH_COMPONENT24, GL_DEPTH_COMPONENT, GL_UNSIGNED_INT, target_w, target_h);
-    g.GenFramebuffers(1, &cut_fbo);
-    g.BindFramebuffer(GL_FRAMEBUFFER, cut_fbo);
-    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, cut_depth, 0);
-    const GLenum none = GL_NONE;
-    g.DrawBuffers(1, &none);
-    g.ReadBuffer(GL_NONE);
-    check_fbo("cutaway depth framebuffer");
+    make_depth_target(cut_depth, cut_fbo, "cutaway depth framebuffer");
     g.GenFramebuffers(2, cut_seed_fbos);
     for (int k = 0; k < 2; ++k) {
       cut_seeds[k] = make_texture(GL_RG32F, GL_RG, GL_FLOAT, target_w, target_h);

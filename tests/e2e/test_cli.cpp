@@ -1072,6 +1072,21 @@ TEST(Render, SmoothFlagAndSceneKey) {
 
 // Surface LIC (issue 21, item 2): --lic, its parameters and the scene keys;
 // bad values exit 2 with a one-line message naming the option or key.
+// `fabrica render` of the aneurysm with each case's extra options exits 2
+// with one line containing the case's text.
+void expect_bad_render_options(
+    const fs::path& dir,
+    const std::vector<std::pair<std::vector<std::string>, std::string>>& bad_cases) {
+  for (const auto& [extra, needle] : bad_cases) {
+    std::vector<std::string> args = {"render", aneurysm().string(), "-o", (dir / "c.png").string()};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const Outcome bad = run_fabrica(args);
+    EXPECT_EQ(bad.code, 2) << describe(bad);
+    EXPECT_TRUE(one_line(bad.err)) << describe(bad);
+    EXPECT_NE(bad.err.find(needle), std::string::npos) << describe(bad);
+  }
+}
+
 TEST(Render, LicFlagAndSceneKeys) {
   if (!has_command("render")) GTEST_SKIP() << "no render command in this build";
   const fs::path dir = work_dir();
@@ -1097,14 +1112,7 @@ TEST(Render, LicFlagAndSceneKeys) {
       {{"--lic", "--lic-noise-scale", "-1"}, "--lic-noise-scale"},
       {{"--lic-length", "4"}, "need --lic"},
       {{"--lic-lenght", "4"}, "--lic-length"}};
-  for (const auto& [extra, needle] : bad_cases) {
-    std::vector<std::string> args = {"render", aneurysm().string(), "-o", (dir / "c.png").string()};
-    args.insert(args.end(), extra.begin(), extra.end());
-    const Outcome bad = run_fabrica(args);
-    EXPECT_EQ(bad.code, 2) << describe(bad);
-    EXPECT_TRUE(one_line(bad.err)) << describe(bad);
-    EXPECT_NE(bad.err.find(needle), std::string::npos) << describe(bad);
-  }
+  expect_bad_render_options(dir, bad_cases);
   const Outcome key =
       run_fabrica({"render", (dir / "bad.json").string(), "-o", (dir / "c.png").string()});
   EXPECT_EQ(key.code, 2) << describe(key);
@@ -1141,14 +1149,7 @@ TEST(Render, CutawayFlagsAndSceneKeys) {
       {{"--cutaway", "--cutaway-margin", "wide"}, "--cutaway-margin"},
       {{"--cutaway-margin", "4"}, "need --cutaway"},
       {{"--cutaway-rim"}, "need --cutaway"}};
-  for (const auto& [extra, needle] : bad_cases) {
-    std::vector<std::string> args = {"render", aneurysm().string(), "-o", (dir / "c.png").string()};
-    args.insert(args.end(), extra.begin(), extra.end());
-    const Outcome bad = run_fabrica(args);
-    EXPECT_EQ(bad.code, 2) << describe(bad);
-    EXPECT_TRUE(one_line(bad.err)) << describe(bad);
-    EXPECT_NE(bad.err.find(needle), std::string::npos) << describe(bad);
-  }
+  expect_bad_render_options(dir, bad_cases);
   const Outcome key =
       run_fabrica({"render", (dir / "bad.json").string(), "-o", (dir / "c.png").string()});
   EXPECT_EQ(key.code, 2) << describe(key);
