@@ -1,22 +1,15 @@
 // The cutaway's distance field by jump flooding (Rong & Tan 2006;
 // docs/algorithms.md §15): every pixel ends with (close to) the nearest
-// focus pixel. u_step 0 seeds from the focus depth (a focus pixel of the
-// picture, not of the tile's margin, is its own seed, others none: -1); each later pass looks at the 3x3 pixels
-// u_step apart and keeps the nearest seed they hold (ties to the first in
-// a fixed order, so the result is deterministic).
-uniform sampler2D u_input;  // step 0: the focus depth; else the seeds
+// focus pixel. cutaway_seed.frag seeds the focus pixels; each pass looks at
+// the 3x3 pixels u_step apart and keeps the nearest seed they hold (ties to
+// the first in a fixed order, so the result is deterministic). The passes
+// run only where no focus is drawn (cutaway_far.vert).
+uniform sampler2D u_input;  // the seeds so far (x < 0: none)
 uniform int u_step;
-uniform vec2 u_size;     // the tile's render size (the target may be larger)
-uniform vec4 u_picture;  // the picture's pixels in the tile: [x0, x1) x [y0, y1) = (x0, y0, x1, y1)
+uniform vec2 u_size;  // the tile's render size (the target may be larger)
 layout(location = 0) out vec2 o_seed;
 void main() {
   ivec2 p = ivec2(gl_FragCoord.xy);
-  if (u_step == 0) {
-    vec2 c = gl_FragCoord.xy;
-    bool inside = c.x >= u_picture.x && c.y >= u_picture.y && c.x < u_picture.z && c.y < u_picture.w;
-    o_seed = inside && texelFetch(u_input, p, 0).r < 1.0 ? vec2(p) : vec2(-1.0);
-    return;
-  }
   vec2 best = vec2(-1.0);
   float best_d = 3.0e38;
   for (int j = -1; j <= 1; ++j) {

@@ -75,19 +75,18 @@ struct PixelRect {
 
 // Pixels the meshes can cover: their bounding spheres' enclosing cubes
 // projected, 2 px wider for rounding; the whole image when a corner is not
-// in front of the eye.
-PixelRect projected_rect(const Matrices& m, const std::vector<const RenderMesh*>& meshes, int width,
-                         int height) {
+// in front of the eye. projected_boxes: the same for boxes.
+PixelRect projected_boxes(const Matrices& m, const std::vector<BoundingBox>& boxes, int width,
+                          int height) {
   const PixelRect whole{0, 0, width, height};
   const Eigen::Matrix4d mvp =
       Eigen::Map<const Eigen::Matrix4f>(m.projection.data()).cast<double>() *
       Eigen::Map<const Eigen::Matrix4f>(m.model_view.data()).cast<double>();
   double lo_x = 1e300, lo_y = 1e300, hi_x = -1e300, hi_y = -1e300;
-  for (const RenderMesh* mesh : meshes) {
+  for (const BoundingBox& box : boxes) {
     for (int corner = 0; corner < 8; ++corner) {
-      const Vec3 p =
-          mesh->center + mesh->radius * Vec3(corner & 1 ? 1.0 : -1.0, corner & 2 ? 1.0 : -1.0,
-                                             corner & 4 ? 1.0 : -1.0);
+      const Vec3 p(corner & 1 ? box.max.x() : box.min.x(), corner & 2 ? box.max.y() : box.min.y(),
+                   corner & 4 ? box.max.z() : box.min.z());
       const Eigen::Vector4d clip = mvp * Eigen::Vector4d(p.x(), p.y(), p.z(), 1.0);
       if (!(clip.w() > 1e-9)) return whole;
       const double x = (0.5 * clip.x() / clip.w() + 0.5) * width;
@@ -97,12 +96,21 @@ PixelRect projected_rect(const Matrices& m, const std::vector<const RenderMesh*>
       lo_y = std::min(lo_y, y), hi_y = std::max(hi_y, y);
     }
   }
-  if (meshes.empty()) return {};
+  if (boxes.empty()) return {};
   auto to_int = [](double v, int lo, int hi) {
     return static_cast<int>(std::clamp(v, static_cast<double>(lo), static_cast<double>(hi)));
   };
   return {to_int(std::floor(lo_x) - 2.0, 0, width), to_int(std::floor(lo_y) - 2.0, 0, height),
           to_int(std::ceil(hi_x) + 2.0, 0, width), to_int(std::ceil(hi_y) + 2.0, 0, height)};
+}
+
+PixelRect projected_rect(const Matrices& m, const std::vector<const RenderMesh*>& meshes, int width,
+                         int height) {
+  std::vector<BoundingBox> boxes;
+  for (const RenderMesh* mesh : meshes)
+    boxes.push_back(
+        {mesh->center - Vec3::Constant(mesh->radius), mesh->center + Vec3::Constant(mesh->radius)});
+  return projected_boxes(m, boxes, width, height);
 }
 
 // `region` in the pixels of tile `t` (render region, margins included),
@@ -170,7 +178,9 @@ struct FrameState {
   PixelRect hybrid_region, lic_region;
   LicKernel lic_kernel;
   float lic_inv_cell = 1.0f;
-  bool cut = false;  // a cutaway with focus and context (pass_cutaway)
+  bool cut = false;            // a cutaway with focus and context (pass_cutaway)
+  PixelRect cut_region;        // the focus's pixels widened by the cutaway's reach
+  bool cut_fade_only = false;  // the transparency pass draws only the cut's fade
 };
 
 void check_size(const Camera& camera) {
@@ -250,6 +260,18 @@ struct Renderer::Impl {
   GLuint cut_seeds[2] = {0, 0}, cut_seed_fbos[2] = {0, 0};
   std::array<float, 3> cut_params{};
   Color cut_rim_color;
+  PixelRect cut_rect;  // F.cut_region in the tile's pixels: where anything can be cut
+
+  // Scissor to cut_rect (the passes that only draw the cut), or off.
+  void cut_scissor(bool on) {
+    if (!on) {
+      gl().Disable(GL_SCISSOR_TEST);
+      return;
+    }
+    gl().Enable(GL_SCISSOR_TEST);
+    gl().Scissor(cut_rect.x0, cut_rect.y0, std::max(0, cut_rect.x1 - cut_rect.x0),
+                 std::max(0, cut_rect.y1 - cut_rect.y0));
+  }
 
   explicit Impl(std::unique_ptr<GlContext> c) : ctx(std::move(c)) {
     ctx->make_current();
@@ -327,8 +349,10 @@ struct Renderer::Impl {
     else if (key == "lic2_value")
       stages = {vs({"fullscreen.vert"}),
                 fs({"lic_stage2.frag"}, {kLicMaxStepsDefine, "LIC_VALUE"})};
+    else if (key == "cut_seed")
+      stages = {vs({"mesh.vert"}), fs({"cutaway_seed.frag"})};
     else if (key == "cut_jfa")
-      stages = {vs({"fullscreen.vert"}), fs({"cutaway_jfa.frag"})};
+      stages = {vs({"cutaway_far.vert"}), fs({"cutaway_jfa.frag"})};
     else
       throw Error(ErrorKind::internal, "unknown program " + key);
     return programs.emplace(key, ShaderProgram(gl(), key, stages)).first->second;
@@ -503,23 +527,18 @@ struct Renderer::Impl {
     check_fbo("transparency framebuffer");
   }
 
-  // A depth texture of the target size and a framebuffer drawing only into it.
-  void make_depth_target(GLuint& texture, GLuint& fbo, const char* name) {
+  void ensure_depth_b() {
+    if (depthb_fbo != 0) return;
     const GlFunctions& g = gl();
-    texture =
+    depth_b =
         make_texture(GL_DEPTH_COMPONENT24, GL_DEPTH_COMPONENT, GL_UNSIGNED_INT, target_w, target_h);
-    g.GenFramebuffers(1, &fbo);
-    g.BindFramebuffer(GL_FRAMEBUFFER, fbo);
-    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, texture, 0);
+    g.GenFramebuffers(1, &depthb_fbo);
+    g.BindFramebuffer(GL_FRAMEBUFFER, depthb_fbo);
+    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, depth_b, 0);
     const GLenum none = GL_NONE;
     g.DrawBuffers(1, &none);
     g.ReadBuffer(GL_NONE);
-    check_fbo(name);
-  }
-
-  void ensure_depth_b() {
-    if (depthb_fbo != 0) return;
-    make_depth_target(depth_b, depthb_fbo, "depth framebuffer");
+    check_fbo("depth framebuffer");
   }
 
   void ensure_ar(bool float_target) {
@@ -625,12 +644,25 @@ struct Renderer::Impl {
   void ensure_cutaway() {
     if (cut_fbo != 0) return;
     const GlFunctions& g = gl();
-    make_depth_target(cut_depth, cut_fbo, "cutaway depth framebuffer");
+    cut_depth =
+        make_texture(GL_DEPTH_COMPONENT24, GL_DEPTH_COMPONENT, GL_UNSIGNED_INT, target_w, target_h);
+    for (GLuint& seeds : cut_seeds)
+      seeds = make_texture(GL_RG32F, GL_RG, GL_FLOAT, target_w, target_h);
+    // The focus pass: its depth and its seeds in both targets.
+    g.GenFramebuffers(1, &cut_fbo);
+    g.BindFramebuffer(GL_FRAMEBUFFER, cut_fbo);
+    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, cut_depth, 0);
+    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, cut_seeds[0], 0);
+    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, cut_seeds[1], 0);
+    const GLenum both[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+    g.DrawBuffers(2, both);
+    check_fbo("cutaway focus framebuffer");
+    // The flood passes: one target each, depth-tested against the focus.
     g.GenFramebuffers(2, cut_seed_fbos);
     for (int k = 0; k < 2; ++k) {
-      cut_seeds[k] = make_texture(GL_RG32F, GL_RG, GL_FLOAT, target_w, target_h);
       g.BindFramebuffer(GL_FRAMEBUFFER, cut_seed_fbos[k]);
       g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, cut_seeds[k], 0);
+      g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, cut_depth, 0);
       check_fbo("cutaway distance framebuffer");
     }
   }
@@ -955,6 +987,8 @@ struct Renderer::Impl {
     const GlFunctions& g = gl();
     ensure_oit();
     g.BindFramebuffer(GL_FRAMEBUFFER, oit_fbo);
+    // Only the fade of a cut to draw (no ghosted structure): only there.
+    cut_scissor(F.cut_fade_only);
     const float zero[4] = {0, 0, 0, 0};
     g.ClearBufferfv(GL_COLOR, 0, zero);
     g.ClearBufferfv(GL_COLOR, 1, zero);
@@ -972,8 +1006,10 @@ struct Renderer::Impl {
         continue;
       set_shading(p, s.style, static_cast<float>(s.style.opacity));
       set_clip(p, clipped(F, s), cut(F, s));
+      cut_scissor(F.cut_fade_only || opaque(s));
       draw_mesh(*F.gpu[i]);
     }
+    cut_scissor(F.cut_fade_only);
     g.Disable(GL_CLIP_DISTANCE0);
     g.BindFramebuffer(GL_FRAMEBUFFER, overlay_fbo);
     set_state_overlay();
@@ -986,6 +1022,7 @@ struct Renderer::Impl {
     c.set("u_accum", 0);
     c.set("u_reveal", 1);
     draw_fullscreen();
+    cut_scissor(false);
     g.ActiveTexture(GL_TEXTURE0);
   }
 
@@ -1003,32 +1040,42 @@ struct Renderer::Impl {
     cut_params = {static_cast<float>(c.margin_px * scale), static_cast<float>(c.fade_px * scale),
                   static_cast<float>(c.rim ? kCutawayRimPx * scale : 0.0)};
     cut_rim_color = c.rim_color;
+    const int ox = t.x - t.margin, oy = t.y - t.margin;
+    cut_rect = {std::max(0, F.cut_region.x0 - ox), std::max(0, F.cut_region.y0 - oy),
+                std::min(t.render_w, F.cut_region.x1 - ox),
+                std::min(t.render_h, F.cut_region.y1 - oy)};
     for (int unit : {kCutSeedUnit, kCutDepthUnit}) {  // drawn into below
       g.ActiveTexture(static_cast<GLenum>(GL_TEXTURE0 + unit));
       g.BindTexture(GL_TEXTURE_2D, 0);
     }
     g.ActiveTexture(GL_TEXTURE0);
+    // The focus's depth, and its pixels as seeds in both targets (no seed
+    // elsewhere).
     g.BindFramebuffer(GL_FRAMEBUFFER, cut_fbo);
     g.Viewport(0, 0, t.render_w, t.render_h);
     set_state_opaque();
     g.ClearDepth(1.0);
     g.Clear(GL_DEPTH_BUFFER_BIT);
-    const ShaderProgram& d = program("depth");
+    const float none[4] = {-1.0f, -1.0f, 0.0f, 0.0f};
+    g.ClearBufferfv(GL_COLOR, 0, none);
+    g.ClearBufferfv(GL_COLOR, 1, none);
+    const ShaderProgram& d = program("cut_seed");
     d.use();
     set_common(d, F.M, t);
     set_clip(d, false, false);
+    // The picture's pixels in the tile: only they seed (tiling changes nothing).
+    d.set("u_picture", static_cast<float>(-ox), static_cast<float>(-oy),
+          static_cast<float>(F.camera.width - ox), static_cast<float>(F.camera.height - oy));
     for (std::size_t i = 0; i < F.scene.structures.size(); ++i)
       if (F.scene.structures[i].role == Role::focus) draw_mesh(*F.gpu[i]);
-    g.Disable(GL_DEPTH_TEST);
+    // The flood: inside cut_rect, where no focus is drawn (depth 1).
+    g.DepthFunc(GL_EQUAL);
     g.DepthMask(GL_FALSE);
+    cut_scissor(true);
     const ShaderProgram& j = program("cut_jfa");
     j.use();
     j.set("u_input", 0);
     j.set("u_size", static_cast<float>(t.render_w), static_cast<float>(t.render_h));
-    // The picture's pixels in the tile: only they seed (tiling changes nothing).
-    const float ox = static_cast<float>(t.x - t.margin), oy = static_cast<float>(t.y - t.margin);
-    j.set("u_picture", -ox, -oy, static_cast<float>(F.camera.width) - ox,
-          static_cast<float>(F.camera.height) - oy);
     int current = 0;
     auto flood = [&](int step, GLuint input, int into) {
       g.BindFramebuffer(GL_FRAMEBUFFER, cut_seed_fbos[into]);
@@ -1037,11 +1084,13 @@ struct Renderer::Impl {
       draw_fullscreen();
       current = into;
     };
-    flood(0, cut_depth, 0);
     int step = 1;
     while (2.0 * step <= cutaway_reach(c, scale)) step *= 2;
     for (; step >= 1; step /= 2) flood(step, cut_seeds[current], 1 - current);
     flood(1, cut_seeds[current], 1 - current);
+    cut_scissor(false);
+    g.DepthFunc(GL_LESS);
+    g.Disable(GL_DEPTH_TEST);
     g.BindTexture(GL_TEXTURE_2D, 0);
     g.ActiveTexture(static_cast<GLenum>(GL_TEXTURE0 + kCutSeedUnit));
     g.BindTexture(GL_TEXTURE_2D, cut_seeds[current]);
@@ -1336,7 +1385,10 @@ void Renderer::draw(const Scene& scene, const Camera& camera, const RenderOption
     }
   }
   F.cut = cutaway_applies(scene);
-  if (F.cut) F.any_transparent = true;  // the fade of a cut is blended (pass_transparent)
+  if (F.cut) {  // the fade of a cut is blended (pass_transparent)
+    F.cut_fade_only = !F.any_transparent;
+    F.any_transparent = true;
+  }
   F.batches = I.upload_lines(scene);
   for (const auto& b : F.batches)
     if (!Impl::opaque(scene.structures[b.structure])) F.lines_need_depth_b = true;
@@ -1374,6 +1426,23 @@ void Renderer::draw(const Scene& scene, const Camera& camera, const RenderOption
     F.hybrid_region = region_of([](const Structure& s) { return s.style.hybrid_apparent_ridges; });
   if (F.any_lic)
     F.lic_region = region_of([](const Structure& s) { return s.style.lic && Impl::opaque(s); });
+  if (F.cut) {  // the focus's vertices' box: tighter than its sphere
+    std::vector<BoundingBox> boxes;
+    for (const auto& s : scene.structures) {
+      if (s.role != Role::focus) continue;
+      const std::vector<float>& p = s.mesh->positions;
+      BoundingBox b{Vec3::Constant(1e300), Vec3::Constant(-1e300)};
+      for (std::size_t i = 0; i + 2 < p.size(); i += 3) {
+        const Vec3 v(p[i], p[i + 1], p[i + 2]);
+        b.min = b.min.cwiseMin(v);
+        b.max = b.max.cwiseMax(v);
+      }
+      boxes.push_back(b);
+    }
+    const PixelRect r = projected_boxes(F.M, boxes, camera.width, camera.height);
+    const int reach = static_cast<int>(std::ceil(cutaway_reach(scene.cutaway, F.line_scale))) + 2;
+    F.cut_region = {r.x0 - reach, r.y0 - reach, r.x1 + reach, r.y1 + reach};
+  }
 
   if (blit != nullptr && tiles.size() != 1)
     throw InputError("render_to_framebuffer: the picture must fit one tile (" +
