@@ -1,5 +1,6 @@
 // Surface LIC, stage 2 (docs/algorithms.md §14): the line integral
-// convolution of stage 1's noise along its direction field, from the pixel
+// convolution of stage 1's noise along its direction field (RGBA8: the
+// direction as dir * 0.5 + 0.5, decoded as 2 x - 1), from the pixel
 // both ways, u_steps steps of u_step pixels each (Euler; each step takes the
 // direction of the texel it lands on, its sign aligned with the previous
 // one), stopping at the target's edge or where the mask is 0; Hann weights
@@ -23,14 +24,14 @@ void main() {
   float sum = c.z, wsum = 1.0;
   for (int side = 0; side < 2; ++side) {
     vec2 p = gl_FragCoord.xy;
-    vec2 d = side == 0 ? c.xy : -c.xy;
+    vec2 d = side == 0 ? 2.0 * c.xy - 1.0 : 1.0 - 2.0 * c.xy;
     for (int i = 1; i <= u_steps; ++i) {
       p += u_step * d;
       ivec2 q = ivec2(floor(p));
       if (q.x < 0 || q.y < 0 || q.x >= size.x || q.y >= size.y) break;
       vec4 s = texelFetch(u_data, q, 0);
       if (!(s.a > 0.0)) break;
-      vec2 nd = s.xy;
+      vec2 nd = 2.0 * s.xy - 1.0;
       if (dot(nd, d) < 0.0) nd = -nd;
       d = nd;
       float w = u_weights[i - 1];

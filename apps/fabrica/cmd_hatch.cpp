@@ -12,8 +12,10 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "cli_common.hpp"
@@ -38,32 +40,21 @@ struct HatchArgs {
   std::string mesh;
   std::string camera_file;
   std::string view;
-  std::string light = "eye";
   std::string size;
   std::string space;
   std::string output;
   std::string with_lines;
   std::string frame;
-  double threshold = 1.0;
-  int grid_depth = -1;
-  int seed_depth = -1;
-  bool uniform_depth = false;
-  double stroke_width = 1.0;
-  double max_length = 0.0;
-  std::optional<double> min_length;  ///< default 1 (shading), 8 (confis)
-  // ConFIS (--method confis)
-  double contour_margin = 0.3;
-  double convex_threshold = 0.1;
-  double concave_threshold = 0.1;
-  double umbilic_threshold = 0.01;
-  double spacing = 6.0;
-  double min_weight = 0.15;
-  bool no_contours = false;
-  bool no_features = false;
-  /// Options of the other method that were given (an error).
-  std::vector<std::string> misplaced;
-  bool no_ridge_removal = false;
-  double ridge_angle = 20.0;
+  /// The method's options, bound to the flags (their defaults are the
+  /// option structs' own: hatching::HatchingOptions, hatching::ConfisOptions;
+  /// --stroke-width, --min-length and --max-length set both methods').
+  DrawHatchingOptions drawing;
+  /// The flags given on the command line (e.g. "--spacing"): a scene's
+  /// structures[].hatching keys yield to them.
+  std::set<std::string> given;
+  /// The method-specific flags given, per method (an error when no
+  /// structure is hatched with that method).
+  std::vector<std::string> confis_given, shading_given;
   bool draw_ridges = false;
   double line_width = 1.5;
   bool transparent = false;
@@ -142,7 +133,7 @@ std::vector<hatching::SvgLayer> feature_line_layers(const Surface& surface, cons
 /// --with-lines at --line-width in image pixels; a scene's keep their scene
 /// style. Returns the backend's name.
 std::string write_hatching_png(const HatchArgs& args, const render::SceneSurfaces& scene,
-                               const Camera& camera,
+                               render::Scene drawn, const Camera& camera,
                                const std::vector<std::optional<hatching::StrokeSet>>& strokes,
                                bool mesh_lines) {
   const render::HeadlessOptions headless = render::headless_options(args.backend);
@@ -162,7 +153,6 @@ std::string write_hatching_png(const HatchArgs& args, const render::SceneSurface
     style.fade_by_strength = false;
     return style;
   };
-  render::Scene drawn = render::build_scene(scene, camera);
   for (std::size_t i = 0; i < drawn.structures.size(); ++i) {
     if (!strokes[i]) continue;
     render::Structure& structure = drawn.structures[i];
@@ -178,9 +168,12 @@ std::string write_hatching_png(const HatchArgs& args, const render::SceneSurface
         if (it == by_weight.end()) {
           const float w = static_cast<float>(run.weight);
           it = by_weight
-                   .emplace(run.weight,
-                            render::PolylineLayer{
-                                "strokes", plain(args.stroke_width * run.weight, {0, 0, 0, w}), {}})
+                   .emplace(
+                       run.weight,
+                       render::PolylineLayer{
+                           "strokes",
+                           plain(args.drawing.hatching.stroke_width_px * run.weight, {0, 0, 0, w}),
+                           {}})
                    .first;
         }
         std::vector<Vec3> points;
@@ -192,7 +185,7 @@ std::string write_hatching_png(const HatchArgs& args, const render::SceneSurface
     for (auto& [weight, layer] : by_weight) structure.polyline_layers.push_back(std::move(layer));
     if (args.draw_ridges) {
       render::PolylineLayer ridges{
-          "ridges", plain(args.stroke_width, {0.84f, 0.15f, 0.16f, 1}), {}};
+          "ridges", plain(args.drawing.hatching.stroke_width_px, {0.84f, 0.15f, 0.16f, 1}), {}};
       for (const auto& r : strokes[i]->ridges)
         ridges.polylines.push_back({r[0].position, r[1].position});
       structure.polyline_layers.push_back(std::move(ridges));
@@ -225,8 +218,8 @@ std::string write_hatching_png(const HatchArgs& args, const render::SceneSurface
 /// them) as layers of the hatching SVG: each structure's visible runs in its
 /// line colour at its width in image pixels.
 std::vector<hatching::SvgLayer> scene_line_layers(const render::SceneSurfaces& scene,
+                                                  const render::Scene& drawn,
                                                   const Camera& camera) {
-  const render::Scene drawn = render::build_scene(scene, camera);
   std::vector<hatching::SvgLayer> out;
   for (const LineLayer& layer : render::vector_layers(scene, drawn, camera)) {
     hatching::SvgLayer svg;
@@ -269,12 +262,53 @@ hatching::StrokeSet merged_strokes(const std::vector<std::optional<hatching::Str
   return all;
 }
 
+/// Structure `index`'s hatching options: the command line's, with the
+/// scene's structures[].hatching keys for the flags not given (docs/scene.md).
+DrawHatchingOptions structure_hatching(const HatchArgs& args, const DrawHatchingOptions& base,
+                                       const render::SceneSpec& spec, std::size_t index) {
+  const render::HatchingSpec& h = spec.structures[index].hatching_options;
+  DrawHatchingOptions o = base;
+  auto given = [&](const std::string& key) {
+    std::string flag = "--" + key;
+    std::replace(flag.begin(), flag.end(), '_', '-');
+    return args.given.count(flag) > 0;
+  };
+  if (!h.method.empty() && !given("method")) o.method = parse_hatching_method(h.method);
+  hatching::ConfisOptions& c = o.confis;
+  const std::map<std::string, double*> confis_numbers = {
+      {"contour_margin", &c.contour_margin},
+      {"convex_threshold", &c.feature_regions.convex_threshold},
+      {"concave_threshold", &c.feature_regions.concave_threshold},
+      {"umbilic_threshold", &c.field.umbilic_threshold},
+      {"spacing", &c.spacing_px},
+      {"min_weight", &c.min_weight}};
+  const std::map<std::string, std::pair<double*, double*>> common = {
+      {"min_length", {&o.hatching.min_length_px, &c.min_length_px}},
+      {"max_length", {&o.hatching.max_length_px, &c.max_length_px}}};
+  const std::string where = "structures[" + std::to_string(index) + "].hatching.";
+  for (const auto& [key, value] : h.numbers) {
+    if (o.method != HatchingMethod::confis && confis_numbers.count(key))
+      throw InputError(where + key + ": only for method confis (structure \"" +
+                       spec.structures[index].name + "\" is hatched with " + to_string(o.method) +
+                       ")");
+    if (given(key)) continue;
+    if (const auto it = confis_numbers.find(key); it != confis_numbers.end()) *it->second = value;
+    if (const auto it = common.find(key); it != common.end())
+      *it->second.first = *it->second.second = value;
+  }
+  for (const auto& [key, value] : h.flags) {
+    if (o.method != HatchingMethod::confis)
+      throw InputError(where + key + ": only for method confis (structure \"" +
+                       spec.structures[index].name + "\" is hatched with " + to_string(o.method) +
+                       ")");
+    if (given(key)) continue;
+    (key == "no_contours" ? c.contours : c.features) = !value;
+  }
+  return o;
+}
+
 int run_hatch(const HatchArgs& args) {
   const HatchingMethod method = parse_hatching_method(args.method);
-  for (const std::string& option : args.misplaced)
-    throw InputError(option + ": only for --method " +
-                     (method == HatchingMethod::confis ? "shading" : "confis") +
-                     " (this run uses --method " + to_string(method) + ")");
   std::unique_ptr<tbb::global_control> threads;
   if (args.threads > 0)
     threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
@@ -287,31 +321,8 @@ int run_hatch(const HatchArgs& args) {
   if (!(args.line_width > 0.0) || !std::isfinite(args.line_width))
     throw InputError("--line-width: must be a positive number of pixels");
 
-  DrawHatchingOptions drawing;
+  DrawHatchingOptions drawing = args.drawing;
   drawing.method = method;
-  drawing.light = args.light;
-  hatching::ConfisOptions& confis = drawing.confis;
-  confis.contour_margin = args.contour_margin;
-  confis.contours = !args.no_contours;
-  confis.features = !args.no_features;
-  confis.feature_regions.convex_threshold = args.convex_threshold;
-  confis.feature_regions.concave_threshold = args.concave_threshold;
-  confis.field.umbilic_threshold = args.umbilic_threshold;
-  confis.spacing_px = args.spacing;
-  confis.min_weight = args.min_weight;
-  confis.stroke_width_px = args.stroke_width;
-  confis.max_length_px = args.max_length;
-  if (args.min_length) confis.min_length_px = *args.min_length;
-  hatching::HatchingOptions& options = drawing.hatching;
-  options.intensity_threshold = args.threshold;
-  options.grid_depth = args.grid_depth;
-  options.seed_depth = args.seed_depth;
-  options.adaptive_depth = !args.uniform_depth;
-  options.stroke_width_px = args.stroke_width;
-  options.max_length_px = args.max_length;
-  options.min_length_px = args.min_length.value_or(1.0);
-  options.ridge_removal = !args.no_ridge_removal;
-  options.ridges.min_angle_deg = args.ridge_angle;
 
   // What is hatched: a mesh (one focus structure, prepared as `fabrica
   // lines` prepares it, oriented outward unless --keep-orientation; cached
@@ -360,23 +371,43 @@ int run_hatch(const HatchArgs& args) {
                                                   args.size, {800, 800}, args.mesh);
   const Camera& camera = chosen.camera;
 
+  // Each hatched structure's options (a scene's structures[].hatching) and
+  // the methods in use: flags of a method no structure uses are an error.
+  std::vector<std::optional<DrawHatchingOptions>> per_options(scene.surfaces.size());
+  bool uses[2] = {false, false};
+  for (std::size_t i = 0; i < scene.surfaces.size(); ++i) {
+    if (scene_input && !scene.spec.structures[i].hatched()) continue;
+    per_options[i] = scene_input ? structure_hatching(args, drawing, scene.spec, i) : drawing;
+    uses[per_options[i]->method == HatchingMethod::confis] = true;
+  }
+  for (const auto& [used, options, name] : {std::tuple{uses[1], &args.confis_given, "confis"},
+                                            std::tuple{uses[0], &args.shading_given, "shading"}})
+    if (!used && !options->empty())
+      throw InputError(options->front() + ": only for --method " + name + " (this run uses " +
+                       (uses[1] ? "confis" : "shading") +
+                       (scene_input ? " for every hatched structure)" : ")"));
+  const char* methods = uses[0] && uses[1] ? "shading and confis" : uses[1] ? "confis" : "shading";
+
   std::vector<std::optional<hatching::StrokeSet>> per_structure(scene.surfaces.size());
   for (std::size_t i = 0; i < scene.surfaces.size(); ++i)
-    if (!scene_input || scene.spec.structures[i].hatched())
-      per_structure[i] = draw_hatching(*scene.surfaces[i], camera, drawing);
+    if (per_options[i])
+      per_structure[i] = draw_hatching(*scene.surfaces[i], camera, *per_options[i]);
   const hatching::StrokeSet strokes = merged_strokes(per_structure, camera);
 
+  // The scene for the PNG or a scene's SVG lines, built once.
+  render::Scene drawn;
+  if (ext == ".png" || scene_input) drawn = render::build_scene(scene, camera);
   std::string via;
   if (ext == ".png") {
-    via = write_hatching_png(args, scene, camera, per_structure, !scene_input);
+    via = write_hatching_png(args, scene, std::move(drawn), camera, per_structure, !scene_input);
   } else {
     const std::vector<hatching::SvgLayer> layers =
-        scene_input ? scene_line_layers(scene, camera)
+        scene_input ? scene_line_layers(scene, drawn, camera)
         : args.with_lines.empty()
             ? std::vector<hatching::SvgLayer>{}
             : feature_line_layers(*scene.surfaces[0], camera, args.with_lines, args.line_width);
     hatching::SvgStyle style;
-    style.stroke_width_px = args.stroke_width;
+    style.stroke_width_px = args.drawing.hatching.stroke_width_px;
     style.draw_ridges = args.draw_ridges;
     style.background = !(args.transparent || scene.spec.transparent);
     hatching::write_hatching_svg(args.output, strokes, style, layers);
@@ -387,9 +418,9 @@ int run_hatch(const HatchArgs& args) {
     std::printf(
         "%s: %s, %zu strokes (%zu vertices), %zu seeds tried of %zu candidates, %zu ridge "
         "segments; grid depth %d, seed depth %d%s%s\n",
-        args.output.c_str(), to_string(method), strokes.strokes.size(), vertices,
-        strokes.stats.seeds, strokes.stats.candidates, strokes.ridges.size(), strokes.grid_depth,
-        strokes.seed_depth, via.empty() ? "" : "; rendered via ", via.c_str());
+        args.output.c_str(), methods, strokes.strokes.size(), vertices, strokes.stats.seeds,
+        strokes.stats.candidates, strokes.ridges.size(), strokes.grid_depth, strokes.seed_depth,
+        via.empty() ? "" : "; rendered via ", via.c_str());
   }
   if (!args.quiet) {
     std::printf("  stroke ends:");
@@ -435,27 +466,45 @@ void add_hatch_command(CLI::App& app, Action& action) {
       "Coordinate space of the mesh for --view: lps or ras (default: file tag, else LPS)");
   cmd->add_option("--size", args->size,
                   "Image size WxH in pixels (default 800x800, or the camera's)");
-  cmd->add_option("--light", args->light,
+  DrawHatchingOptions& d = args->drawing;
+  hatching::HatchingOptions& shading = d.hatching;
+  hatching::ConfisOptions& confis = d.confis;
+  // A length or width flag sets both methods' value.
+  auto both = [args](double hatching::HatchingOptions::*s, double hatching::ConfisOptions::*c) {
+    return [args, s, c](double v) {
+      args->drawing.hatching.*s = v;
+      args->drawing.confis.*c = v;
+    };
+  };
+  cmd->add_option("--light", d.light,
                   "Light: eye (default), dir:X,Y,Z (world, towards the light), view:X,Y,Z (x "
                   "right, y up, z to the "
                   "viewer), point:X,Y,Z (world mm)");
-  cmd->add_option("--threshold", args->threshold,
+  cmd->add_option("--threshold", shading.intensity_threshold,
                   "Strokes stop where the intensity exceeds this (1 = no threshold)");
-  cmd->add_option("--grid-depth", args->grid_depth,
+  cmd->add_option("--grid-depth", shading.grid_depth,
                   "Deepest proximity-grid level (default: 20 at 800 px, +2 per doubling)");
-  cmd->add_option("--seed-depth", args->seed_depth,
+  cmd->add_option("--seed-depth", shading.seed_depth,
                   "Deepest seeding level (default: grid depth - 2)");
-  cmd->add_flag("--uniform-depth", args->uniform_depth,
-                "Truncate every stroke at the grid depth, whatever the tone");
-  cmd->add_option("--stroke-width", args->stroke_width,
-                  "Stroke width in pixels (also sets the density)");
-  cmd->add_option("--max-length", args->max_length,
-                  "Maximum stroke length in pixels (0 = no limit)");
-  cmd->add_option("--min-length", args->min_length,
-                  "Drop strokes shorter than this many pixels (default 1; confis 8)");
-  cmd->add_flag("--no-ridge-removal", args->no_ridge_removal,
-                "Do not keep strokes away from intensity ridges");
-  cmd->add_option("--ridge-angle", args->ridge_angle,
+  cmd->add_flag_callback(
+      "--uniform-depth", [args] { args->drawing.hatching.adaptive_depth = false; },
+      "Truncate every stroke at the grid depth, whatever the tone");
+  cmd->add_option_function<double>(
+      "--stroke-width",
+      both(&hatching::HatchingOptions::stroke_width_px, &hatching::ConfisOptions::stroke_width_px),
+      "Stroke width in pixels (also sets the density)");
+  cmd->add_option_function<double>(
+      "--max-length",
+      both(&hatching::HatchingOptions::max_length_px, &hatching::ConfisOptions::max_length_px),
+      "Maximum stroke length in pixels (0 = no limit)");
+  cmd->add_option_function<double>(
+      "--min-length",
+      both(&hatching::HatchingOptions::min_length_px, &hatching::ConfisOptions::min_length_px),
+      "Drop strokes shorter than this many pixels (default 1; confis 8)");
+  cmd->add_flag_callback(
+      "--no-ridge-removal", [args] { args->drawing.hatching.ridge_removal = false; },
+      "Do not keep strokes away from intensity ridges");
+  cmd->add_option("--ridge-angle", shading.ridges.min_angle_deg,
                   "Intensity ridges only where the gradients at an edge's ends differ by at "
                   "least this many degrees (default 20, the paper's)");
   cmd->add_flag("--draw-ridges", args->draw_ridges,
@@ -473,27 +522,29 @@ void add_hatch_command(CLI::App& app, Action& action) {
                   "else EGL then OSMesa)");
   // ConFIS (--method confis; docs/confis.md).
   std::vector<CLI::Option*> confis_only{
-      cmd->add_option("--contour-margin", args->contour_margin,
+      cmd->add_option("--contour-margin", confis.contour_margin,
                       "confis: width of the contour margin on n.v, in (0, 1] (default 0.3): "
                       "streamlines where 0 <= n.v < this"),
-      cmd->add_option("--convex-threshold", args->convex_threshold,
+      cmd->add_option("--convex-threshold", confis.feature_regions.convex_threshold,
                       "confis: feature regions where k1 * feature size >= this (strongly convex; "
                       "default 0.1)"),
-      cmd->add_option("--concave-threshold", args->concave_threshold,
+      cmd->add_option("--concave-threshold", confis.feature_regions.concave_threshold,
                       "confis: feature regions where k1 * feature size <= -this (strongly "
                       "concave; default 0.1)"),
-      cmd->add_option("--umbilic-threshold", args->umbilic_threshold,
+      cmd->add_option("--umbilic-threshold", confis.field.umbilic_threshold,
                       "confis: umbilic (no direction, no feature region) where |k1 - k2| * "
                       "feature size < this (default 0.01)"),
-      cmd->add_option("--spacing", args->spacing,
+      cmd->add_option("--spacing", confis.spacing_px,
                       "confis: distance between streamlines in pixels (default 6)"),
-      cmd->add_option("--min-weight", args->min_weight,
+      cmd->add_option("--min-weight", confis.min_weight,
                       "confis: width and opacity factor at the masks' borders, in [0, 1] "
                       "(default 0.15)"),
-      cmd->add_flag("--no-contours", args->no_contours,
-                    "confis: no streamlines in the contour margin"),
-      cmd->add_flag("--no-features", args->no_features,
-                    "confis: no streamlines in the feature regions")};
+      cmd->add_flag_callback(
+          "--no-contours", [args] { args->drawing.confis.contours = false; },
+          "confis: no streamlines in the contour margin"),
+      cmd->add_flag_callback(
+          "--no-features", [args] { args->drawing.confis.features = false; },
+          "confis: no streamlines in the feature regions")};
   std::vector<CLI::Option*> shading_only;
   for (const char* name :
        {"--light", "--threshold", "--grid-depth", "--seed-depth", "--uniform-depth",
@@ -504,13 +555,18 @@ void add_hatch_command(CLI::App& app, Action& action) {
   cmd->add_flag("--keep-orientation", args->keep_orientation,
                 "Do not re-orient the mesh outward before hatching");
   cmd->add_flag("-q,--quiet", args->quiet, "No summary line");
-  cmd->callback([args, &action, confis_only, shading_only] {
+  cmd->callback([args, cmd, &action, confis_only, shading_only] {
     // Options of the other method are an error (run_hatch names them once
     // --method is known to be valid).
-    args->misplaced.clear();
-    const bool confis = lower(args->method) == "confis";
-    for (CLI::Option* o : confis ? shading_only : confis_only)
-      if (o->count() > 0) args->misplaced.push_back(o->get_name());
+    args->given.clear();
+    args->confis_given.clear();
+    args->shading_given.clear();
+    for (const CLI::Option* o : cmd->get_options())
+      if (o->count() > 0) args->given.insert(o->get_name());
+    for (CLI::Option* o : confis_only)
+      if (o->count() > 0) args->confis_given.push_back(o->get_name());
+    for (CLI::Option* o : shading_only)
+      if (o->count() > 0) args->shading_given.push_back(o->get_name());
     action = [args] { return run_hatch(*args); };
   });
 }

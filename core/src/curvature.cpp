@@ -12,11 +12,16 @@
 #include <tbb/parallel_invoke.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <limits>
+#include <string>
 #include <vector>
 
+#include "curvature_fit_kernel.hpp"
 #include "curvature_internal.hpp"
+#include "fabrica/core/error.hpp"
 #include "fabrica/core/geometry.hpp"
 #include "geometry_kernels.hpp"
 
@@ -26,34 +31,6 @@ namespace {
 
 constexpr std::size_t kFaceGrain = 2048;
 constexpr std::size_t kVertexGrain = 1024;
-
-/// Solves the symmetric tridiagonal system with diagonal `diag` and
-/// off-diagonal `off` (off[i] = A[i][i+1]) by LDLᵀ without pivoting (the
-/// normal equations of both per-face fits are tridiagonal). Returns false
-/// when a pivot is not clearly positive (rank-deficient fit).
-template <int N>
-bool solve_spd_tridiagonal(const double (&diag)[N], const double (&off)[N - 1],
-                           const double (&b)[N], double (&x)[N]) {
-  double max_diag = 0.0;
-  for (int i = 0; i < N; ++i) max_diag = std::max(max_diag, diag[i]);
-  if (!(max_diag > 0.0)) return false;
-  const double tiny = 1e-12 * max_diag;
-  double inv_d[N], l[N], y[N];
-  double d = diag[0];
-  if (!(d > tiny)) return false;
-  inv_d[0] = 1.0 / d;
-  y[0] = b[0];
-  for (int i = 1; i < N; ++i) {
-    l[i] = off[i - 1] * inv_d[i - 1];
-    d = diag[i] - l[i] * off[i - 1];
-    if (!(d > tiny)) return false;
-    inv_d[i] = 1.0 / d;
-    y[i] = b[i] - l[i] * y[i - 1];
-  }
-  x[N - 1] = y[N - 1] * inv_d[N - 1];
-  for (int i = N - 2; i >= 0; --i) x[i] = y[i] * inv_d[i] - l[i + 1] * x[i + 1];
-  return true;
-}
 
 /// Second fundamental form of principal values k1, k2 whose e1 has unit
 /// coordinates (c, s) in some frame: k1 (c,s)(c,s)ᵀ + k2 (-s,c)(-s,c)ᵀ.
@@ -76,26 +53,6 @@ inline void cubic_reexpress(const double (&C)[4], const Vec2& x, const Vec2& y, 
   out[1] = xx1 * y1 + xx2 * y2;
   out[2] = yy1 * x1 + yy2 * x2;
   out[3] = yy1 * y1 + yy2 * y2;
-}
-
-/// Coordinates, in the face frame (t, b), of the vertex tangent vectors x
-/// and y after the minimal rotation from the vertex plane (normal n) into
-/// the face plane (normal nT). Uses R x . t = x . t - (nT . x)(n . t)/(1+c),
-/// which follows from R x = x - (nT . x)/(1+c) (n + nT) and t, b _|_ nT.
-struct FrameInFace {
-  double x1, x2, y1, y2;
-};
-inline FrameInFace frame_in_face(const Vec3& x, const Vec3& y, const Vec3& n, const Vec3& nT,
-                                 const Vec3& t, const Vec3& b) {
-  const double c = n.dot(nT);
-  if (!(c > -1.0 + 1e-12)) {
-    const Vec3 rx = detail::rotate_tangent(x, n, nT), ry = detail::rotate_tangent(y, n, nT);
-    return {rx.dot(t), rx.dot(b), ry.dot(t), ry.dot(b)};
-  }
-  const double s = 1.0 / (1.0 + c);
-  const double nt = n.dot(t) * s, nb = n.dot(b) * s;
-  const double xn = nT.dot(x), yn = nT.dot(y);
-  return {x.dot(t) - xn * nt, x.dot(b) - xn * nb, y.dot(t) - yn * nt, y.dot(b) - yn * nb};
 }
 
 }  // namespace
@@ -167,61 +124,6 @@ void vertex_frame(const TriangleMesh& mesh, const Topology& topo, std::size_t vt
   v = n.cross(u);
 }
 
-namespace {
-
-/// The least-squares fit of II on one face (docs/algorithms.md §2.1), in the
-/// frame (t, b = nT x t); false if the normal equations are singular.
-inline bool fit_second_fundamental_form(const Vec3 (&e)[3], const Vec3* const (&n)[3],
-                                        const Vec3& t, const Vec3& b, double (&x)[3]) {
-  // Per edge j (head corner j+2, tail j+1): e u + f v = dn.t, f u + g v = dn.b.
-  double suu = 0, suv = 0, svv = 0, r0 = 0, r1 = 0, r2 = 0;
-  for (int j = 0; j < 3; ++j) {
-    const double u = e[j].dot(t), v = e[j].dot(b);
-    const Vec3 dn = *n[(j + 2) % 3] - *n[(j + 1) % 3];
-    const double dnt = dn.dot(t), dnb = dn.dot(b);
-    suu += u * u;
-    suv += u * v;
-    svv += v * v;
-    r0 += u * dnt;
-    r1 += v * dnt + u * dnb;
-    r2 += v * dnb;
-  }
-  // Normal equations [[suu, suv, 0], [suv, suu + svv, suv], [0, suv, svv]].
-  const double diag[3] = {suu, suu + svv, svv};
-  const double off[2] = {suv, suv};
-  const double rhs[3] = {r0, r1, r2};
-  return solve_spd_tridiagonal<3>(diag, off, rhs, x);
-}
-
-/// The least-squares fit of C on one face (§2.3) from the three vertices'
-/// II in the face frame.
-inline bool fit_curvature_derivative(const Vec3 (&e)[3], const TangentTensor2 (&II)[3],
-                                     const Vec3& t, const Vec3& b, double (&x)[4]) {
-  // Per edge: de = a u + b v, df = b u + c v (counted twice), dg = c u + d v.
-  // The normal equations are tridiagonal:
-  // [[uu, uv, 0, 0], [uv, vv + 2uu, 2uv, 0], [0, 2uv, 2vv + uu, uv], [0, 0, uv, vv]].
-  double suu = 0, suv = 0, svv = 0;
-  double rhs[4] = {0.0, 0.0, 0.0, 0.0};
-  for (int j = 0; j < 3; ++j) {
-    const double u = e[j].dot(t), v = e[j].dot(b);
-    const TangentTensor2& h = II[(j + 2) % 3];
-    const TangentTensor2& l = II[(j + 1) % 3];
-    const double de = h.xx - l.xx, df = h.xy - l.xy, dg = h.yy - l.yy;
-    suu += u * u;
-    suv += u * v;
-    svv += v * v;
-    rhs[0] += u * de;
-    rhs[1] += v * de + 2.0 * u * df;
-    rhs[2] += 2.0 * v * df + u * dg;
-    rhs[3] += v * dg;
-  }
-  const double diag[4] = {suu, svv + 2.0 * suu, 2.0 * svv + suu, svv};
-  const double off[3] = {suv, 2.0 * suv, suv};
-  return solve_spd_tridiagonal<4>(diag, off, rhs, x);
-}
-
-}  // namespace
-
 void fill_corner_slots(const Topology& topo, ScratchArray<std::array<std::int32_t, 3>>& slots) {
   const std::size_t nv = topo.vertex_count();
   slots.resize(topo.face_count());
@@ -238,84 +140,64 @@ void fill_corner_slots(const Topology& topo, ScratchArray<std::array<std::int32_
   });
 }
 
-/// Face pass of the II fit over faces [begin, end): fit, then write each
-/// corner's weighted tensor in its vertex's reference frame into its slot.
-FABRICA_MULTIVERSION
-void fit_second_fundamental_forms(const CurvatureInputs& in, FaceFitScratch& scratch,
-                                  std::size_t begin, std::size_t end) {
-  const TriangleMesh& mesh = in.mesh;
-  auto& slots = scratch.slots;
-  const auto& frames = scratch.vertices;
-  for (std::size_t fi = begin; fi < end; ++fi) {
-    const Face& face = mesh.faces[fi];
-    const Vec3& nT = in.face_normals[fi];
-    const auto& slot = scratch.corner_slot[fi];
-    for (int k = 0; k < 3; ++k) slots[slot[k]] = {0.0, 0.0, 0.0, 0.0, 0.0};
-    const Vec3& p0 = mesh.positions[face[0]];
-    const Vec3& p1 = mesh.positions[face[1]];
-    const Vec3& p2 = mesh.positions[face[2]];
-    const Vec3 e[3] = {p2 - p1, p0 - p2, p1 - p0};
-    if (nT.isZero()) continue;
-    const Vec3 t = e[0].normalized();
-    if (!in.normal_valid[face[0]] || !in.normal_valid[face[1]] || !in.normal_valid[face[2]])
-      continue;
-    const VertexRecord* V[3] = {&frames[face[0]], &frames[face[1]], &frames[face[2]]};
-    const Vec3* const n[3] = {&V[0]->n, &V[1]->n, &V[2]->n};
-    const Vec3 b = nT.cross(t);
-    double x[3];
-    if (!fit_second_fundamental_form(e, n, t, b, x)) continue;
-    const Vec3& ca = in.corner_areas[fi];
-    for (int k = 0; k < 3; ++k) {
-      const double w = ca[k];
-      if (!(w > 0.0)) continue;
-      const FrameInFace r = frame_in_face(V[k]->x, V[k]->y, V[k]->n, nT, t, b);
-      const double a1 = r.x1, b1 = r.x2, a2 = r.y1, b2 = r.y2;
-      slots[slot[k]] = {w * (a1 * a1 * x[0] + 2.0 * a1 * b1 * x[1] + b1 * b1 * x[2]),
-                        w * (a1 * a2 * x[0] + (a1 * b2 + a2 * b1) * x[1] + b1 * b2 * x[2]),
-                        w * (a2 * a2 * x[0] + 2.0 * a2 * b2 * x[1] + b2 * b2 * x[2]), 0.0, w};
-    }
-  }
+std::atomic<bool>& curvature_avx2_enabled() {
+#if defined(FABRICA_CURVATURE_AVX2)
+  static std::atomic<bool> on{__builtin_cpu_supports("avx2") != 0};
+#else
+  static std::atomic<bool> on{false};
+#endif
+  return on;
 }
 
-/// Face pass of the C fit over faces [begin, end), as above.
-FABRICA_MULTIVERSION
-void fit_curvature_derivatives(const CurvatureInputs& in, const PrincipalCurvatures& curv,
-                               FaceFitScratch& scratch, std::size_t begin, std::size_t end) {
-  const TriangleMesh& mesh = in.mesh;
-  auto& slots = scratch.slots;
-  const auto& vrec = scratch.vertices;
-  for (std::size_t fi = begin; fi < end; ++fi) {
-    const Face& face = mesh.faces[fi];
-    const Vec3& nT = in.face_normals[fi];
-    const auto& slot = scratch.corner_slot[fi];
-    for (int k = 0; k < 3; ++k) slots[slot[k]] = {0.0, 0.0, 0.0, 0.0, 0.0};
-    if (nT.isZero() || !curv.valid[face[0]] || !curv.valid[face[1]] || !curv.valid[face[2]])
-      continue;
-    const Vec3& p0 = mesh.positions[face[0]];
-    const Vec3& p1 = mesh.positions[face[1]];
-    const Vec3& p2 = mesh.positions[face[2]];
-    const Vec3 e[3] = {p2 - p1, p0 - p2, p1 - p0};
-    const Vec3 t = e[0].normalized();  // the same frame as the II fit
-    const Vec3 b = nT.cross(t);
-    const VertexRecord* V[3] = {&vrec[face[0]], &vrec[face[1]], &vrec[face[2]]};
-    FrameInFace r[3];
-    TangentTensor2 II[3];
-    for (int k = 0; k < 3; ++k) {
-      r[k] = frame_in_face(V[k]->x, V[k]->y, V[k]->n, nT, t, b);
-      II[k] = tensor_from_principal(V[k]->k1, V[k]->k2, r[k].x1, r[k].x2);
-    }
-    double x[4];
-    if (!fit_curvature_derivative(e, II, t, b, x)) continue;
-    const Vec3& ca = in.corner_areas[fi];
-    for (int k = 0; k < 3; ++k) {
-      const double w = ca[k];
-      if (!(w > 0.0)) continue;
-      double C[4];
-      cubic_reexpress(x, Vec2(r[k].x1, r[k].x2), Vec2(r[k].y1, r[k].y2), C);
-      slots[slot[k]] = {w * C[0], w * C[1], w * C[2], w * C[3], w};
-    }
-  }
+#if !defined(FABRICA_CURVATURE_AVX2)
+// Without the AVX2 file: never called (curvature_avx2_enabled() is false).
+void fit_second_fundamental_forms_avx2(const FitArrays& a, std::size_t begin, std::size_t end) {
+  fitk::fit_second_fundamental_forms<fitk::FloatLanes>(a, begin, end);
 }
+void fit_curvature_derivatives_avx2(const FitArrays& a, std::size_t begin, std::size_t end) {
+  fitk::fit_curvature_derivatives<fitk::FloatLanes>(a, begin, end);
+}
+#endif
+
+namespace {
+
+FitArrays fit_arrays(const CurvatureInputs& in, const std::uint8_t* valid,
+                     FaceFitScratch& scratch) {
+  // The fits address vertex records (12 floats each) and the corners of the
+  // faces (3 each) with 32-bit offsets.
+  constexpr std::size_t kMaxVertices = std::numeric_limits<std::int32_t>::max() / 12;
+  constexpr std::size_t kMaxFaces = std::numeric_limits<std::int32_t>::max() / 3;
+  if (in.mesh.positions.size() > kMaxVertices || in.mesh.faces.size() > kMaxFaces)
+    throw InputError("surface mesh: " + std::to_string(in.mesh.positions.size()) +
+                     " vertices and " + std::to_string(in.mesh.faces.size()) +
+                     " faces; the curvature estimate handles at most " +
+                     std::to_string(kMaxVertices) + " vertices and " + std::to_string(kMaxFaces) +
+                     " faces (split the mesh)");
+  return {in.mesh.positions.empty() ? nullptr : in.mesh.positions[0].data(),
+          in.mesh.faces.data(),
+          in.face_normals.empty() ? nullptr : in.face_normals[0].data(),
+          in.corner_areas.empty() ? nullptr : in.corner_areas[0].data(),
+          valid,
+          &scratch.vertices[0],
+          &scratch.corner_slot[0],
+          &scratch.fit_slots[0]};
+}
+
+/// One face pass (II or C fit) over all faces, eight at a time, AVX2 where
+/// the CPU has it: both versions give the same bits.
+template <class Portable, class Avx2>
+void run_face_pass(std::size_t nf, const FitArrays& arrays, const Portable& portable,
+                   const Avx2& avx2) {
+  const bool wide = curvature_avx2_enabled().load(std::memory_order_relaxed);
+  parallel_chunks(nf, kFaceGrain, [&](std::size_t begin, std::size_t end) {
+    if (wide)
+      avx2(arrays, begin, end);
+    else
+      portable(arrays, begin, end);
+  });
+}
+
+}  // namespace
 
 // Layout (for speed): per-vertex data the face passes need is packed into
 // one record per vertex; each face pass fits its tensor and immediately
@@ -331,7 +213,7 @@ PrincipalCurvatures estimate_curvature(const CurvatureInputs& in, FaceFitScratch
   const std::size_t nv = mesh.positions.size();
 
   if (scratch.corner_slot.size() != nf) fill_corner_slots(topo, scratch.corner_slot);
-  scratch.slots.resize(3 * nf);
+  scratch.fit_slots.resize(3 * nf);
 
   // Per vertex: normal and reference tangent frame (x = u, y = v = n x u).
   // Usually already filled by the vertex-normal pass (surface.cpp).
@@ -340,26 +222,22 @@ PrincipalCurvatures estimate_curvature(const CurvatureInputs& in, FaceFitScratch
     frames.resize(nv);
     parallel_chunks(nv, kVertexGrain, [&](std::size_t begin, std::size_t end) {
       for (std::size_t vi = begin; vi < end; ++vi) {
-        VertexRecord& F = frames[vi];
-        F.n = in.vertex_normals[vi];
-        F.k1 = F.k2 = 0.0;
-        if (!in.normal_valid[vi]) {
-          F.x = F.y = Vec3::Zero();
-          continue;
-        }
-        vertex_frame(mesh, topo, vi, F.n, F.x, F.y);
+        Vec3 x = Vec3::Zero(), y = Vec3::Zero();
+        if (in.normal_valid[vi]) vertex_frame(mesh, topo, vi, in.vertex_normals[vi], x, y);
+        set_fit_vertex(frames[vi], in.vertex_normals[vi], x, y, 0.0, 0.0);
       }
     });
   }
 
-  auto& slots = scratch.slots;
+  auto& slots = scratch.fit_slots;
   PrincipalCurvatures out;
   // The outputs' fresh memory is filled while the face pass runs.
   tbb::parallel_invoke(
       [&] {
-        parallel_chunks(nf, kFaceGrain, [&](std::size_t begin, std::size_t end) {
-          fit_second_fundamental_forms(in, scratch, begin, end);
-        });
+        if (nf == 0) return;
+        run_face_pass(nf, fit_arrays(in, in.normal_valid.data(), scratch),
+                      fitk::fit_second_fundamental_forms<fitk::FloatLanes>,
+                      fit_second_fundamental_forms_avx2);
       },
       [&] {
         assign_large(out.k1, nv, 0.0);
@@ -374,24 +252,30 @@ PrincipalCurvatures estimate_curvature(const CurvatureInputs& in, FaceFitScratch
       if (!in.normal_valid[vi]) continue;
       const auto faces = topo.vertex_faces(vi);
       const std::size_t first = static_cast<std::size_t>(faces.data() - base);
-      double ku = 0, kuv = 0, kv = 0, wsum = 0;
+      float ku = 0, kuv = 0, kv = 0, wsum = 0;
       for (std::size_t i = 0; i < faces.size(); ++i) {
         const auto& c = slots[first + i];
-        if (!(c[4] > 0.0)) continue;
+        if (!(c[4] > 0.0f)) continue;
         ku += c[0];
         kuv += c[1];
         kv += c[2];
         wsum += c[4];
       }
-      if (!(wsum > 0.0)) continue;
-      const double inv = 1.0 / wsum;
-      const VertexRecord& F = frames[vi];
-      const PrincipalFrame pf = diagonalize({ku * inv, kuv * inv, kv * inv}, F.x, F.y, F.n);
+      if (!(wsum > 0.0f)) continue;
+      const double inv = 1.0 / double(wsum);
+      const FitVertex& F = frames[vi];
+      const PrincipalFrame pf =
+          diagonalize({ku * inv, kuv * inv, kv * inv}, Vec3(F.x[0], F.x[1], F.x[2]),
+                      Vec3(F.y[0], F.y[1], F.y[2]), in.vertex_normals[vi]);
       if (!std::isfinite(pf.k1) || !std::isfinite(pf.k2)) continue;
+      // The float frame (u, v) is orthonormal to float rounding only:
+      // e1 is made a unit tangent again in double, e2 = n x e1.
+      const Vec3& n = in.vertex_normals[vi];
+      const Vec3 e1 = (pf.e1 - pf.e1.dot(n) * n).normalized();
       out.k1[vi] = pf.k1;
       out.k2[vi] = pf.k2;
-      out.e1[vi] = pf.e1;
-      out.e2[vi] = pf.e2;
+      out.e1[vi] = e1;
+      out.e2[vi] = n.cross(e1);
       out.valid[vi] = 1;
     }
   });
@@ -406,7 +290,7 @@ CurvatureDerivatives estimate_curvature_derivatives(const CurvatureInputs& in,
   const std::size_t nf = mesh.faces.size();
   const std::size_t nv = mesh.positions.size();
 
-  auto& slots = scratch.slots;
+  auto& slots = scratch.fit_slots;
   CurvatureDerivatives out;
   tbb::parallel_invoke(
       [&] {
@@ -417,15 +301,14 @@ CurvatureDerivatives estimate_curvature_derivatives(const CurvatureInputs& in,
         scratch.frames_ready = false;
         parallel_chunks(nv, 8192, [&](std::size_t begin, std::size_t end) {
           for (std::size_t v = begin; v < end; ++v)
-            vrec[v] =
-                VertexRecord{in.vertex_normals[v], curv.e1[v], curv.e2[v],
-                             curv.valid[v] ? curv.k1[v] : 0.0, curv.valid[v] ? curv.k2[v] : 0.0};
+            set_fit_vertex(vrec[v], in.vertex_normals[v], curv.e1[v], curv.e2[v],
+                           curv.valid[v] ? curv.k1[v] : 0.0, curv.valid[v] ? curv.k2[v] : 0.0);
         });
-
+        if (nf == 0) return;
         // Face pass: re-uses the slot map of the II fit.
-        parallel_chunks(nf, kFaceGrain, [&](std::size_t begin, std::size_t end) {
-          fit_curvature_derivatives(in, curv, scratch, begin, end);
-        });
+        run_face_pass(nf, fit_arrays(in, curv.valid.data(), scratch),
+                      fitk::fit_curvature_derivatives<fitk::FloatLanes>,
+                      fit_curvature_derivatives_avx2);
       },
       [&] {
         assign_large(out.a, nv, 0.0);
@@ -440,16 +323,16 @@ CurvatureDerivatives estimate_curvature_derivatives(const CurvatureInputs& in,
       if (!curv.valid[vi]) continue;
       const auto faces = topo.vertex_faces(vi);
       const std::size_t first = static_cast<std::size_t>(faces.data() - base);
-      double acc[4] = {0.0, 0.0, 0.0, 0.0};
-      double wsum = 0.0;
+      float acc[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+      float wsum = 0.0f;
       for (std::size_t i = 0; i < faces.size(); ++i) {
         const auto& c = slots[first + i];
-        if (!(c[4] > 0.0)) continue;
+        if (!(c[4] > 0.0f)) continue;
         for (int k = 0; k < 4; ++k) acc[k] += c[k];
         wsum += c[4];
       }
-      if (!(wsum > 0.0)) continue;
-      const double inv = 1.0 / wsum;
+      if (!(wsum > 0.0f)) continue;
+      const double inv = 1.0 / double(wsum);
       out.a[vi] = acc[0] * inv;
       out.b[vi] = acc[1] * inv;
       out.c[vi] = acc[2] * inv;

@@ -3,9 +3,11 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <vector>
 
+#include "curvature_fit_kernel.hpp"
 #include "fabrica/core/mesh.hpp"
 #include "fabrica/core/surface.hpp"
 #include "fabrica/core/topology.hpp"
@@ -22,28 +24,37 @@ struct CurvatureInputs {
   const std::vector<std::uint8_t>& normal_valid;
 };
 
-/// Per-vertex data a face pass reads, packed together: the normal n and a
-/// tangent frame (x, y = n x x): the reference frame (u, v) for the II fit,
-/// the principal frame (e1, e2) and k1, k2 for the derivative fit.
-struct VertexRecord {
-  Vec3 n;
-  Vec3 x;
-  Vec3 y;
-  double k1, k2;
-};
-
 /// Buffers shared by the passes of one Surface (allocated once, reused, so
 /// that fresh memory, whose first touch is expensive, is touched once): each
-/// (face, corner)'s position in the vertex -> faces CSR list, one slot per
-/// such position holding that corner's weighted, re-expressed quantity
-/// (normal: 3 values + weight + area; II: 3 values; C: 4) and its weight
-/// (entry 4 for the fits; 0 = not used), and one record per vertex.
+/// (face, corner)'s position in the vertex -> faces CSR list; one slot per
+/// such position for the vertex-normal pass (weighted normal: 3 values,
+/// weight, area; double, freed once the normals exist) and one for the
+/// fits (II: 3 values, C: 4, then the weight, 0 = not used; float,
+/// curvature_fit_kernel.hpp); and one float record per vertex.
 struct FaceFitScratch {
   ScratchArray<std::array<std::int32_t, 3>> corner_slot;
   ScratchArray<std::array<double, 5>> slots;
-  ScratchArray<VertexRecord> vertices;
+  ScratchArray<FitSlot> fit_slots;
+  ScratchArray<FitVertex> vertices;
   bool frames_ready = false;  ///< vertices hold (n, u, v) for the II fit
 };
+
+/// Stores a vertex's normal, frame and principal values in a fit record.
+inline void set_fit_vertex(FitVertex& r, const Vec3& n, const Vec3& x, const Vec3& y, double k1,
+                           double k2) {
+  for (int i = 0; i < 3; ++i) {
+    r.n[i] = static_cast<float>(n[i]);
+    r.x[i] = static_cast<float>(x[i]);
+    r.y[i] = static_cast<float>(y[i]);
+  }
+  r.k1 = static_cast<float>(k1);
+  r.k2 = static_cast<float>(k2);
+  r.pad = 0.0f;
+}
+
+/// Whether the AVX2 fits run: whether the CPU has AVX2 (and the build has
+/// them), unless set to false (tests compare them with the portable ones).
+std::atomic<bool>& curvature_avx2_enabled();
 
 /// An orthonormal tangent frame (u, v = n x u) at vertex `vtx` with unit
 /// normal n: u is its first incident edge projected onto the tangent plane,

@@ -12,6 +12,9 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <new>
+#include <type_traits>
+#include <utility>
 #include <vector>
 #if defined(__linux__)
 #include <sys/mman.h>
@@ -59,29 +62,45 @@ void assign_large(std::vector<T>& v, std::size_t n, const T& value) {
 /// A scratch array whose elements are NOT initialised (every pass that uses
 /// one writes each element before anything reads it), so the first touch of
 /// its pages happens inside the parallel pass that fills it, and large ones
-/// use transparent huge pages as in assign_large.
+/// use transparent huge pages as in assign_large. Large ones (>= 4 MiB, on
+/// Linux) are mapped directly, so freeing one returns its memory to the
+/// system at once and leaves the allocator's thresholds alone (a large
+/// block freed through malloc raises glibc's mmap threshold, and the
+/// arrays allocated after it then stay in the heap).
 template <class T>
 class ScratchArray {
+  static_assert(std::is_trivially_default_constructible_v<T> &&
+                std::is_trivially_destructible_v<T>);
+
  public:
+  ScratchArray() = default;
+  ScratchArray(const ScratchArray&) = delete;
+  ScratchArray& operator=(const ScratchArray&) = delete;
+  ScratchArray(ScratchArray&& o) noexcept { swap(o); }
+  ScratchArray& operator=(ScratchArray&& o) noexcept {
+    ScratchArray tmp(std::move(o));
+    swap(tmp);
+    return *this;
+  }
+  ~ScratchArray() { release(); }
+
   void resize(std::size_t n) {
     if (n > capacity_) {
-      data_.reset();
-      data_.reset(new T[n]);
-      capacity_ = n;
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
-      constexpr std::size_t kHuge = std::size_t(2) << 20;
-      const std::size_t bytes = n * sizeof(T);
-      const auto begin = reinterpret_cast<std::uintptr_t>(data_.get());
-      const std::uintptr_t first = (begin + kHuge - 1) & ~(kHuge - 1);
-      const std::uintptr_t last = (begin + bytes) & ~(kHuge - 1);
-      if (bytes >= 2 * kHuge && last > first)
-        madvise(reinterpret_cast<void*>(first), last - first, MADV_HUGEPAGE);
-#endif
+      release();
+      allocate(n);
     }
     size_ = n;
   }
-  std::size_t size() const {
-    return size_;
+  std::size_t size() const { return size_; }
+  /// Frees the storage.
+  void release() {
+#if defined(__linux__)
+    if (mapped_) munmap(data_, capacity_ * sizeof(T));
+#endif
+    if (!mapped_) delete[] data_;
+    data_ = nullptr;
+    mapped_ = false;
+    size_ = capacity_ = 0;
   }
   T& operator[](std::size_t i) {
     return data_[i];
@@ -91,8 +110,38 @@ class ScratchArray {
   }
 
  private:
-  std::unique_ptr<T[]> data_;
+  void swap(ScratchArray& o) noexcept {
+    std::swap(data_, o.data_);
+    std::swap(size_, o.size_);
+    std::swap(capacity_, o.capacity_);
+    std::swap(mapped_, o.mapped_);
+  }
+  void allocate(std::size_t n) {
+    const std::size_t bytes = n * sizeof(T);
+#if defined(__linux__)
+    constexpr std::size_t kHuge = std::size_t(2) << 20;
+    if (bytes >= 2 * kHuge) {
+      void* p = mmap(nullptr, bytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+      if (p == MAP_FAILED) throw std::bad_alloc();
+#if defined(MADV_HUGEPAGE)
+      const auto begin = reinterpret_cast<std::uintptr_t>(p);
+      const std::uintptr_t first = (begin + kHuge - 1) & ~(kHuge - 1);
+      const std::uintptr_t last = (begin + bytes) & ~(kHuge - 1);
+      if (last > first) madvise(reinterpret_cast<void*>(first), last - first, MADV_HUGEPAGE);
+#endif
+      data_ = static_cast<T*>(p);
+      mapped_ = true;
+      capacity_ = n;
+      return;
+    }
+#endif
+    data_ = new T[n];
+    capacity_ = n;
+  }
+
+  T* data_ = nullptr;
   std::size_t size_ = 0, capacity_ = 0;
+  bool mapped_ = false;
 };
 
 /// A face is degenerate when twice its area is below this fraction of its

@@ -157,19 +157,17 @@ void compute_face_and_vertex(const TriangleMesh& mesh, const Topology& topo,
       const double len = n.norm();
       // The reference frame of the curvature fit, computed here so its
       // memory is first touched alongside real work.
-      detail::VertexRecord& frame = scratch->vertices[v];
-      frame.k1 = frame.k2 = 0.0;
+      Vec3 unit = Vec3::Zero(), x = Vec3::Zero(), y = Vec3::Zero();
       if (wsum > 0.0 && len > 1e-10 * wsum) {
-        const Vec3 unit = n / len;
+        unit = n / len;
         (*vertex_normals)[v] = unit;
         (*normal_valid)[v] = 1;
-        frame.n = unit;
-        detail::vertex_frame(mesh, topo, v, unit, frame.x, frame.y);
-      } else {
-        frame.n = frame.x = frame.y = Vec3::Zero();
+        detail::vertex_frame(mesh, topo, v, unit, x, y);
       }
+      detail::set_fit_vertex(scratch->vertices[v], unit, x, y, 0.0, 0.0);
     }
   });
+  scratch->slots.release();  // the fits use their own (float) slots
 }
 
 }  // namespace

@@ -4,6 +4,10 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 #include <memory>
 #include <numeric>
 
@@ -21,6 +25,36 @@ std::vector<std::int32_t> offsets_from_counts(const std::vector<std::int32_t>& c
 }
 
 constexpr std::size_t kGrain = 4096;
+
+// How many entries count_below may read past a list (readable, ignored).
+constexpr std::size_t kRankPad = 8;
+
+// Set bits of each byte (the baseline x86-64 has no popcnt instruction).
+constexpr auto kBitCount = [] {
+  std::array<std::uint8_t, 256> t{};
+  for (unsigned i = 0; i < 256; ++i) t[i] = static_cast<std::uint8_t>((i & 1) + t[i / 2]);
+  return t;
+}();
+
+/// How many of the n values at p are < b. Lists of up to eight (nearly all
+/// of them: a vertex's higher neighbours) are compared eight at a time (two
+/// SSE2 compares; entries past n are read, never counted).
+inline std::int32_t count_below(const std::int32_t* p, std::int32_t n, std::int32_t b) {
+#if defined(__SSE2__)
+  if (n <= 8) {
+    const __m128i vb = _mm_set1_epi32(b);
+    const __m128i lo = _mm_cmplt_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p)), vb);
+    const __m128i hi =
+        _mm_cmplt_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p + 4)), vb);
+    const unsigned bits = static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(lo))) |
+                          (static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(hi))) << 4);
+    return kBitCount[bits & ((1u << n) - 1u)];
+  }
+#endif
+  std::int32_t rank = 0;
+  for (std::int32_t i = 0; i < n; ++i) rank += p[i] < b;
+  return rank;
+}
 
 }  // namespace
 
@@ -52,7 +86,11 @@ Topology::Topology(const TriangleMesh& mesh) {
   // in a scratch segment of two slots per incident face (left
   // uninitialised: the parallel pass touches it first).
   vertex_face_opposite_.resize(vertex_faces_.size());
-  const std::unique_ptr<std::int32_t[]> candidates(new std::int32_t[2 * vertex_faces_.size()]);
+  // (+ kRankPad: the rank count below reads eight entries at a time; what it
+  // reads past a list is masked out.)
+  const std::unique_ptr<std::int32_t[]> candidates(
+      new std::int32_t[2 * vertex_faces_.size() + kRankPad]);
+  std::fill_n(candidates.get() + 2 * vertex_faces_.size(), kRankPad, 0);
   std::vector<std::int32_t> neighbor_counts(nv), upper_counts(nv);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, kGrain), [&](const auto& r) {
     for (std::size_t v = r.begin(); v < r.end(); ++v) {
@@ -103,9 +141,7 @@ Topology::Topology(const TriangleMesh& mesh) {
   // Rank of b among a's upper neighbours (a handful: a branch-free count).
   auto upper_rank = [&](std::size_t a, std::int32_t b) {
     const std::int32_t* const last = sorted_neighbors(a) + neighbor_counts[a];
-    std::int32_t rank = 0;
-    for (const std::int32_t* p = last - upper_counts[a]; p != last; ++p) rank += *p < b;
-    return rank;
+    return count_below(last - upper_counts[a], upper_counts[a], b);
   };
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, kGrain), [&](const auto& r) {
     for (std::size_t v = r.begin(); v < r.end(); ++v) {

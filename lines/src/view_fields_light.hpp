@@ -1,6 +1,7 @@
 // Private to fabrica::lines: pieces of update_view_fields().
 #pragma once
 
+#include <atomic>
 #include <cstddef>
 #include <memory>
 #include <vector>
@@ -58,6 +59,14 @@ void update_dt1q1(ViewFields& fields, const Surface& surface, bool cull,
 /// returns once every vertex <= v is done, computing unclaimed blocks
 /// itself while it waits (so nobody waits for work that no thread runs).
 /// Same values as update_dt1q1, at any thread count and interleaving.
+/// How many fan vertices the AVX2 D_t1 q1 pass handed to the double
+/// candidate search (a float sign within its error bound, |t1| > 2, or more
+/// than two candidate faces); for tests.
+inline std::atomic<std::size_t>& dt1q1_double_path() {
+  static std::atomic<std::size_t> n{0};
+  return n;
+}
+
 class Dt1q1Blocks {
  public:
   static constexpr std::size_t kBlock = 2048;

@@ -92,7 +92,7 @@ Scene build_scene(const SceneSurfaces& scene, const Camera& camera) {
     st.style = spec.style;
     auto mesh =
         std::make_shared<RenderMesh>(make_render_mesh(surface, st.style.hybrid_apparent_ridges));
-    if (st.style.lic) set_lic_field(*mesh, surface);
+    if (st.style.lic) set_lic_field(*mesh, scene.surfaces[i]);
     st.mesh = std::move(mesh);
     const DrawLinesOptions options = structure_line_options(st.style);
     if (!options.lines.families.empty()) st.lines = draw_lines(surface, camera, options).lines;

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <numbers>
 
 #include "fabrica/core/error.hpp"
@@ -95,28 +96,103 @@ void set_lic_field(RenderMesh& mesh, const Surface& surface) {
   if (mesh.vertex_count() != surface.vertex_count() ||
       mesh.triangle_count() != surface.face_count())
     throw InputError("LIC: the render mesh was not made from this surface");
+  LicField field = compute_lic_field(surface);
+  mesh.lic_field = std::move(field.direction);
+  mesh.lic_level = std::move(field.level);
+}
+
+void set_lic_field(RenderMesh& mesh, const std::shared_ptr<const Surface>& surface) {
+  if (!surface) throw InputError("LIC: no surface");
+  if (mesh.vertex_count() != surface->vertex_count() ||
+      mesh.triangle_count() != surface->face_count())
+    throw InputError("LIC: the render mesh was not made from this surface");
+  const std::shared_ptr<const LicField> field = cached_lic_field(surface);
+  mesh.lic_field = field->direction;
+  mesh.lic_level = field->level;
+}
+
+std::shared_ptr<const LicField> cached_lic_field(const std::shared_ptr<const Surface>& surface) {
+  struct Entry {
+    std::weak_ptr<const Surface> surface;
+    std::shared_ptr<const LicField> field;
+  };
+  static std::mutex mutex;
+  static std::vector<Entry> cache;
+  auto find = [&]() -> std::shared_ptr<const LicField> {
+    // An expired entry's address may be reused by a new surface: dropped.
+    std::erase_if(cache, [](const Entry& e) { return e.surface.expired(); });
+    for (const Entry& e : cache)
+      if (e.surface.lock() == surface) return e.field;
+    return nullptr;
+  };
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    if (auto hit = find()) return hit;
+  }
+  // Computed outside the lock (parallel inside); a concurrent twin computes
+  // the same bytes, the first one stored wins.
+  auto field = std::make_shared<const LicField>(compute_lic_field(*surface));
+  const std::lock_guard<std::mutex> lock(mutex);
+  if (auto hit = find()) return hit;
+  cache.push_back({surface, field});
+  return field;
+}
+
+LicField compute_lic_field(const Surface& surface) {
   const hatching::CurvatureField field = hatching::compute_curvature_field(surface);
   const hatching::FeatureRegions regions = hatching::compute_feature_regions(surface);
-  mesh.lic_field.assign(4 * surface.face_count(), 0.0f);
-  for (std::size_t f = 0; f < surface.face_count(); ++f) {
-    const Vec3& d = field.face_direction[f];
-    if (!(d.squaredNorm() > 0.0)) continue;  // degenerate face
-    for (int c = 0; c < 3; ++c) mesh.lic_field[4 * f + c] = static_cast<float>(d[c]);
-    mesh.lic_field[4 * f + 3] = 1.0f;
+  const std::size_t nv = surface.vertex_count();
+  // Per vertex, the line average (doubled angles, area weighted) of its
+  // faces' directions in a tangent frame (t, b) of the vertex normal.
+  const auto& normals = surface.vertex_normals();
+  std::vector<Vec3> t(nv), b(nv);
+  for (std::size_t v = 0; v < nv; ++v) {
+    const Vec3& n = normals[v];
+    const Vec3 axis = std::abs(n.x()) < 0.6 ? Vec3::UnitX() : Vec3::UnitY();
+    t[v] = n.cross(axis);
+    const double len = t[v].norm();
+    t[v] = len > 0.0 ? Vec3(t[v] / len) : Vec3::Zero();
+    b[v] = n.cross(t[v]);
   }
-  mesh.lic_level.resize(surface.vertex_count());
-  for (std::size_t v = 0; v < surface.vertex_count(); ++v)
-    mesh.lic_level[v] = static_cast<float>(regions.level[v]);
+  std::vector<Vec2> sum(nv, Vec2::Zero());
+  const auto& faces = surface.faces();
+  const auto& areas = surface.face_areas();
+  for (std::size_t f = 0; f < faces.size(); ++f) {
+    const Vec3& d = field.face_direction[f];
+    if (!(d.squaredNorm() > 0.0) || !(areas[f] > 0.0)) continue;
+    for (int c = 0; c < 3; ++c) {
+      const auto v = static_cast<std::size_t>(faces[f][c]);
+      const double x = d.dot(t[v]), y = d.dot(b[v]), r2 = x * x + y * y;
+      if (r2 > 0.0) sum[v] += areas[f] * Vec2((x * x - y * y) / r2, 2.0 * x * y / r2);
+    }
+  }
+  LicField out;
+  out.direction.assign(3 * nv, 0.0f);
+  out.level.resize(nv);
+  for (std::size_t v = 0; v < nv; ++v) {
+    out.level[v] = static_cast<float>(regions.level[v]);
+    if (!(sum[v].squaredNorm() > 0.0)) continue;
+    const double half = 0.5 * std::atan2(sum[v].y(), sum[v].x());
+    const Vec3 d = std::cos(half) * t[v] + std::sin(half) * b[v];
+    for (int c = 0; c < 3; ++c) out.direction[3 * v + c] = static_cast<float>(d[c]);
+  }
+  return out;
 }
 
 // ------------------------------------------------------------ reference
 
 namespace {
 
-// Stage 1 data of one pixel: screen direction, noise, mask (lic_stage1.frag).
+// Stage 1 data of one pixel as the RGBA8 target holds it (lic_stage1.frag):
+// screen direction (decoded 2 x - 1), noise, mask.
 struct Texel {
   float dx = 0.0f, dy = 0.0f, noise = 0.0f, mask = 0.0f;
 };
+
+// A value in [0, 1] through an 8-bit normalised channel.
+float unorm8(float x) {
+  return std::round(std::clamp(x, 0.0f, 1.0f) * 255.0f) / 255.0f;
+}
 
 }  // namespace
 
@@ -137,6 +213,7 @@ LicBuffer lic_reference(const RenderMesh& mesh, const Camera& camera, const LicO
   const std::size_t pixels = static_cast<std::size_t>(W) * H;
   std::vector<double> depth(pixels, std::numeric_limits<double>::infinity());
   std::vector<std::int64_t> tri(pixels, -1);
+  std::vector<std::uint8_t> front(pixels, 0);
   std::vector<Vec3> bary(pixels);
   auto vertex = [&](std::uint32_t v) {
     return Vec3(mesh.positions[3 * v], mesh.positions[3 * v + 1], mesh.positions[3 * v + 2]);
@@ -174,40 +251,55 @@ LicBuffer lic_reference(const RenderMesh& mesh, const Camera& camera, const LicO
         if (!(z < depth[i]) || z < -1.0 || z > 1.0) continue;
         depth[i] = z;
         tri[i] = static_cast<std::int64_t>(t);
+        front[i] = area > 0.0 ? 1 : 0;  // counter-clockwise on the screen (y up)
         Vec3 b(l[0] / clip[0].w(), l[1] / clip[1].w(), l[2] / clip[2].w());
         bary[i] = b / b.sum();
       }
     }
   }
 
-  // Stage 1 per pixel.
-  std::vector<Texel> data(pixels);
-  for (std::size_t i = 0; i < pixels; ++i) {
-    if (tri[i] < 0) continue;
-    const auto t = static_cast<std::size_t>(tri[i]);
-    Vec3 p = Vec3::Zero();
-    double level = 0.0;
-    for (int k = 0; k < 3; ++k) {
-      const std::uint32_t v = mesh.indices[3 * t + k];
-      p += bary[i][k] * vertex(v);
-      level += bary[i][k] * mesh.lic_level[v];
-    }
-    const float mask = std::clamp(static_cast<float>(level), 0.0f, 1.0f);
-    const float* fd = &mesh.lic_field[4 * t];
-    Texel& d = data[i];
-    const Vec3 pf = p.cast<float>().cast<double>();
-    d.noise =
-        lic_noise(static_cast<float>(pf.x()) * inv_cell, static_cast<float>(pf.y()) * inv_cell,
-                  static_cast<float>(pf.z()) * inv_cell);
+  // Per vertex (lic_stage1.vert): the direction's screen projection as a
+  // doubled-angle vector.
+  std::vector<Vec2> doubled(mesh.vertex_count(), Vec2::Zero());
+  for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
+    const float* fd = &mesh.lic_field[3 * v];
+    const Vec3 p = vertex(static_cast<std::uint32_t>(v));
     const Eigen::Vector4d c = mvp * Eigen::Vector4d(p.x(), p.y(), p.z(), 1.0);
     const Eigen::Vector4d dc = mvp * Eigen::Vector4d(fd[0], fd[1], fd[2], 0.0);
     const double sx = (dc.x() * c.w() - c.x() * dc.w()) * W,
                  sy = (dc.y() * c.w() - c.y() * dc.w()) * H;
-    const double len = std::hypot(sx, sy);
-    if (!(len > 0.0) || !(fd[3] > 0.0f) || !(mask > 0.0f)) continue;
-    d.dx = static_cast<float>(sx / len);
-    d.dy = static_cast<float>(sy / len);
-    d.mask = mask;
+    const double l2 = sx * sx + sy * sy;
+    if (l2 > 0.0) doubled[v] = Vec2((sx * sx - sy * sy) / l2, 2.0 * sx * sy / l2);
+  }
+
+  // Stage 1 per pixel: the visible front faces (lic_stage1.frag).
+  std::vector<Texel> data(pixels);
+  for (std::size_t i = 0; i < pixels; ++i) {
+    if (tri[i] < 0 || !front[i]) continue;
+    const auto t = static_cast<std::size_t>(tri[i]);
+    Vec3 p = Vec3::Zero();
+    Vec2 q = Vec2::Zero();
+    double level = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t v = mesh.indices[3 * t + k];
+      p += bary[i][k] * vertex(v);
+      q += bary[i][k] * doubled[v];
+      level += bary[i][k] * mesh.lic_level[v];
+    }
+    const float mask = std::clamp(static_cast<float>(level), 0.0f, 1.0f);
+    Texel& d = data[i];
+    const Vec3 pf = p.cast<float>().cast<double>();
+    d.noise = unorm8(lic_noise(static_cast<float>(pf.x()) * inv_cell,
+                               static_cast<float>(pf.y()) * inv_cell,
+                               static_cast<float>(pf.z()) * inv_cell));
+    const double len = q.norm();
+    if (!(len > 1e-4) || !(mask > 0.0f)) continue;  // (0.5, 0.5, noise, 0)
+    const double c = std::clamp(q.x() / len, -1.0, 1.0);
+    double dx = std::sqrt(0.5 * (1.0 + c)), dy = std::sqrt(0.5 * (1.0 - c));
+    if (q.y() < 0.0) dy = -dy;
+    d.dx = 2.0f * unorm8(static_cast<float>(dx * 0.5 + 0.5)) - 1.0f;
+    d.dy = 2.0f * unorm8(static_cast<float>(dy * 0.5 + 0.5)) - 1.0f;
+    d.mask = unorm8(mask);
   }
 
   // Stage 2: the convolution (lic_stage2.frag).

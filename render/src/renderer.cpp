@@ -31,8 +31,7 @@ struct GpuMesh {
   GLuint vao = 0, vbo = 0, ebo = 0;
   GLsizei index_count = 0;
   bool curvature = false;
-  // Surface LIC: RenderMesh::lic_field as a texture buffer (RGBA32F per triangle).
-  GLuint field_buffer = 0, field_texture = 0;
+  bool lic = false;  // attributes 5 (feature level) and 6 (direction) present
 };
 
 struct Matrices {
@@ -340,8 +339,6 @@ struct Renderer::Impl {
       stages = {vs({"fullscreen.vert"}), fs({"ar_bare_stage2.frag"})};
     else if (key == "lic1")
       stages = {vs({"lic_stage1.vert"}), fs({"lic_noise.glsl", "cutaway.glsl", "lic_stage1.frag"})};
-    else if (key == "lic_occluder")
-      stages = {vs({"lic_stage1.vert"}), fs({"cutaway.glsl", "lic_occluder.frag"})};
     else if (key == "lic_mask")
       stages = {vs({"fullscreen.vert"}), fs({"lic_mask.frag"})};
     else if (key == "lic2")
@@ -363,8 +360,6 @@ struct Renderer::Impl {
     gl().DeleteVertexArrays(1, &m.vao);
     gl().DeleteBuffers(1, &m.vbo);
     gl().DeleteBuffers(1, &m.ebo);
-    gl().DeleteTextures(1, &m.field_texture);
-    gl().DeleteBuffers(1, &m.field_buffer);
     m = GpuMesh{};
   }
 
@@ -393,7 +388,8 @@ struct Renderer::Impl {
     const std::size_t n = m.vertex_count();
     const bool lic = m.has_lic_field();
     const std::size_t lic_offset = gm.curvature ? 14 * n : 6 * n;
-    const std::size_t floats = lic_offset + (lic ? n : 0);
+    const std::size_t floats = lic_offset + (lic ? 4 * n : 0);
+    gm.lic = lic;
     g.GenVertexArrays(1, &gm.vao);
     g.GenBuffers(1, &gm.vbo);
     g.GenBuffers(1, &gm.ebo);
@@ -411,7 +407,10 @@ struct Renderer::Impl {
       data.insert(data.end(), m.e1.begin(), m.e1.end());
       data.insert(data.end(), m.e2.begin(), m.e2.end());
     }
-    if (lic) data.insert(data.end(), m.lic_level.begin(), m.lic_level.end());
+    if (lic) {
+      data.insert(data.end(), m.lic_level.begin(), m.lic_level.end());
+      data.insert(data.end(), m.lic_field.begin(), m.lic_field.end());
+    }
     g.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(data.size() * sizeof(float)), data.data(),
                  GL_STATIC_DRAW);
     auto attrib = [&](GLuint loc, int size, std::size_t offset_floats) {
@@ -426,24 +425,16 @@ struct Renderer::Impl {
       attrib(3, 3, 8 * n);
       attrib(4, 3, 11 * n);
     }
-    if (lic) attrib(5, 1, lic_offset);
+    if (lic) {
+      attrib(5, 1, lic_offset);
+      attrib(6, 3, lic_offset + n);
+    }
     g.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, gm.ebo);
     g.BufferData(GL_ELEMENT_ARRAY_BUFFER,
                  static_cast<GLsizeiptr>(m.indices.size() * sizeof(std::uint32_t)),
                  m.indices.data(), GL_STATIC_DRAW);
     gm.index_count = static_cast<GLsizei>(m.indices.size());
     g.BindVertexArray(0);
-    if (lic) {
-      g.GenBuffers(1, &gm.field_buffer);
-      g.BindBuffer(GL_TEXTURE_BUFFER, gm.field_buffer);
-      g.BufferData(GL_TEXTURE_BUFFER, static_cast<GLsizeiptr>(m.lic_field.size() * sizeof(float)),
-                   m.lic_field.data(), GL_STATIC_DRAW);
-      g.GenTextures(1, &gm.field_texture);
-      g.BindTexture(GL_TEXTURE_BUFFER, gm.field_texture);
-      g.TexBuffer(GL_TEXTURE_BUFFER, GL_RGBA32F, gm.field_buffer);
-      g.BindTexture(GL_TEXTURE_BUFFER, 0);
-      g.BindBuffer(GL_TEXTURE_BUFFER, 0);
-    }
     check_gl_error(g, "uploading a mesh");
     return meshes.emplace(mesh.get(), gm).first->second;
   }
@@ -635,10 +626,26 @@ struct Renderer::Impl {
     g.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
   }
 
+  // The LIC targets: lic_fbo draws stage 1 into lic_color (RGBA8) with the
+  // opaque pass's depth depth_a (tested, not written); lic_out_fbo draws into
+  // main_color with its own depth lic_depth (the mark pass's).
   void ensure_lic() {
     if (lic_fbo != 0) return;
-    lic_color = make_texture(GL_RGBA32F, GL_RGBA, GL_FLOAT, target_w, target_h);
-    make_two_stage_targets(lic_color, lic_depth, lic_fbo, lic_out_fbo, "LIC");
+    const GlFunctions& g = gl();
+    lic_color = make_texture(GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, target_w, target_h);
+    g.GenFramebuffers(1, &lic_fbo);
+    g.BindFramebuffer(GL_FRAMEBUFFER, lic_fbo);
+    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, lic_color, 0);
+    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, depth_a, 0);
+    check_fbo("LIC framebuffer");
+    g.GenRenderbuffers(1, &lic_depth);
+    g.BindRenderbuffer(GL_RENDERBUFFER, lic_depth);
+    g.RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, target_w, target_h);
+    g.GenFramebuffers(1, &lic_out_fbo);
+    g.BindFramebuffer(GL_FRAMEBUFFER, lic_out_fbo);
+    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, main_color, 0);
+    g.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, lic_depth);
+    check_fbo("LIC output framebuffer");
   }
 
   void ensure_cutaway() {
@@ -759,14 +766,20 @@ struct Renderer::Impl {
   };
   // The clipping plane as the shaders take it (common.glsl, clip_at).
   std::array<float, 4> clip{0.0f, 0.0f, 0.0f, 1.0f};
+  // An unclipped draw also gets the plane 0 x + 1 >= 0 (keeps everything):
+  // Mesa's llvmpipe kept clipping a draw after glDisable(GL_CLIP_DISTANCE0)
+  // when the previous draw of the same program had it enabled (a focus
+  // structure after a clipped context one lost its clipped half).
   // `cut`: a context structure of a frame with a cutaway (cutaway.glsl).
   void set_clip(const ShaderProgram& p, bool clipped, bool cut = false) {
-    if (clipped)
-      gl().Enable(GL_CLIP_DISTANCE0);
-    else
-      gl().Disable(GL_CLIP_DISTANCE0);
-    p.set("u_clip", clip[0], clip[1], clip[2], clip[3]);
     p.set("u_cutaway", cut ? 1 : 0);
+    if (clipped) {
+      gl().Enable(GL_CLIP_DISTANCE0);
+      p.set("u_clip", clip[0], clip[1], clip[2], clip[3]);
+    } else {
+      gl().Disable(GL_CLIP_DISTANCE0);
+      p.set("u_clip", 0.0f, 0.0f, 0.0f, 1.0f);
+    }
   }
   void hybrid_stage1(const std::vector<HybridDraw>& draws, const HybridOptions& o,
                      const Matrices& m, const Tile& t, bool bare) {
@@ -854,12 +867,14 @@ struct Renderer::Impl {
     g.Disable(GL_DEPTH_TEST);
   }
 
-  // LIC stage 1 into lic_fbo (docs/algorithms.md §14): LIC meshes by
-  // lic_stage1.frag (stencil 1), the other opaque meshes as occluders
-  // (mask 0, stencil 0), in scene order, with their own depth test.
+  // LIC stage 1 into lic_fbo (docs/algorithms.md §14): the LIC meshes'
+  // front faces by lic_stage1 with depth test LEQUAL against depth_a, as the
+  // opaque pass left it (the same vertex transform: only the visible
+  // fragments pass, and every other opaque mesh occludes as it does there),
+  // no depth writes. A pixel whose visible surface is another mesh or a back
+  // face keeps the cleared (0, 0, 0, 0): mask 0.
   struct LicDraw {
     const GpuMesh* mesh;
-    bool occluder;
     bool clipped = false;  // a context structure of a scene with a clip
     bool cut = false;      // a context structure of a frame with a cutaway
   };
@@ -867,40 +882,37 @@ struct Renderer::Impl {
                   float inv_cell, int image_w, int image_h) {
     const GlFunctions& g = gl();
     ensure_lic();
-    begin_stage1(lic_fbo, t, {0.0f, 0.0f, 0.0f, 0.0f});
+    g.BindFramebuffer(GL_FRAMEBUFFER, lic_fbo);
+    const GLenum color0 = GL_COLOR_ATTACHMENT0;
+    g.DrawBuffers(1, &color0);
+    g.Viewport(0, 0, t.render_w, t.render_h);
+    set_state_opaque();
+    g.ClearColor(0.0f, 0.0f, 0.0f, 0.0f);
+    g.Clear(GL_COLOR_BUFFER_BIT);
+    g.DepthFunc(GL_LEQUAL);
+    g.DepthMask(GL_FALSE);
+    g.Enable(GL_CULL_FACE);
     const Eigen::Matrix4f mvp = Eigen::Map<const Eigen::Matrix4f>(m.projection.data()) *
                                 Eigen::Map<const Eigen::Matrix4f>(m.model_view.data());
     const ShaderProgram& p = program("lic1");
-    const ShaderProgram& o = program("lic_occluder");
-    const ShaderProgram* current = nullptr;
-    g.ActiveTexture(GL_TEXTURE1);
+    p.use();
+    set_common(p, m, t);
+    p.set_mat4("u_mvp", mvp.data());
+    p.set("u_image_size", static_cast<float>(image_w), static_cast<float>(image_h));
+    p.set("u_inv_cell", inv_cell);
     for (const auto& d : draws) {
-      const ShaderProgram& q = d.occluder ? o : p;
-      if (&q != current) {
-        current = &q;
-        q.use();
-        set_common(q, m, t);
-        if (&q == &p) {
-          p.set_mat4("u_mvp", mvp.data());
-          p.set("u_image_size", static_cast<float>(image_w), static_cast<float>(image_h));
-          p.set("u_inv_cell", inv_cell);
-          p.set("u_field", 1);
-        }
-      }
-      if (!d.occluder) g.BindTexture(GL_TEXTURE_BUFFER, d.mesh->field_texture);
-      set_clip(q, d.clipped, d.cut);
-      g.StencilFunc(GL_ALWAYS, d.occluder ? 0 : 1, 0xFF);
+      set_clip(p, d.clipped, d.cut);
       draw_mesh(*d.mesh);
     }
     g.Disable(GL_CLIP_DISTANCE0);
-    g.BindTexture(GL_TEXTURE_BUFFER, 0);
-    g.ActiveTexture(GL_TEXTURE0);
-    g.Disable(GL_STENCIL_TEST);
+    g.Disable(GL_CULL_FACE);
+    g.DepthMask(GL_TRUE);
+    g.DepthFunc(GL_LESS);
   }
 
   // LIC stage 2 into main_color (through lic_out_fbo), scissored to
   // `region`: as hybrid_stage2, a cheap pass first marks the pixels with a
-  // mask > 0 among the LIC pixels (stencil 1) by a depth write, then the
+  // mask > 0 by a depth write into lic_depth, then the
   // convolution runs with depth test EQUAL on those only. Multiplied into
   // the colour (blend DST_COLOR, ZERO), or with `value` written as is
   // ((v, mask, 0, 1), render_lic_buffer).
@@ -909,12 +921,21 @@ struct Renderer::Impl {
     const GlFunctions& g = gl();
     const PixelRect r = tile_region(t, region);
     if (is_empty(r)) return;
-    begin_stage2(lic_out_fbo, lic_color, t, r);
+    g.BindFramebuffer(GL_FRAMEBUFFER, lic_out_fbo);
+    const GLenum color0 = GL_COLOR_ATTACHMENT0;
+    g.DrawBuffers(1, &color0);
+    g.Viewport(0, 0, t.render_w, t.render_h);
+    g.Enable(GL_SCISSOR_TEST);
+    g.Scissor(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
+    g.DepthMask(GL_TRUE);
+    g.ClearDepth(1.0);
+    g.Clear(GL_DEPTH_BUFFER_BIT);
+    g.ActiveTexture(GL_TEXTURE0);
+    g.BindTexture(GL_TEXTURE_2D, lic_color);
     const ShaderProgram& m = program("lic_mask");
     m.use();
     m.set("u_data", 0);
     mark_pixels();
-    g.Disable(GL_STENCIL_TEST);
     g.DepthFunc(GL_EQUAL);
     g.DepthMask(GL_FALSE);
     if (!value) {
@@ -932,7 +953,7 @@ struct Renderer::Impl {
     draw_fullscreen();
     g.Disable(GL_SCISSOR_TEST);
     g.Disable(GL_BLEND);
-    g.StencilMask(0xFF);
+    g.DepthMask(GL_TRUE);
     g.DepthFunc(GL_LESS);
     g.Disable(GL_DEPTH_TEST);
   }
@@ -974,8 +995,7 @@ struct Renderer::Impl {
     std::vector<LicDraw> draws;
     for (std::size_t i = 0; i < F.scene.structures.size(); ++i) {
       const Structure& s = F.scene.structures[i];
-      if (!opaque(s)) continue;
-      draws.push_back({F.gpu[i], !s.style.lic, clipped(F, s), cut(F, s)});
+      if (opaque(s) && s.style.lic) draws.push_back({F.gpu[i], clipped(F, s), cut(F, s)});
     }
     lic_stage1(draws, F.M, t, F.lic_inv_cell, F.camera.width, F.camera.height);
     lic_stage2(F.lic_kernel, static_cast<float>(F.options.lic.strength), t, F.lic_region, false);
@@ -1585,13 +1605,25 @@ Image Renderer::render_lic_buffer(const std::shared_ptr<const RenderMesh>& mesh,
   const PixelRect region = projected_rect(M, {mesh.get()}, camera.width, camera.height);
   Image image(camera.width, camera.height);
   for (const Tile& t : tiles) {
-    I.lic_stage1({{&gm, false}}, M, t, static_cast<float>(1.0 / cell), camera.width, camera.height);
+    // The depth the opaque pass would leave (mesh.vert), then stage 1 on it.
     g.BindFramebuffer(GL_FRAMEBUFFER, I.main_fbo);
     const GLenum color0 = GL_COLOR_ATTACHMENT0;
     g.DrawBuffers(1, &color0);
     g.Viewport(0, 0, t.render_w, t.render_h);
+    I.set_state_opaque();
     g.ClearColor(0.0f, 0.0f, 0.0f, 0.0f);
-    g.Clear(GL_COLOR_BUFFER_BIT);
+    g.ClearDepth(1.0);
+    g.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    g.ColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+    const ShaderProgram& depth = I.program("mesh");
+    depth.use();
+    I.set_common(depth, M, t);
+    I.set_clip(depth, false);
+    I.draw_mesh(gm);
+    g.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    I.lic_stage1({{&gm, false}}, M, t, static_cast<float>(1.0 / cell), camera.width, camera.height);
+    g.BindFramebuffer(GL_FRAMEBUFFER, I.main_fbo);
+    g.Viewport(0, 0, t.render_w, t.render_h);
     I.lic_stage2(kernel, static_cast<float>(options.strength), t, region, true);
     check_gl_error(g, "drawing the LIC buffer");
     I.read_tile(I.main_fbo, t, camera.height, image, false);

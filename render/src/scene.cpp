@@ -147,6 +147,20 @@ const std::vector<std::string> kLicKeys = {"kernel_length", "noise_scale", "stre
 const std::vector<std::string> kClipKeys = {"point", "normal"};
 const std::vector<std::string> kCutawayKeys = {"enabled", "margin_px", "fade_px", "rim",
                                                "rim_color"};
+// structures[].hatching as an object: numbers with their ranges (lo, hi,
+// whether lo itself is allowed), the flags, and "method".
+struct HatchingNumber {
+  const char* key;
+  double lo, hi;
+  bool lo_allowed;
+};
+const HatchingNumber kHatchingNumbers[] = {
+    {"contour_margin", 0.0, 1.0, false},    {"convex_threshold", 0.0, 1e6, false},
+    {"concave_threshold", 0.0, 1e6, false}, {"umbilic_threshold", 0.0, 1e6, true},
+    {"spacing", 0.0, 1e6, false},           {"min_weight", 0.0, 1.0, true},
+    {"min_length", 0.0, 1e6, true},         {"max_length", 0.0, 1e6, true}};
+const std::vector<std::string> kHatchingFlags = {"no_contours", "no_features"};
+const std::vector<std::string> kHatchingMethods = {"shading", "confis"};
 
 Vec3 vec3_from_json(const nlohmann::json& j, const std::string& what) {
   if (!j.is_array() || j.size() != 3 || !j[0].is_number() || !j[1].is_number() || !j[2].is_number())
@@ -163,6 +177,46 @@ const std::vector<std::string> kCameraKeys = {"eye",   "center", "up",   "fov_de
                                               "width", "height", "near", "far"};
 const std::vector<std::string> kViews = {"anterior", "posterior", "left",
                                          "right",    "superior",  "inferior"};
+
+}  // namespace
+
+namespace {
+
+HatchingSpec hatching_spec(const nlohmann::json& j, const std::string& what,
+                           const std::string& path) {
+  std::vector<std::string> known = {"method"};
+  for (const auto& n : kHatchingNumbers) known.push_back(n.key);
+  known.insert(known.end(), kHatchingFlags.begin(), kHatchingFlags.end());
+  check_keys(j, known, what, path);
+  HatchingSpec h;
+  if (j.contains("method")) {
+    h.method = lower(text(j, "method", what, path));
+    if (std::find(kHatchingMethods.begin(), kHatchingMethods.end(), h.method) ==
+        kHatchingMethods.end())
+      throw InputError(what + ": " + at(path, "method") + ": unknown method \"" +
+                       j["method"].get<std::string>() + "\" (use shading or confis)" +
+                       did_you_mean(h.method, kHatchingMethods));
+  }
+  for (const auto& n : kHatchingNumbers) {
+    if (!j.contains(n.key)) continue;
+    const double v = number(j, n.key, n.lo, n.hi, what, path);
+    if (!n.lo_allowed && !(v > n.lo))
+      throw InputError(what + ": " + at(path, n.key) + " must be greater than " +
+                       std::to_string(n.lo));
+    h.numbers[n.key] = v;
+  }
+  for (const auto& key : kHatchingFlags)
+    if (j.contains(key)) h.flags[key] = boolean(j, key.c_str(), what, path);
+  const std::string method = h.method.empty() ? "confis" : h.method;
+  if (method == "shading")
+    for (const auto& [key, v] : h.numbers)
+      if (key != "min_length" && key != "max_length")
+        throw InputError(what + ": " + at(path, key) + ": only for \"method\": \"confis\"");
+  if (method == "shading" && !h.flags.empty())
+    throw InputError(what + ": " + at(path, h.flags.begin()->first) +
+                     ": only for \"method\": \"confis\"");
+  return h;
+}
 
 }  // namespace
 
@@ -471,7 +525,14 @@ SceneSpec scene_spec_from_json(const nlohmann::json& j, const std::filesystem::p
                            (l.is_string() ? std::string("an empty string") : type_name(l)) + ")");
         }
       }
-      if (s.contains("hatching")) st.hatching = boolean(s, "hatching", what, path);
+      if (s.contains("hatching")) {
+        if (s["hatching"].is_object()) {
+          st.hatching = true;
+          st.hatching_options = hatching_spec(s["hatching"], what, at(path, "hatching"));
+        } else {
+          st.hatching = boolean(s, "hatching", what, path);
+        }
+      }
       spec.structures.push_back(std::move(st));
     }
   } catch (const nlohmann::json::exception& e) {
@@ -535,6 +596,13 @@ nlohmann::json scene_spec_to_json(const SceneSpec& spec) {
     else if (!s.label.empty())
       o["label"] = s.label;
     if (s.hatching) o["hatching"] = *s.hatching;
+    if (s.hatching.value_or(false) && s.hatching_options != HatchingSpec{}) {
+      nlohmann::json h = nlohmann::json::object();
+      if (!s.hatching_options.method.empty()) h["method"] = s.hatching_options.method;
+      for (const auto& [key, v] : s.hatching_options.numbers) h[key] = v;
+      for (const auto& [key, v] : s.hatching_options.flags) h[key] = v;
+      o["hatching"] = h;
+    }
     list.push_back(o);
   }
   j["structures"] = list;

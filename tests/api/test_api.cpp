@@ -164,6 +164,15 @@ TEST(Api, PrepareMeshOrientsAndReports) {
   PrepareOptions keep;
   keep.orient = false;
   EXPECT_EQ(prepare_mesh(inverted(original), keep).mesh.faces, inverted(original).faces);
+  // Keeping the orientation still welds exact duplicates (docs/validation.md): the second
+  // triangle's copies of vertices 1 and 2 become 1 and 2, vertex i stays vertex i.
+  TriangleMesh split;
+  split.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
+  split.faces = {{0, 1, 2}, {3, 5, 4}};
+  const PreparedMesh welded = prepare_mesh(split, keep);
+  EXPECT_EQ(welded.mesh.faces, (std::vector<Face>{{0, 1, 2}, {1, 5, 2}}));
+  EXPECT_EQ(welded.mesh.positions.size(), 6u);
+  EXPECT_EQ(welded.repair.welded_vertices, 2u);
   EXPECT_THROW(prepare_mesh(TriangleMesh{}), InputError);
   EXPECT_THROW(prepare_mesh(test::bundled_data() / "no-such-mesh.obj"), InputError);
 }

@@ -1020,7 +1020,9 @@ TEST(Render, SceneSvgKeepsAGroupPerStructure) {
       EXPECT_FALSE(f.child("path").empty()) << groups.back()[0];
     }
     EXPECT_TRUE(families.count("contour")) << groups.back()[0];
-    if (groups.back()[1] == "context") EXPECT_EQ(families.size(), 1u);  // "lines": ["contour"]
+    if (groups.back()[1] == "context") {
+      EXPECT_EQ(families.size(), 1u);  // "lines": ["contour"]
+    }
   }
   // data/aneurysm-scene.json: the context wall (line_color 0.25 0.3 0.4, alpha 0.5) first,
   // the focus aneurysm (default black lines) drawn over it.
@@ -1484,6 +1486,73 @@ TEST(ConfisCli, BadParametersExit2) {
     EXPECT_NE(r.err.find(expected), std::string::npos) << describe(r);
     EXPECT_TRUE(list_dir(dir).empty()) << joined(list_dir(dir));
   }
+}
+
+// structures[].hatching as an object (issue 21): the method and the ConFIS
+// parameters per structure, named as the flags; a flag given on the command
+// line wins over the key; unknown keys and values exit 2 naming the key;
+// `fabrica lines` and `render` read the same scene.
+TEST(ConfisCli, SceneHatchingKey) {
+  if (!has_command("hatch")) GTEST_SKIP() << "no hatch command in this build";
+  const fs::path dir = work_dir();
+  const fs::path liver =
+      test::bundled_data() / "meshes" / "anatomy" / "liver" / "sofa_liver-smooth.obj";
+  auto scene = [&](const std::string& name, const std::string& hatching) {
+    const fs::path path = dir / name;
+    write_bytes(path, "{\"view\": \"left\", \"structures\": [{\"mesh\": \"" +
+                          liver.generic_string() + "\", \"lines\": [], \"hatching\": " + hatching +
+                          "}]}");
+    return path.string();
+  };
+  // "OUT: METHOD, N strokes (M vertices), ..." without the output's name.
+  auto summary = [](const Outcome& r) {
+    const auto at = r.out.find(": ");
+    const auto end = r.out.find(", grid depth");
+    return at == std::string::npos ? r.out : r.out.substr(at, end - at);
+  };
+  auto hatch = [&](std::vector<std::string> args) {
+    args.insert(args.begin(), "hatch");
+    args.insert(args.end(), {"-o", (dir / "out.svg").string()});
+    const Outcome r = run_fabrica(args);
+    EXPECT_EQ(r.code, 0) << describe(r);
+    fs::remove(dir / "out.svg");
+    return summary(r);
+  };
+  const std::string keyed =
+      scene("keyed.json", "{\"method\": \"confis\", \"spacing\": 5, \"contour_margin\": 0.4}");
+  const std::string from_key = hatch({keyed});
+  EXPECT_EQ(from_key.rfind(": confis, ", 0), 0u) << from_key;
+  EXPECT_EQ(from_key, hatch({liver.string(), "--view", "left", "--method", "confis", "--spacing",
+                             "5", "--contour-margin", "0.4"}));
+  // The flag wins over the key.
+  const std::string flag_wins = hatch({keyed, "--spacing", "9"});
+  EXPECT_EQ(flag_wins, hatch({liver.string(), "--view", "left", "--method", "confis", "--spacing",
+                              "9", "--contour-margin", "0.4"}));
+  EXPECT_NE(flag_wins, from_key);
+  // `lines` and `render` read the scene (the key does not change them).
+  const Outcome lines = run_fabrica({"lines", keyed, "-o", (dir / "l.svg").string(), "-q"});
+  EXPECT_EQ(lines.code, 0) << describe(lines);
+  fs::remove(dir / "l.svg");
+
+  const std::vector<std::pair<std::string, std::string>> bad{
+      {"{\"method\": \"confsi\"}", "did you mean 'confis'"},
+      {"{\"method\": \"confis\", \"spacnig\": 5}", "structures[0].hatching.spacnig"},
+      {"{\"method\": \"confis\", \"spacing\": 0}", "structures[0].hatching.spacing"},
+      {"{\"method\": \"confis\", \"contour_margin\": 2}", "structures[0].hatching.contour_margin"},
+      {"{\"method\": \"confis\", \"no_contours\": 1}", "structures[0].hatching.no_contours"},
+      {"{\"method\": \"shading\", \"spacing\": 5}", "structures[0].hatching.spacing"},
+      {"{\"spacing\": 5}", "structures[0].hatching.spacing"},  // --method shading
+      {"\"yes\"", "structures[0].hatching"}};
+  for (const auto& [value, needle] : bad) {
+    const Outcome r =
+        run_fabrica({"hatch", scene("bad.json", value), "-o", (dir / "out.svg").string()});
+    EXPECT_EQ(r.code, 2) << value << "\n" << describe(r);
+    EXPECT_TRUE(one_line(r.err)) << describe(r);
+    EXPECT_NE(r.err.find(needle), std::string::npos) << value << "\n" << describe(r);
+  }
+  fs::remove(dir / "bad.json");
+  fs::remove(dir / "keyed.json");
+  EXPECT_TRUE(list_dir(dir).empty()) << joined(list_dir(dir));
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 // resolutions each: errors must be small and shrink with refinement.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 #include <vector>
 
@@ -15,6 +16,10 @@ namespace {
 
 using test::CurvatureErrors;
 using test::ErrorOptions;
+
+using test::kFloatDirectionDeg;
+using test::kFloatRounding;
+using test::kFloatRoundingC;
 
 CurvatureErrors run(const std::string& name, TriangleMesh mesh, const test::AnalyticSurface& a,
                     const ErrorOptions& o) {
@@ -59,7 +64,10 @@ TriangleMesh twisted_cylinder(double r, double h, int rings, int segments, doubl
 TEST(Curvature, SphereIsExactForAnyInscribedTriangulation) {
   // Max's normal weights are exact for vertices on a sphere, so the normal
   // differences are exactly Δp / R and the fit gives II = I / R exactly,
-  // whatever the triangulation: the error must be at rounding level.
+  // whatever the triangulation: the error must be at rounding level. The
+  // fits run in single precision (as rtsc's; ε = 6e-8, measured errors
+  // ≤ 3e-7 for II and ≤ 1.5e-5 for C), so "rounding level" is float's, not
+  // double's 1e-10 of the double-precision fits before issue 22.
   const double r = 3.0;
   ErrorOptions o;
   o.scale = 1.0 / r;
@@ -73,11 +81,11 @@ TEST(Curvature, SphereIsExactForAnyInscribedTriangulation) {
           std::pair{"jittered icosphere", jittered_sphere(r, sub, 0.3)}}) {
       const auto e =
           run(std::string(name) + "/" + std::to_string(sub), mesh, test::analytic_sphere(r), o);
-      EXPECT_LT(e.k1, 1e-10) << name;
-      EXPECT_LT(e.k2, 1e-10) << name;
-      EXPECT_LT(e.mean, 1e-10) << name;
-      EXPECT_LT(e.gauss, 1e-10) << name;
-      EXPECT_LT(e.deriv, 1e-6) << name;  // finite-difference noise of the exact C = 0
+      EXPECT_LT(e.k1, kFloatRounding) << name;
+      EXPECT_LT(e.k2, kFloatRounding) << name;
+      EXPECT_LT(e.mean, kFloatRounding) << name;
+      EXPECT_LT(e.gauss, kFloatRounding) << name;
+      EXPECT_LT(e.deriv, kFloatRoundingC) << name;  // the exact C = 0
       EXPECT_EQ(e.invalid, 0u);
       EXPECT_GT(e.count, 40u);
     }
@@ -90,12 +98,12 @@ TEST(Curvature, Cylinder) {
   o.scale = 1.0 / r;
   o.umbilic_gap = 0.5 / r;
   // Regular grid (as in the reference README's example): exact on the
-  // middle rings.
+  // middle rings, up to the single-precision rounding of the fits.
   const auto grid =
       run("cylinder 96x20", test::make_cylinder(r, 20.0, 19, 96), test::analytic_cylinder(r), o);
-  EXPECT_LT(grid.k1, 1e-10);
-  EXPECT_LT(grid.k2, 1e-10);
-  EXPECT_LT(grid.deriv, 1e-6);
+  EXPECT_LT(grid.k1, kFloatRounding);
+  EXPECT_LT(grid.k2, kFloatRounding);
+  EXPECT_LT(grid.deriv, kFloatRoundingC);
   // Twisted grid: a real discretisation error that shrinks with refinement.
   // Vertices within three rings of a boundary see one-sided (biased) data:
   // left out.
@@ -112,8 +120,9 @@ TEST(Curvature, Cylinder) {
     EXPECT_LT(e[i].k2, 0.35 * e[i - 1].k2);  // second order
     EXPECT_LT(e[i].dir_deg, e[i - 1].dir_deg);
     // Every interior vertex is congruent to every other (helical lattice):
-    // the estimated curvature field is constant, so C = 0 up to rounding.
-    EXPECT_LT(e[i].deriv, 1e-9);
+    // the estimated curvature field is constant, so C = 0 up to rounding
+    // (single precision: measured ≤ 2e-6).
+    EXPECT_LT(e[i].deriv, kFloatRoundingC);
   }
   EXPECT_LT(e.back().k1, 1e-4);
   EXPECT_LT(e.back().k2, 5e-4);
@@ -143,7 +152,10 @@ TEST(Curvature, TorusRegularGridConverges) {
     EXPECT_LT(e[i].k2, 0.35 * e[i - 1].k2);
     EXPECT_LT(e[i].mean, 0.35 * e[i - 1].mean);
     EXPECT_LT(e[i].gauss, 0.35 * e[i - 1].gauss);
-    EXPECT_LT(e[i].dir_deg, 0.35 * e[i - 1].dir_deg);
+    // Directions converge down to the floor of the single-precision fits
+    // (measured 0.006-0.007 degrees on the two finer tori, from the
+    // rounding of the vertex normals whose differences the II fit reads).
+    EXPECT_LT(e[i].dir_deg, std::max(0.35 * e[i - 1].dir_deg, kFloatDirectionDeg));
     EXPECT_LT(e[i].deriv, 0.35 * e[i - 1].deriv);
   }
   EXPECT_LT(e[0].k1, 0.002);

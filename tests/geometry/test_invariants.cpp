@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "analytic.hpp"
+#include "curvature_internal.hpp"  // the AVX2 fits' switch (core/src, private)
 #include "fabrica/core/curvature.hpp"
 #include "fabrica/core/error.hpp"
 #include "fabrica/core/geometry.hpp"
@@ -299,7 +300,7 @@ TEST(Invariance, RigidMotionAndScaling) {
     Surface b(transformed(m, R, Vec3(10, -20, 5), scale));
     const auto &ca = a.curvature(), &cb = b.curvature();
     const auto &da = a.curvature_derivatives(), &db = b.curvature_derivatives();
-    const double tol = 1e-8;
+    const double tol = test::kFloatRounding;  // single-precision fits (was 1e-8)
     for (std::size_t v = 0; v < a.vertex_count(); ++v) {
       ASSERT_TRUE(cb.valid[v]);
       EXPECT_NEAR(cb.k1[v] * scale, ca.k1[v], tol * std::abs(ca.k1[v]) + 1e-12);
@@ -309,17 +310,18 @@ TEST(Invariance, RigidMotionAndScaling) {
       EXPECT_LT((b.vertex_normals()[v] - R * a.vertex_normals()[v]).norm(), 1e-10);
       if (std::abs(ca.k1[v] - ca.k2[v]) < 1e-3) continue;
       const Vec3 e1 = R * ca.e1[v];
-      EXPECT_GT(std::abs(cb.e1[v].dot(e1)), 1 - 1e-8);
+      EXPECT_GT(std::abs(cb.e1[v].dot(e1)), 1 - test::kFloatRounding);
       const double s1 = cb.e1[v].dot(e1) > 0 ? 1 : -1;
       const double s2 = cb.e2[v].dot(R * ca.e2[v]) > 0 ? 1 : -1;
-      const double cs = 1e-7 * (std::abs(da.a[v]) + std::abs(da.b[v]) + std::abs(da.c[v]) +
-                                std::abs(da.d[v]) + 1e-6);
+      const double cs = test::kFloatRoundingC * (std::abs(da.a[v]) + std::abs(da.b[v]) +
+                                                 std::abs(da.c[v]) + std::abs(da.d[v]) + 1e-6);
       EXPECT_NEAR(s1 * db.a[v] * scale * scale, da.a[v], cs);
       EXPECT_NEAR(s2 * db.b[v] * scale * scale, da.b[v], cs);
       EXPECT_NEAR(s1 * db.c[v] * scale * scale, da.c[v], cs);
       EXPECT_NEAR(s2 * db.d[v] * scale * scale, da.d[v], cs);
     }
-    EXPECT_NEAR(b.feature_size() / scale, a.feature_size(), 1e-9 * a.feature_size());
+    EXPECT_NEAR(b.feature_size() / scale, a.feature_size(),
+                test::kFloatRounding * a.feature_size());
     EXPECT_NEAR(b.median_edge_length() / scale, a.median_edge_length(),
                 1e-12 * a.median_edge_length());
     EXPECT_NEAR(b.bounding_sphere_radius() / scale, a.bounding_sphere_radius(),
@@ -401,7 +403,7 @@ TEST(Robustness, OpenMultiComponentDegenerate) {
     EXPECT_EQ(s.vertex_normals()[v], Vec3::Zero());
   }
   EXPECT_TRUE(c.valid[0]);
-  EXPECT_NEAR(c.k1[0], 1.0, 1e-9);
+  EXPECT_NEAR(c.k1[0], 1.0, test::kFloatRounding);  // float fits
   EXPECT_EQ(s.face_normals()[s.face_count() - 1], Vec3::Zero());
   // An empty mesh and a mesh without faces.
   for (TriangleMesh e : {TriangleMesh{}, TriangleMesh{{{1, 2, 3}}, {}}}) {
@@ -477,6 +479,24 @@ TEST(Determinism, SameBitsAtOneAndTwoThreads) {
   }
 }
 
+// The single-precision curvature fits have a portable and an AVX2 version
+// (core/src/curvature_fit_kernel.hpp); they must give the same bits, also
+// on the partial last block of eight faces (37 x 19 x 2 = 1406 faces).
+TEST(Determinism, Avx2CurvatureFitsMatchPortable) {
+  if (!detail::curvature_avx2_enabled().load()) GTEST_SKIP() << "no AVX2 fits on this CPU/build";
+  for (const TriangleMesh& m :
+       {test::make_torus(16, 4.5, 256, 128, 0.2), test::make_torus(16, 4.5, 37, 19, 0.3)}) {
+    Surface wide(m);
+    wide.precompute();
+    const auto expected = bytes_of(wide);
+    detail::curvature_avx2_enabled() = false;
+    Surface portable(m);
+    portable.precompute();
+    detail::curvature_avx2_enabled() = true;
+    EXPECT_EQ(bytes_of(portable), expected);
+  }
+}
+
 TEST(Determinism, ConcurrentLazyAccess) {
   const TriangleMesh m = test::make_torus(16, 4.5, 128, 64, 0.2);
   Surface ref(m);
@@ -506,10 +526,11 @@ TEST(Statistics, EdgesSphereFeatureSize) {
     EXPECT_LE((q - s.bounding_sphere_center()).norm(), s.bounding_sphere_radius());
   EXPECT_LT(s.bounding_sphere_radius(), 3.0 * 1.05);
   // All |k| = 1/3: feature size = min(0.01 * 3, 0.05 * R).
-  EXPECT_NEAR(s.feature_size(), 0.03, 1e-9);
+  EXPECT_NEAR(s.feature_size(), 0.03, 0.03 * test::kFloatRounding);  // float fits
   FeatureSizeOptions rtsc;
   rtsc.rtsc_sampling = true;
-  EXPECT_NEAR(feature_size(s.curvature(), s.bounding_sphere_radius(), rtsc), 0.03, 1e-9);
+  EXPECT_NEAR(feature_size(s.curvature(), s.bounding_sphere_radius(), rtsc), 0.03,
+              0.03 * test::kFloatRounding);
   EXPECT_NEAR(curvature_derivative_along(1, 2, 3, 4, 1, 0), 1, 0);
   EXPECT_NEAR(curvature_derivative_along(1, 2, 3, 4, 0, 1), 4, 0);
   EXPECT_NEAR(curvature_derivative_along(1, 2, 3, 4, 0.6, 0.8),
@@ -544,8 +565,9 @@ TEST(Smoothing, KeepsSphereReducesNoise) {
   o.derivative_smoothing_passes = 1;
   Surface s(test::make_icosphere(2.0, 3), o);
   for (std::size_t v = 0; v < s.vertex_count(); ++v) {
-    EXPECT_NEAR(s.curvature().k1[v], 0.5, 1e-12);
-    EXPECT_NEAR(s.curvature().k2[v], 0.5, 1e-12);
+    // Exact up to the float rounding of the fits (was 1e-12).
+    EXPECT_NEAR(s.curvature().k1[v], 0.5, 0.5 * test::kFloatRounding);
+    EXPECT_NEAR(s.curvature().k2[v], 0.5, 0.5 * test::kFloatRounding);
   }
   // Jittered torus: smoothing lowers the k1 error (noise, not bias).
   const auto torus = test::make_torus(16, 4.5, 192, 96, 0.25);

@@ -197,6 +197,28 @@ TEST(LinesViewFields, SimdAndPortablePassesGiveTheSameBits) {
   }
 }
 
+// The AVX2 D_t1 q1 pass finds a fan's candidate faces from float signs and
+// hands the fan to the double search when a sign is within the float
+// error: on a cylinder seen across its axis, t1 runs around it, so the
+// neighbours on a vertex's own ring lie on the line through it (p = 0 up to
+// rounding). Same bits as the portable pass, and that hand-over happens.
+TEST(LinesViewFields, Dt1q1FloatSignsHandNearZeroToDouble) {
+#if !defined(FABRICA_LINES_AVX2)
+  GTEST_SKIP() << "no AVX2 passes in this build";
+#else
+  if (!detail::cpu_has_avx2()) GTEST_SKIP() << "this CPU has no AVX2";
+  const Surface surface(test::make_cylinder(10.0, 40.0, 24, 64));
+  const LinePrecompute pre(surface);
+  Camera c = camera_towards(surface, Vec3(1.0, 0.0, 0.0));
+  c.projection = Projection::orthographic;
+  const std::size_t before = detail::dt1q1_double_path().load();
+  expect_same_vertex_pass(surface, pre, c, false);
+  EXPECT_GT(detail::dt1q1_double_path().load(), before);
+  c = camera_towards(surface, Vec3(1.0, 0.3, 0.1));
+  expect_same_vertex_pass(surface, pre, c, false);
+#endif
+}
+
 // The face kernels also have AVX2 paths (the apparent-ridge crossing test
 // and segments, and the contour and suggestive-contour segments, four faces
 // at a time); every family's segments, all fields

@@ -82,6 +82,13 @@ std::size_t differing(const fr::Image& a, const fr::Image& b, int levels) {
   return n;
 }
 
+// Whether pixel (x, y) of a and b differs by more than `levels` in a channel.
+bool pixel_differs(const fr::Image& a, const fr::Image& b, int x, int y, int levels) {
+  for (int c = 0; c < 4; ++c)
+    if (std::abs(int(a.pixel(x, y)[c]) - int(b.pixel(x, y)[c])) > levels) return true;
+  return false;
+}
+
 // Noise cells of about 2 pixels at `cam` (the automatic scale is meant for
 // pictures about 1000 pixels tall; these are smaller).
 fr::LicOptions test_options(const fr::RenderMesh& mesh, const Camera& cam) {
@@ -283,9 +290,7 @@ TEST(Lic, RenderPassTilesAndStaysInTheFeatureRegions) {
   std::size_t changed = 0, changed_outside = 0;
   for (int y = 0; y < cam.height; ++y) {
     for (int x = 0; x < cam.width; ++x) {
-      bool differs = false;
-      for (int c = 0; c < 4; ++c)
-        differs = differs || std::abs(int(plain.pixel(x, y)[c]) - int(lic.pixel(x, y)[c])) > 1;
+      const bool differs = pixel_differs(plain, lic, x, y, 1);
       const bool masked = buffer.pixel(x, y)[3] > 0 && buffer.pixel(x, y)[1] > 0;
       changed += differs;
       changed_outside += differs && !masked;
@@ -335,4 +340,81 @@ TEST(Lic, MissingFieldIsAnInputError) {
   mesh->lic_field.clear();
   EXPECT_THROW(renderer().render_lic_buffer(mesh, view_of(*mesh, 64, 64), {}), fabrica::InputError);
   EXPECT_THROW(fr::lic_reference(*mesh, view_of(*mesh, 64, 64), {}), fabrica::InputError);
+}
+
+// The clipping plane (b2282e1): a LIC context structure cut in half by the
+// scene's clip (the plane through the view direction, so the removed half is
+// the right half of the picture) gets no LIC on the clipped side: the
+// picture with LIC equals the one without in every column right of the
+// plane's image, and differs on the kept side. The same mesh as the focus
+// is not clipped (renderer.cpp set_clip: llvmpipe kept clipping after
+// glDisable(GL_CLIP_DISTANCE0)).
+TEST(Lic, ClipPlaneRemovesTheLicOnTheClippedSide) {
+  const auto& f = torus();
+  const Camera cam = view_of(*f.mesh, 300, 220);
+  const Vec3 forward = (cam.center - cam.eye).normalized();
+  const Vec3 right = forward.cross(cam.up).normalized();
+  fr::Scene scene;
+  fr::Structure s;
+  s.name = "torus";
+  s.role = fr::Role::context;
+  s.style = fr::default_style(fr::Role::context);
+  s.style.opacity = 1.0;  // LIC is drawn on opaque structures
+  s.mesh = f.mesh;
+  scene.structures.push_back(s);
+  scene.clip = fr::ClipPlane{f.mesh->center, right};
+  fr::RenderOptions o;
+  o.lic = test_options(*f.mesh, cam);
+  const auto plain = renderer().render(scene, cam, o);
+  scene.structures[0].style.lic = true;
+  const auto lic = renderer().render(scene, cam, o);
+  std::size_t kept_changed = 0, clipped_changed = 0;
+  for (int y = 0; y < cam.height; ++y) {
+    for (int x = 0; x < cam.width; ++x) {
+      const bool differs = pixel_differs(plain, lic, x, y, 0);
+      if (x < cam.width / 2 - 1) kept_changed += differs;
+      if (x > cam.width / 2 + 1) clipped_changed += differs;
+    }
+  }
+  std::printf("clip: %zu pixels changed on the kept side, %zu on the clipped side\n", kept_changed,
+              clipped_changed);
+  EXPECT_GT(kept_changed, 500u);
+  EXPECT_EQ(clipped_changed, 0u);
+  // The focus is never clipped: as a focus structure (drawn after the
+  // clipped context one on the same renderer) it keeps both halves and its
+  // LIC on both.
+  fr::Scene focus = scene;
+  focus.structures[0].role = fr::Role::focus;
+  const auto focus_lic = renderer().render(focus, cam, o);
+  focus.structures[0].style.lic = false;
+  const auto focus_plain = renderer().render(focus, cam, o);
+  std::size_t right_changed = 0;
+  for (int y = 0; y < cam.height; ++y)
+    for (int x = cam.width / 2 + 2; x < cam.width; ++x)
+      right_changed += pixel_differs(focus_lic, focus_plain, x, y, 0);
+  EXPECT_GT(right_changed, 500u) << "the focus lost its right half or its LIC there";
+}
+
+// The LIC field is computed once per surface (cached_lic_field) and gives
+// the same bytes as computing it again; set_lic_field with the shared
+// surface (build_scene's path) equals the uncached one.
+TEST(Lic, FieldIsCachedPerSurfaceWithTheSameBytes) {
+  auto surface =
+      std::make_shared<const fabrica::Surface>(fabrica::test::make_torus(1.0, 0.25, 60, 20));
+  const auto a = fr::cached_lic_field(surface);
+  const auto b = fr::cached_lic_field(surface);
+  EXPECT_EQ(a.get(), b.get()) << "computed twice";
+  const fr::LicField fresh = fr::compute_lic_field(*surface);
+  EXPECT_EQ(a->direction, fresh.direction);
+  EXPECT_EQ(a->level, fresh.level);
+  fr::RenderMesh m1 = fr::make_render_mesh(*surface, false), m2 = m1;
+  fr::set_lic_field(m1, surface);
+  fr::set_lic_field(m2, *surface);
+  EXPECT_EQ(m1.lic_field, m2.lic_field);
+  EXPECT_EQ(m1.lic_level, m2.lic_level);
+  ASSERT_TRUE(m1.has_lic_field());
+  // A new surface (even at a reused address) gets its own field.
+  auto other =
+      std::make_shared<const fabrica::Surface>(fabrica::test::make_torus(1.0, 0.3, 60, 20));
+  EXPECT_NE(fr::cached_lic_field(other)->direction, a->direction);
 }

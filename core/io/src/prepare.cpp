@@ -14,8 +14,9 @@ std::vector<std::string> PreparedMesh::messages() const {
 }
 
 namespace {
+// Welds exact duplicates always; orients only when options.orient (docs/validation.md).
 void prepare(PreparedMesh& prepared, const PrepareOptions& options) {
-  if (options.orient) prepared.repair = io::prepare_for_lines(prepared.mesh);
+  prepared.repair = io::prepare_for_lines(prepared.mesh, options);
 }
 }  // namespace
 

@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -63,16 +64,34 @@ double camera_px_per_mm(const Camera& camera);
 /// function of shaders/lic_noise.glsl (the interpolation in float).
 float lic_noise(float x, float y, float z);
 
-/// Sets mesh.lic_field and mesh.lic_level from the shared curvature field
-/// and feature regions of `surface` (fabrica/hatching/curvature_field.hpp,
-/// default options; the mesh must be made from the same surface).
+/// What the LIC pass needs of a surface, per vertex: `direction` (3 floats)
+/// the maximal-curvature LINE direction, the area-weighted doubled-angle
+/// mean of its faces' directions in the shared curvature field
+/// (fabrica/hatching/curvature_field.hpp, default options), unit, zero where
+/// none; `level` the feature level phi of the feature regions (>= 0 inside,
+/// the mask is clamp(phi, 0, 1)).
+struct LicField {
+  std::vector<float> direction, level;
+};
+LicField compute_lic_field(const Surface& surface);
+
+/// compute_lic_field, computed once per surface while it is alive (a
+/// process-wide cache keyed by the surface; thread-safe): build_scene,
+/// render_scene and `fabrica batch` reuse it for every view of a mesh.
+std::shared_ptr<const LicField> cached_lic_field(const std::shared_ptr<const Surface>& surface);
+
+/// Sets mesh.lic_field and mesh.lic_level from compute_lic_field(surface)
+/// (the cached one with the shared_ptr); the mesh must be made from the same
+/// surface.
 void set_lic_field(RenderMesh& mesh, const Surface& surface);
+void set_lic_field(RenderMesh& mesh, const std::shared_ptr<const Surface>& surface);
 
 /// The LIC pass's two images on the CPU for one mesh (its own occluder),
 /// rasterised at pixel centres: `value` the LIC value v in [0, 1] per pixel
 /// (row 0 at the top, as Image), `mask` the feature mask clamp(phi, 0, 1)
-/// (0 where the mesh is not visible or outside the feature regions). Needs
-/// mesh.lic_field and mesh.lic_level.
+/// (0 where the mesh is not visible, where the visible face is a back face,
+/// or outside the feature regions), both quantised as the GPU pass's RGBA8
+/// target holds them. Needs mesh.lic_field and mesh.lic_level.
 struct LicBuffer {
   int width = 0, height = 0;
   std::vector<float> value, mask;

@@ -23,10 +23,10 @@ struct RenderMesh {
   std::vector<std::uint32_t> indices;  ///< 3 per triangle
   std::vector<float> k1, k2;           ///< optional: 1 per vertex
   std::vector<float> e1, e2;           ///< optional: 3 per vertex
-  /// Optional, for surface LIC (lic.hpp, set_lic_field): 4 per triangle, the
-  /// unit maximal-curvature direction (sign-aligned) and 1 (0: degenerate
-  /// face, no direction); 1 per vertex, the feature level phi (>= 0 inside a
-  /// feature region; the mask is clamp(phi, 0, 1), phi linear in a face).
+  /// Optional, for surface LIC (lic.hpp, set_lic_field, LicField): 3 per
+  /// vertex, the unit maximal-curvature line direction (either sign; zero:
+  /// none); 1 per vertex, the feature level phi (>= 0 inside a feature
+  /// region; the mask is clamp(phi, 0, 1), phi linear in a face).
   std::vector<float> lic_field, lic_level;
   Vec3 center = Vec3::Zero();  ///< bounding sphere
   double radius = 0.0;
@@ -37,7 +37,7 @@ struct RenderMesh {
   std::size_t triangle_count() const { return indices.size() / 3; }
   bool has_curvature() const { return k1.size() == vertex_count() && vertex_count() > 0; }
   bool has_lic_field() const {
-    return lic_field.size() == 4 * triangle_count() && lic_level.size() == vertex_count() &&
+    return lic_field.size() == 3 * vertex_count() && lic_level.size() == vertex_count() &&
            triangle_count() > 0;
   }
 };

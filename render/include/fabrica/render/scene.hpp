@@ -6,6 +6,7 @@
 #pragma once
 
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <nlohmann/json_fwd.hpp>
 #include <optional>
@@ -142,6 +143,21 @@ struct Scene {
 
 // ------------------------------------------------------------ JSON ----
 
+/// `structures[].hatching` as an object (issue 21; docs/scene.md): how
+/// `fabrica hatch SCENE.json` hatches the structure, with the names of its
+/// flags ("method"; the ConFIS parameters contour_margin, convex_threshold,
+/// concave_threshold, umbilic_threshold, spacing, min_weight, no_contours,
+/// no_features; and min_length, max_length). A key that is not
+/// given, or whose flag is given on the command line, takes the command
+/// line's value. Validated when read (range, type, unknown key: InputError
+/// naming the key).
+struct HatchingSpec {
+  std::string method;                     ///< "shading" or "confis"; empty: --method
+  std::map<std::string, double> numbers;  ///< by key, e.g. "contour_margin"
+  std::map<std::string, bool> flags;      ///< "no_contours", "no_features"
+  bool operator==(const HatchingSpec&) const = default;
+};
+
 struct StructureSpec {
   std::string name;
   std::filesystem::path mesh;  ///< absolute, or relative to the scene file
@@ -153,7 +169,9 @@ struct StructureSpec {
   std::string label;
   bool show_label = true;
   /// Hatched by `fabrica hatch SCENE.json`; unset: the focus structures are.
+  /// "hatching": {...} (an object) hatches it with `hatching_options`.
   std::optional<bool> hatching;
+  HatchingSpec hatching_options;
   /// Whether `fabrica hatch` hatches this structure.
   bool hatched() const { return hatching.value_or(role == Role::focus); }
 };
