@@ -118,18 +118,25 @@ int main(int argc, char** argv) {
     for (std::size_t k = 0; k < n; ++k) hash = (hash ^ b[k]) * 1099511628211ull;
   };
   auto mix_soups = [&] {
-    for (const auto& s : soups)
+    // (the ends as the consumers see them: barycentrics and positions
+    // recomputed from the lean records)
+    for (const auto& s : soups) {
+      if (s.segments.empty()) continue;
+      const SegmentGeometry geo = s.geometry();
       for (const auto& seg : s.segments) {
         mix(&seg.face, sizeof seg.face);
-        for (const auto& e : seg.end) {
-          mix(&e.anchor.face, sizeof e.anchor.face);
-          mix(e.anchor.bary.data(), 3 * sizeof(double));
-          mix(e.position.data(), 3 * sizeof(double));
+        for (int i = 0; i < 2; ++i) {
+          const SegmentEnd& e = seg.end[i];
+          const ResolvedEnd r = geo.resolve(seg, i);
+          mix(&r.anchor.face, sizeof r.anchor.face);
+          mix(r.anchor.bary.data(), 3 * sizeof(double));
+          mix(r.position.data(), 3 * sizeof(double));
           mix(&e.element, sizeof e.element);
-          mix(&e.kind, sizeof e.kind);
+          mix(&seg.kind[i], sizeof seg.kind[i]);
           mix(&e.strength, sizeof e.strength);
         }
       }
+    }
   };
   for (const auto& s : soups) segments += s.segments.size();
   mix_soups();

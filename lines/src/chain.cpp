@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <limits>
 
+#include "chain_internal.hpp"
 #include "fabrica/core/projector.hpp"
 
 namespace fabrica {
@@ -15,8 +16,18 @@ namespace {
 
 // Endpoints that can be joined: kind edge, vertex or centroid with an
 // element id >= 0. Interior ends and ends without an element never join.
-bool joinable(const SegmentEnd& end) {
-  return end.kind != EndKind::interior && end.element >= 0;
+bool joinable(const LineSegment& s, int side) {
+  return s.kind[side] != EndKind::interior && s.end[side].element >= 0;
+}
+bool joinable_end(const std::vector<LineSegment>& segs, std::size_t j) {
+  return joinable(segs[j / 2], static_cast<int>(j % 2));
+}
+// The key of end j (= 2 * segment + side): its kind and element.
+EndKind kind_of(const std::vector<LineSegment>& segs, std::size_t j) {
+  return segs[j / 2].kind[j % 2];
+}
+std::int32_t element_of(const std::vector<LineSegment>& segs, std::size_t j) {
+  return segs[j / 2].end[j % 2].element;
 }
 
 constexpr std::int32_t kEmpty = -1;
@@ -36,13 +47,13 @@ std::vector<std::int32_t> pair_ends_flat(const std::vector<LineSegment>& segs,
   std::vector<std::int32_t> partner(ends, -1);
   thread_local std::vector<std::int32_t> table;
   if (table.size() < table_size) table.resize(table_size, kEmpty);
-  auto slot_of = [&](const SegmentEnd& end) -> std::int32_t& {
-    return table[static_cast<std::size_t>(table_offset[static_cast<int>(end.kind)] + end.element)];
+  auto slot_of = [&](std::size_t j) -> std::int32_t& {
+    return table[static_cast<std::size_t>(table_offset[static_cast<int>(kind_of(segs, j))] +
+                                          element_of(segs, j))];
   };
   for (std::size_t j = 0; j < ends; ++j) {
-    const SegmentEnd& end = segs[j / 2].end[j % 2];
-    if (!joinable(end)) continue;
-    std::int32_t& s = slot_of(end);
+    if (!joinable_end(segs, j)) continue;
+    std::int32_t& s = slot_of(j);
     const auto jj = static_cast<std::int32_t>(j);
     if (s == kEmpty) {
       s = jj;
@@ -62,10 +73,8 @@ std::vector<std::int32_t> pair_ends_flat(const std::vector<LineSegment>& segs,
       s = kMany;
     }
   }
-  for (std::size_t j = 0; j < ends; ++j) {
-    const SegmentEnd& end = segs[j / 2].end[j % 2];
-    if (joinable(end)) slot_of(end) = kEmpty;
-  }
+  for (std::size_t j = 0; j < ends; ++j)
+    if (joinable_end(segs, j)) slot_of(j) = kEmpty;
   return partner;
 }
 
@@ -77,11 +86,10 @@ std::vector<std::int32_t> pair_ends_sorted(const std::vector<LineSegment>& segs)
   std::vector<std::pair<std::uint64_t, std::uint64_t>> keys;
   keys.reserve(2 * n);
   for (std::size_t j = 0; j < 2 * n; ++j) {
-    const SegmentEnd& end = segs[j / 2].end[j % 2];
-    if (!joinable(end)) continue;
-    keys.push_back(
-        {(static_cast<std::uint64_t>(end.kind) << 32) | static_cast<std::uint64_t>(end.element),
-         j});
+    if (!joinable_end(segs, j)) continue;
+    keys.push_back({(static_cast<std::uint64_t>(kind_of(segs, j)) << 32) |
+                        static_cast<std::uint64_t>(element_of(segs, j)),
+                    j});
   }
   std::sort(keys.begin(), keys.end());
   std::vector<std::int32_t> partner(2 * n, -1);
@@ -97,14 +105,17 @@ std::vector<std::int32_t> pair_ends_sorted(const std::vector<LineSegment>& segs)
   return partner;
 }
 
-std::vector<std::int32_t> pair_ends(const std::vector<LineSegment>& segs) {
+}  // namespace
+
+namespace detail {
+
+std::vector<std::int32_t> pair_ends(const std::vector<LineSegment>& segs, bool force_sorted) {
   std::int64_t max_element[3] = {-1, -1, -1};
-  for (const auto& s : segs)
-    for (const auto& end : s.end)
-      if (joinable(end)) {
-        auto& m = max_element[static_cast<int>(end.kind)];
-        m = std::max(m, static_cast<std::int64_t>(end.element));
-      }
+  for (std::size_t j = 0; j < 2 * segs.size(); ++j)
+    if (joinable_end(segs, j)) {
+      auto& m = max_element[static_cast<int>(kind_of(segs, j))];
+      m = std::max(m, static_cast<std::int64_t>(element_of(segs, j)));
+    }
   std::int64_t offset[3];
   std::int64_t size = 0;
   for (int k = 0; k < 3; ++k) {
@@ -114,16 +125,22 @@ std::vector<std::int32_t> pair_ends(const std::vector<LineSegment>& segs) {
   // Mesh element ids are bounded by the mesh size; fall back to sorting
   // when the table would be large in bytes (over 2^23 entries, 32 MB:
   // meshes with millions of edges) or the end indices overflow 31 bits.
-  if (size > (std::int64_t{1} << 23) || segs.size() >= (std::size_t{1} << 29))
+  if (force_sorted || size > (std::int64_t{1} << 23) || segs.size() >= (std::size_t{1} << 29))
     return pair_ends_sorted(segs);
   return pair_ends_flat(segs, offset, static_cast<std::size_t>(size));
 }
 
-LineVertex to_vertex(const SegmentEnd& e) {
+}  // namespace detail
+
+namespace {
+
+// A polyline vertex at end `side` of s, its place on the mesh recomputed
+// from the lean record.
+LineVertex to_vertex(const SegmentGeometry& geo, const LineSegment& s, int side) {
   LineVertex v;
-  v.anchor = e.anchor;
-  v.position = e.position;
-  v.strength = e.strength;
+  v.anchor = geo.anchor(s, side);
+  v.position = geo.position(s, side);
+  v.strength = s.end[side].strength;
   v.visible = true;
   return v;
 }
@@ -157,7 +174,8 @@ std::vector<Polyline> chain_segments(const SegmentSoup& soup, const ChainOptions
   const std::size_t n = segs.size();
   std::vector<Polyline> out;
   if (n == 0) return out;
-  const std::vector<std::int32_t> partner = pair_ends(segs);
+  const SegmentGeometry geo = soup.geometry();
+  const std::vector<std::int32_t> partner = detail::pair_ends(segs);
 
   // 1. Walk every chain (serial, indices only). Chain c is steps[first[c] ..
   //    first[c + 1]); closed[c] says whether it is a loop. Vertices of a
@@ -212,25 +230,25 @@ std::vector<Polyline> chain_segments(const SegmentSoup& soup, const ChainOptions
     const bool loop = closed[c] != 0;
     const std::size_t nv = loop ? m : m + 1;
     if (nv < 2) return;
-    auto vertex_end = [&](std::size_t k) -> const SegmentEnd& {
-      if (k == 0) return segs[st[0].segment].end[st[0].entry];
-      return segs[st[k - 1].segment].end[1 - st[k - 1].entry];
-    };
+    std::vector<LineVertex> vertices(nv);
+    vertices[0] = to_vertex(geo, segs[st[0].segment], st[0].entry);
+    for (std::size_t k = 1; k < nv; ++k)
+      vertices[k] = to_vertex(geo, segs[st[k - 1].segment], 1 - st[k - 1].entry);
+    auto position = [&](std::size_t k) -> const Vec3& { return vertices[k].position; };
     if (options.min_length > 0.0) {
       // Polyline::length(), same terms in the same order.
       double len = 0.0;
-      for (std::size_t i = 0; i + 1 < nv; ++i)
-        len += (vertex_end(i + 1).position - vertex_end(i).position).norm();
-      if (loop && nv > 2) len += (vertex_end(0).position - vertex_end(nv - 1).position).norm();
+      for (std::size_t i = 0; i + 1 < nv; ++i) len += (position(i + 1) - position(i)).norm();
+      if (loop && nv > 2) len += (position(0) - position(nv - 1)).norm();
       if (len < options.min_length) return;
     }
     if (projector) {
       // projected_length(), same terms in the same order.
       double len = 0.0;
-      Vec2 prev = (*projector)(vertex_end(0).position).pixel;
+      Vec2 prev = (*projector)(position(0)).pixel;
       const Vec2 start = prev;
       for (std::size_t i = 1; i < nv; ++i) {
-        const Vec2 p = (*projector)(vertex_end(i).position).pixel;
+        const Vec2 p = (*projector)(position(i)).pixel;
         len += (p - prev).norm();
         prev = p;
       }
@@ -240,8 +258,7 @@ std::vector<Polyline> chain_segments(const SegmentSoup& soup, const ChainOptions
     Polyline& pl = built[c];
     pl.family = soup.family;
     pl.closed = loop;
-    pl.vertices.resize(nv);
-    for (std::size_t i = 0; i < nv; ++i) pl.vertices[i] = to_vertex(vertex_end(i));
+    pl.vertices = std::move(vertices);
     pl.edge_faces.resize(m);
     for (std::size_t i = 0; i < m; ++i) pl.edge_faces[i] = segs[st[i].segment].face;
     keep[c] = 1;

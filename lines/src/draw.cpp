@@ -133,6 +133,7 @@ LineDrawing draw_lines(const Surface& surface, const Camera& camera,
   // Built first, so that bad options are reported before anything is
   // computed, as LineDrawer does (its precompute is filled on extraction).
   auto extractor = std::make_unique<LineExtractor>(surface, options.lines);
+  extractor->set_one_shot(true);  // its per-view inputs freed as each pass is through
   const double feature_size = extractor->feature_size();
   DepthBuffer depth;
   if (options.visibility) {

@@ -99,6 +99,10 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
   // D_t1 q1 (the apparent ridges' second field pass) is computed in the
   // apparent-ridge task below, concurrently with the other families.
   detail::update_view_fields(fields_, *surface_, camera, req, precompute_.get(), true);
+  // The vertex and light passes are done with the vertex blocks; the
+  // D_t1 q1 pass (the apparent-ridge task) is the only reader of the
+  // tangent ring, freed when it is through (one-shot only).
+  if (one_shot_) precompute_->release_vertex_blocks();
 
   const double fs = feature_size_;
   // The families are independent given the fields: run them concurrently
@@ -130,6 +134,13 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
       tbb::this_task_arena::max_concurrency() == 1 ||
       tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism) == 1;
   const bool pipelined = three && one_thread;
+  // One-shot: the tangent ring is freed once D_t1 q1 is complete; when
+  // pipelined, once both the kernel (which drives it) and run_all are.
+  std::atomic<int> ring_readers{0};
+  auto ring_done = [&] {
+    if (one_shot_ && (!pipelined || ring_readers.fetch_add(1) == 1))
+      precompute_->release_tangent_ring();
+  };
   std::optional<detail::Dt1q1Blocks> dt1q1;
   detail::ChunkReady ready;
   if (pipelined) {
@@ -150,6 +161,7 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
     out[apparent_k] = detail::extract_apparent_ridges(*surface_, fields_, fs, options_.apparent,
                                                       listed ? apparent_faces_.get() : nullptr,
                                                       pipelined ? &ready : nullptr);
+    if (pipelined) ring_done();
   };
   auto run = [&](std::size_t k) {
     const LineFamily f = options_.families[k];
@@ -190,10 +202,12 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
       case LineFamily::apparent:
         if (pipelined) {
           dt1q1->run_all();  // what the kernel (in the scan's task) left
+          ring_done();
           break;
         }
         detail::update_dt1q1(fields_, *surface_, fields_.apparent_cull_threshold.has_value(),
                              precompute_.get());
+        ring_done();
         if (three) {
           if (arrived.fetch_add(1) == 1) apparent_kernel();
         } else {
@@ -215,6 +229,7 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
                     [&](const tbb::blocked_range<std::size_t>& r) {
                       for (std::size_t k = r.begin(); k != r.end(); ++k) run(k);
                     });
+  for (auto& soup : out) soup.surface = surface_;  // the ends refer to this mesh
   return out;
 }
 

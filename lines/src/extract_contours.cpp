@@ -18,27 +18,17 @@ void require_field(const std::vector<double>& v, std::size_t n, const char* what
                                          "' was not computed for this surface");
 }
 
-SegmentEnd vertex_end(const Surface& s, std::size_t face, std::int32_t v) {
-  const Face& f = s.faces()[face];
-  SegmentEnd e;
-  e.anchor.face = static_cast<std::int32_t>(face);
-  e.anchor.bary = Vec3::Zero();
-  for (int k = 0; k < 3; ++k)
-    if (f[k] == v) e.anchor.bary[k] = 1.0;
-  e.position = s.positions()[static_cast<std::size_t>(v)];
-  e.element = v;
-  e.kind = EndKind::vertex;
-  return e;
-}
-
+// The segment along mesh edge `edge`, in its first face, from its lower
+// vertex to its higher one (vertex ends).
 LineSegment edge_segment(const Surface& s, std::size_t edge) {
   const Topology& topo = s.topology();
   const auto ev = topo.edge(edge);
-  const auto face = static_cast<std::size_t>(topo.edge_faces(edge)[0]);
   LineSegment seg;
-  seg.face = static_cast<std::int32_t>(face);
-  seg.end[0] = vertex_end(s, face, ev[0]);
-  seg.end[1] = vertex_end(s, face, ev[1]);
+  seg.face = topo.edge_faces(edge)[0];
+  for (int i = 0; i < 2; ++i) {
+    seg.kind[i] = EndKind::vertex;
+    seg.end[i].element = ev[i];
+  }
   return seg;
 }
 
@@ -46,6 +36,7 @@ template <class Pred>
 SegmentSoup edge_soup(const Surface& s, LineFamily family, Pred&& keep) {
   SegmentSoup soup;
   soup.family = family;
+  soup.surface = &s;
   const Topology& topo = s.topology();
   detail::parallel_chunks<LineSegment>(
       topo.edge_count(),
@@ -124,6 +115,7 @@ SegmentSoup extract_contours(const Surface& surface, const ViewFields& fields,
   }
   SegmentSoup soup;
   soup.family = LineFamily::contour;
+  soup.surface = &surface;
   ScalarCrossingOptions o;
   const detail::SignBits bits = contour_setup(surface, fields, options, o);
   detail::scalar_zero_crossings(surface, fields.ndotv, o, bits, soup.segments);
@@ -162,6 +154,7 @@ SegmentSoup suggestive_like(const Surface& surface, const ViewFields& fields, do
       suggestive_setup(surface, fields, fs, threshold, fade, cull, highlight, test);
   SegmentSoup soup;
   soup.family = highlight ? LineFamily::highlight : LineFamily::suggestive;
+  soup.surface = &surface;
   detail::suggestive_zero_crossings(surface, test, bits, soup.segments);
   return soup;
 }
@@ -198,8 +191,10 @@ bool extract_contours_and_suggestive(const Surface& surface, const ViewFields& f
                                           suggestive.fade, suggestive.cull_backfaces, false, test);
   contours = SegmentSoup{};
   contours.family = LineFamily::contour;
+  contours.surface = &surface;
   suggestive_contours = SegmentSoup{};
   suggestive_contours.family = LineFamily::suggestive;
+  suggestive_contours.surface = &surface;
   // The kQ1Above bits exist only with an apparent cull threshold.
   if (!fields.apparent_cull_threshold || fields.signs.size() != surface.vertex_count())
     apparent = nullptr;

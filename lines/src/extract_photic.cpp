@@ -36,6 +36,7 @@ SegmentSoup lit_zero_crossings(const Surface& surface, const ViewFields& fields,
                                double t) {
   SegmentSoup soup;
   soup.family = family;
+  soup.surface = &surface;
   if (cull) o.cull = fields.ndotv;
   if (fields.light_faces.empty()) return soup;  // no face can carry a kept line
   o.faces = fields.light_faces;

@@ -24,6 +24,7 @@ SegmentSoup threshold_raw(const LinePrecompute& pre, LineFamily family, const Vi
                           double t, bool cull) {
   SegmentSoup soup;
   soup.family = family;
+  soup.surface = &pre.surface();
   const std::size_t nv = pre.surface().vertex_count();
   const bool do_cull = cull && fields.ndotv.size() == nv;
   const std::uint8_t* sg = fields.signs.size() == nv ? fields.signs.data() : nullptr;
@@ -97,6 +98,7 @@ SegmentSoup extract_apparent_ridges(const Surface& surface, const ViewFields& fi
     throw Error(ErrorKind::internal, "apparent ridges: view fields lack q1/t1/Dt1q1");
   SegmentSoup soup;
   soup.family = LineFamily::apparent;
+  soup.surface = &surface;
   VectorCrossingOptions o;
   o.test = options.maximum_test ? ExtremumTest::perpendicular : ExtremumTest::none;
   o.threshold = options.threshold / (feature_size * feature_size);

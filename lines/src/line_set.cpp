@@ -34,12 +34,6 @@ std::optional<LineFamily> parse_family(std::string_view name) {
   return std::nullopt;
 }
 
-double SegmentSoup::total_length() const {
-  double sum = 0.0;
-  for (const auto& s : segments) sum += (s.end[1].position - s.end[0].position).norm();
-  return sum;
-}
-
 }  // namespace fabrica
 
 namespace fabrica {

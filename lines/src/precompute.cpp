@@ -15,7 +15,11 @@ namespace fabrica {
 
 struct LinePrecompute::Cache {
   std::once_flag k1_once, ridge_once, demarcating_once, gradient_once, laplacian_once, ring_once;
-  std::once_flag ridge_keys_once, demarcating_keys_once, tangent_ring_once, blocks_once;
+  std::once_flag ridge_keys_once, demarcating_keys_once;
+  // The per-view passes' inputs can be released (release_view_inputs) and
+  // are then rebuilt on the next use: a flag under a mutex, not a once_flag.
+  std::mutex tangent_ring_mutex, blocks_mutex;
+  bool tangent_ring_ready = false, blocks_ready = false;
   VertexBlocks blocks;
   TangentRing tangent_ring;
   std::vector<RawKey> ridge_keys, valley_keys, demarcating_keys;
@@ -61,7 +65,9 @@ const LinePrecompute::CornerRing& LinePrecompute::corner_ring() const {
 }
 
 const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
-  std::call_once(cache_->tangent_ring_once, [&] {
+  std::lock_guard lock(cache_->tangent_ring_mutex);
+  if (cache_->tangent_ring_ready) return cache_->tangent_ring;
+  [&] {
     // Topology::vertex_face_opposite, CSR like vertex_faces (corner_ring()
     // without the copy).
     const Topology& topo = surface_->topology();
@@ -171,12 +177,15 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
         t.y[s] = offset(i, v, 1);
       }
     });
-  });
+  }();
+  cache_->tangent_ring_ready = true;
   return cache_->tangent_ring;
 }
 
 const LinePrecompute::VertexBlocks& LinePrecompute::vertex_blocks() const {
-  std::call_once(cache_->blocks_once, [&] {
+  std::lock_guard lock(cache_->blocks_mutex);
+  if (cache_->blocks_ready) return cache_->blocks;
+  [&] {
     const auto& pos = surface_->positions();
     const auto& nrm = surface_->vertex_normals();
     const auto& curv = surface_->curvature();
@@ -211,8 +220,21 @@ const LinePrecompute::VertexBlocks& LinePrecompute::vertex_blocks() const {
           vb.valid[b] = static_cast<std::uint8_t>(valid);
         },
         512);
-  });
+  }();
+  cache_->blocks_ready = true;
   return cache_->blocks;
+}
+
+void LinePrecompute::release_vertex_blocks() const {
+  std::lock_guard lock(cache_->blocks_mutex);
+  cache_->blocks = VertexBlocks{};
+  cache_->blocks_ready = false;
+}
+
+void LinePrecompute::release_tangent_ring() const {
+  std::lock_guard lock(cache_->tangent_ring_mutex);
+  cache_->tangent_ring = TangentRing{};
+  cache_->tangent_ring_ready = false;
 }
 
 namespace {
@@ -385,14 +407,15 @@ const std::vector<LineSegment>& LinePrecompute::raw_demarcating() const {
     const double cos45 = std::sqrt(0.5);
     auto& out = cache_->demarcating;
     out.reserve(raw.size());
+    const SegmentGeometry geo(s);
     for (auto& seg : raw) {
       const Face& f = s.faces()[static_cast<std::size_t>(seg.face)];
       if (std::abs(g[f[0]].dot(g[f[1]])) < cos45 || std::abs(g[f[1]].dot(g[f[2]])) < cos45 ||
           std::abs(g[f[2]].dot(g[f[0]])) < cos45)
         continue;
-      for (auto& e : seg.end) {
-        const Vec3& bc = e.anchor.bary;
-        e.strength =
+      for (int i = 0; i < 2; ++i) {
+        const Vec3 bc = geo.anchor(seg, i).bary;
+        seg.end[i].strength =
             static_cast<float>(bc[0] * cggg[f[0]] + bc[1] * cggg[f[1]] + bc[2] * cggg[f[2]]);
       }
       out.push_back(seg);

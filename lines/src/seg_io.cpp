@@ -109,16 +109,18 @@ void write_seg(const std::filesystem::path& path, const nlohmann::json& header,
     for (LineFamily fam : seg_family_order())
       for (const auto& soup : soups) {
         if (soup.family != fam) continue;
-        for (const auto& s : soup.segments)
-          write_segment(out, family_name(fam), s.end[0].position, s.end[1].position);
+        for (const Segment3& s : segment_positions(soup))
+          write_segment(out, family_name(fam), s[0], s[1]);
       }
   });
 }
 
 std::vector<Segment3> segment_positions(const SegmentSoup& soup) {
   std::vector<Segment3> out;
+  if (soup.segments.empty()) return out;
   out.reserve(soup.segments.size());
-  for (const auto& s : soup.segments) out.push_back({s.end[0].position, s.end[1].position});
+  const SegmentGeometry geo = soup.geometry();
+  for (const auto& s : soup.segments) out.push_back({geo.position(s, 0), geo.position(s, 1)});
   return out;
 }
 

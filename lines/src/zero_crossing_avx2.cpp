@@ -149,29 +149,39 @@ struct Edge4 {
 }
 
 // The four points of scalar_faces_avx2's lanes (p1, the clips at z1 and
-// z2, p2): barycentrics and positions per component and lane, strengths,
-// and the edge ends' elements (of the lane being written).
+// z2, p2): the edge ends' fractions t (points 0 and 3) and elements (of
+// the lane being written), the clip points' barycentrics per component and
+// lane (points 1 and 2), strengths.
 struct LanePoints {
-  alignas(32) double bary[4][3][4], at[4][3][4];
+  alignas(32) double t[4][4], bary[4][3][4];
   alignas(16) float st[4][4];
   std::int32_t el[4] = {-1, -1, -1, -1};
   bool fade;
 };
 
-// Segment (points a, b) of lane l of face `face`, converted into the
+// Segment (points a, b) of lane l of face `face`, converted into the lean
 // LineSegment in place by emplace_back (each field written once), as
 // emit_segment writes it.
 struct LaneSegment {
   const LanePoints& lp;
   std::int32_t face;
   int l, a, b;
+  static bool on_edge(int i) { return i == 0 || i == 3; }
   SegmentEnd end(int i) const {
-    return SegmentEnd{
-        SurfacePoint{face, Vec3(lp.bary[i][0][l], lp.bary[i][1][l], lp.bary[i][2][l])},
-        Vec3(lp.at[i][0][l], lp.at[i][1][l], lp.at[i][2][l]), lp.el[i],
-        i == 0 || i == 3 ? EndKind::edge : EndKind::interior, lp.fade ? lp.st[i][l] : 1.0f};
+    SegmentEnd e;
+    if (on_edge(i)) {
+      e.t = lp.t[i][l];
+      e.element = lp.el[i];
+    } else {
+      e.bary[0] = static_cast<float>(lp.bary[i][0][l]);
+      e.bary[1] = static_cast<float>(lp.bary[i][1][l]);
+      e.element = -1;
+    }
+    e.strength = lp.fade ? lp.st[i][l] : 1.0f;
+    return e;
   }
-  operator LineSegment() const { return LineSegment{face, {end(a), end(b)}}; }
+  static EndKind kind(int i) { return on_edge(i) ? EndKind::edge : EndKind::interior; }
+  operator LineSegment() const { return LineSegment{face, {kind(a), kind(b)}, {end(a), end(b)}}; }
 };
 
 // scalar_face_body for the listed faces (no magnitude threshold), four at
@@ -300,21 +310,14 @@ template <class Num>
     edge_slot4(e1.lo, e1.hi, slot[0]);
     edge_slot4(e2.lo, e2.hi, slot[1]);
     lp.fade = fade;
-    for (int k = 0; k < 3; ++k) {
-      _mm256_store_pd(lp.bary[0][k], b1[k]);
-      _mm256_store_pd(lp.bary[3][k], b2[k]);
-      _mm256_store_pd(lp.at[0][k], e1.p[k]);
-      _mm256_store_pd(lp.at[3][k], e2.p[k]);
-    }
+    _mm256_store_pd(lp.t[0], e1.t);
+    _mm256_store_pd(lp.t[3], e2.t);
     const __m256d zs[2] = {z1, z2};
     for (int i = 0; i < 2; ++i) {
       const __m256d z = zs[i], u = _mm256_sub_pd(one, z);
-      for (int k = 0; k < 3; ++k) {
+      for (int k = 0; k < 2; ++k)  // the third is 1 - the others (segments.hpp)
         _mm256_store_pd(lp.bary[1 + i][k],
                         _mm256_add_pd(_mm256_mul_pd(u, b1[k]), _mm256_mul_pd(z, b2[k])));
-        _mm256_store_pd(lp.at[1 + i][k],
-                        _mm256_add_pd(_mm256_mul_pd(u, e1.p[k]), _mm256_mul_pd(z, e2.p[k])));
-      }
       _mm256_store_pd(zv[i], z);
       if (fade)
         _mm_store_ps(
@@ -645,9 +648,9 @@ struct Cut4 {
     for (int l = 0; l < lanes; ++l) centroid |= int(kept.z[j + l] == 7) << l;
     const int emit = ((~_mm256_movemask_pd(reject) & ((1 << lanes) - 1)) | centroid);
     if (!emit) continue;
-    // The ends as LanePoints 0 (a) and 3 (b): set_edge_end's barycentrics
-    // (1 - t at the lower corner, t at the upper), the points, and
-    // ridge_strength.
+    // The ends as LanePoints 0 (a) and 3 (b): their fractions t from the
+    // lower corner (the barycentrics and points are recomputed from them,
+    // segments.hpp), and ridge_strength.
     LanePoints lp;
     lp.fade = sp.raw || sp.threshold > 0.0;
     if (sp.raw) {
@@ -662,16 +665,8 @@ struct Cut4 {
     rotate3(r1, r2, corner, c);
     const __m256d alo = when(swap_a, c[1], c[0]), ahi = when(swap_a, c[0], c[1]);
     const __m256d blo = when(swap_b, c[2], c[1]), bhi = when(swap_b, c[1], c[2]);
-    const __m256d one = _mm256_set1_pd(1.0);
-    __m256d ba[3], bb[3];
-    edge_bary4(alo, ahi, a.t, _mm256_sub_pd(one, a.t), ba);
-    edge_bary4(blo, bhi, b.t, _mm256_sub_pd(one, b.t), bb);
-    for (int k = 0; k < 3; ++k) {
-      _mm256_store_pd(lp.bary[0][k], ba[k]);
-      _mm256_store_pd(lp.bary[3][k], bb[k]);
-      _mm256_store_pd(lp.at[0][k], a.p[k]);
-      _mm256_store_pd(lp.at[3][k], b.p[k]);
-    }
+    _mm256_store_pd(lp.t[0], a.t);
+    _mm256_store_pd(lp.t[3], b.t);
     std::int32_t slot[2][4];
     edge_slot4(alo, ahi, slot[0]);
     edge_slot4(blo, bhi, slot[1]);

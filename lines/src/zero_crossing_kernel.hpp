@@ -39,6 +39,7 @@ struct MeshArrays {
 // once into the output record.
 struct ScalarEnd {
   double bary[3];
+  double t;  // edge ends: the fraction along the edge from its lower vertex
   double pos[3];
   std::int32_t element;
   EndKind kind;
@@ -75,6 +76,7 @@ inline EdgeParam scalar_edge(const Face& face, int ca, int cb, double va, double
   p.pos[0] = u * a[0] + e.t * b[0];
   p.pos[1] = u * a[1] + e.t * b[1];
   p.pos[2] = u * a[2] + e.t * b[2];
+  p.t = e.t;
   p.element = m.topo->face_edge(f, 3 - e.c_lo - e.c_hi);
   p.kind = EndKind::edge;
 }
@@ -157,6 +159,24 @@ struct ScalarInputs {
   double mag_t = 0.0;
 };
 
+// Writes a kernel endpoint into end i of a lean record: an edge end keeps
+// its edge and t (its barycentrics and position are recomputed from them
+// with the same operations, segments.hpp), an interior one its barycentrics.
+[[gnu::always_inline]] inline void write_end(LineSegment& seg, int i, const ScalarEnd& p,
+                                             float strength) {
+  SegmentEnd& e = seg.end[i];
+  seg.kind[i] = p.kind;
+  if (p.kind == EndKind::edge) {
+    e.t = p.t;
+    e.element = p.element;
+  } else {
+    e.bary[0] = static_cast<float>(p.bary[0]);
+    e.bary[1] = static_cast<float>(p.bary[1]);
+    e.element = -1;
+  }
+  e.strength = strength;
+}
+
 // Writes segment (a, b) of face f (vertices v), after the magnitude
 // threshold if any.
 [[gnu::always_inline]] inline void emit_segment(const ScalarInputs& in, std::size_t f,
@@ -173,21 +193,10 @@ struct ScalarInputs {
     sa *= t > 0.0 ? static_cast<float>(ka / (ka + t)) : 1.0f;
     sb *= t > 0.0 ? static_cast<float>(kb / (kb + t)) : 1.0f;
   }
-  const auto fi = static_cast<std::int32_t>(f);
   LineSegment& seg = out.emplace_back();
-  seg.face = fi;
-  const ScalarEnd* src[2] = {&a, &b};
-  const float strength[2] = {sa, sb};
-  for (int i = 0; i < 2; ++i) {
-    SegmentEnd& e = seg.end[i];
-    const ScalarEnd& p = *src[i];
-    e.anchor.face = fi;
-    e.anchor.bary = Vec3(p.bary[0], p.bary[1], p.bary[2]);
-    e.position = Vec3(p.pos[0], p.pos[1], p.pos[2]);
-    e.element = p.element;
-    e.kind = p.kind;
-    e.strength = strength[i];
-  }
+  seg.face = static_cast<std::int32_t>(f);
+  write_end(seg, 0, a, sa);
+  write_end(seg, 1, b, sb);
 }
 
 // Up to four points, consumed in pairs (rtsc's GL_LINES logic): p1 when
@@ -456,37 +465,28 @@ struct EdgeCut {
   return sp.threshold > 0.0 ? static_cast<float>(k / (k + sp.threshold)) : 1.0f;
 }
 
-// An endpoint on the edge of a cut: barycentrics 1 - t at lo, t at hi.
-[[gnu::always_inline]] inline SegmentEnd set_edge_end(std::int32_t f, const EdgeCut& c,
-                                                      const double p[3], std::int32_t edge,
-                                                      float strength) {
-  SegmentEnd e{SurfacePoint{f, Vec3::Zero()}, Vec3(p[0], p[1], p[2]), edge, EndKind::edge,
-               strength};
-  e.anchor.bary[c.lo] = 1.0 - c.t;
-  e.anchor.bary[c.hi] = c.t;
-  return e;
-}
-
-// A kept segment's fields, converted into the LineSegment in place by
+// A kept segment's fields, converted into the lean LineSegment in place by
 // emplace_back (aggregate initialisation: each field is written once,
-// nothing is value-initialised first).
+// nothing is value-initialised first). Edge ends keep the cut's t (the
+// fraction from the lower vertex: the barycentrics 1 - t at lo and t at hi
+// and the position cut_point computes are recomputed from it); the
+// centroid end keeps its face.
 template <bool ToCenter>
 struct SegmentRecord {
   std::int32_t face;
   const EdgeCut &a, &b;
-  const double *pa, *pb;
   std::int32_t ea, eb;
   float sa, sb;
   operator LineSegment() const {
-    if constexpr (ToCenter) {
-      return LineSegment{face,
-                         {set_edge_end(face, a, pa, ea, sa),
-                          SegmentEnd{SurfacePoint{face, Vec3::Constant(1.0 / 3.0)},
-                                     Vec3(pb[0], pb[1], pb[2]), face, EndKind::centroid, sb}}};
-    } else {
-      return LineSegment{face,
-                         {set_edge_end(face, a, pa, ea, sa), set_edge_end(face, b, pb, eb, sb)}};
-    }
+    SegmentEnd e0, e1;
+    e0.t = a.t;
+    e0.element = ea;
+    e0.strength = sa;
+    e1.t = ToCenter ? 0.0 : b.t;
+    e1.element = eb;
+    e1.strength = sb;
+    return LineSegment{
+        face, {EndKind::edge, ToCenter ? EndKind::centroid : EndKind::edge}, {e0, e1}};
   }
 };
 
@@ -536,7 +536,7 @@ template <bool ToCenter>
   const Topology& topo = *in.m.topo;
   const std::int32_t ea = topo.face_edge(f, 3 - a.lo - a.hi);
   const std::int32_t eb = ToCenter ? fi : topo.face_edge(f, 3 - b.lo - b.hi);
-  out.emplace_back(SegmentRecord<ToCenter>{fi, a, b, pa, pb, ea, eb, ridge_strength(sp, m01, k01),
+  out.emplace_back(SegmentRecord<ToCenter>{fi, a, b, ea, eb, ridge_strength(sp, m01, k01),
                                            ridge_strength(sp, m12, k12)});
 }
 

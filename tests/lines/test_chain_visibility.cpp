@@ -14,6 +14,7 @@
 #include <limits>
 #include <vector>
 
+#include "chain_internal.hpp"
 #include "fabrica/core/camera.hpp"
 #include "fabrica/core/error.hpp"
 #include "fabrica/core/surface.hpp"
@@ -190,21 +191,24 @@ TEST(DepthRaster, RejectsImagesTooLargeToIndex) {
 
 namespace {
 
-SegmentEnd edge_end(std::int32_t element, double x) {
-  SegmentEnd e;
-  e.kind = EndKind::edge;
-  e.element = element;
-  e.position = Vec3(x, 0.1 * x * x, 0.0);
-  e.anchor.face = 0;
-  return e;
+// A segment between vertices a and b (vertex ends), in face min(a, b) (of
+// parabola_strip: it holds both when they are consecutive).
+LineSegment seg(std::int32_t a, std::int32_t b) {
+  LineSegment s;
+  s.face = std::min(a, b);
+  s.kind[0] = s.kind[1] = EndKind::vertex;
+  s.end[0].element = a;
+  s.end[1].element = b;
+  return s;
 }
 
-LineSegment seg(std::int32_t a, std::int32_t b, double xa, double xb, std::int32_t face) {
-  LineSegment s;
-  s.face = face;
-  s.end[0] = edge_end(a, xa);
-  s.end[1] = edge_end(b, xb);
-  return s;
+// Vertex i at (i, 0.1 i^2, 0), faces (i, i+1, i+2): the ends' positions
+// encode their ids.
+TriangleMesh parabola_strip(int n) {
+  TriangleMesh m;
+  for (int i = 0; i < n; ++i) m.positions.emplace_back(i, 0.1 * i * i, 0.0);
+  for (int i = 0; i + 2 < n; ++i) m.faces.push_back({i, i + 1, i + 2});
+  return m;
 }
 
 void expect_same_lines(const std::vector<Polyline>& a, const std::vector<Polyline>& b) {
@@ -224,30 +228,37 @@ TEST(Chaining, FlatTableAndSortedPairingAgree) {
   // A shuffled open chain of 6 segments, a loop of 4, and a branch point
   // where three segments meet (nothing joins there); ids 0..99 use the flat
   // table, the same ids times 2^24 force the sort-based pairing.
-  auto soup_with_scale = [](std::int32_t scale) {
+  const Surface strip(parabola_strip(40));
+  auto soup_with_scale = [&](std::int32_t scale) {
     SegmentSoup s;
     s.family = LineFamily::ridge;
+    s.surface = &strip;
     auto id = [&](std::int32_t i) { return i * scale; };
     // open chain 1-2-3-4-5-6-7, segments out of order and flipped
-    s.segments.push_back(seg(id(4), id(3), 4, 3, 10));
-    s.segments.push_back(seg(id(1), id(2), 1, 2, 11));
-    s.segments.push_back(seg(id(6), id(7), 6, 7, 12));
-    s.segments.push_back(seg(id(3), id(2), 3, 2, 13));
-    s.segments.push_back(seg(id(5), id(6), 5, 6, 14));
-    s.segments.push_back(seg(id(4), id(5), 4, 5, 15));
+    s.segments.push_back(seg(id(4), id(3)));
+    s.segments.push_back(seg(id(1), id(2)));
+    s.segments.push_back(seg(id(6), id(7)));
+    s.segments.push_back(seg(id(3), id(2)));
+    s.segments.push_back(seg(id(5), id(6)));
+    s.segments.push_back(seg(id(4), id(5)));
     // loop 20-21-22-23-20
-    s.segments.push_back(seg(id(21), id(22), 21, 22, 16));
-    s.segments.push_back(seg(id(20), id(21), 20, 21, 17));
-    s.segments.push_back(seg(id(23), id(20), 23, 20, 18));
-    s.segments.push_back(seg(id(22), id(23), 22, 23, 19));
+    s.segments.push_back(seg(id(21), id(22)));
+    s.segments.push_back(seg(id(20), id(21)));
+    s.segments.push_back(seg(id(23), id(20)));
+    s.segments.push_back(seg(id(22), id(23)));
     // branch at 30: three segments end there
-    s.segments.push_back(seg(id(30), id(31), 30, 31, 20));
-    s.segments.push_back(seg(id(32), id(30), 32, 30, 21));
-    s.segments.push_back(seg(id(30), id(33), 30, 33, 22));
+    s.segments.push_back(seg(id(30), id(31)));
+    s.segments.push_back(seg(id(32), id(30)));
+    s.segments.push_back(seg(id(30), id(33)));
     return s;
   };
-  const auto flat = chain_segments(soup_with_scale(1));
-  const auto sorted = chain_segments(soup_with_scale(1 << 24));
+  const SegmentSoup small = soup_with_scale(1);
+  const auto flat = chain_segments(small);
+  // The same pairs from the table, from the sort, and from the sort of
+  // ids too large for a table (the same ids times 2^24).
+  const auto pairs = detail::pair_ends(small.segments);
+  EXPECT_EQ(pairs, detail::pair_ends(small.segments, true));
+  EXPECT_EQ(pairs, detail::pair_ends(soup_with_scale(1 << 24).segments));
   // 1 open chain of 6 segments, 3 single segments at the branch, 1 loop.
   ASSERT_EQ(flat.size(), 5u);
   EXPECT_FALSE(flat[0].closed);
@@ -256,11 +267,14 @@ TEST(Chaining, FlatTableAndSortedPairingAgree) {
   EXPECT_TRUE(flat[4].closed);
   EXPECT_EQ(flat[4].vertices.size(), 4u);
   EXPECT_EQ(flat[4].edge_faces.size(), 4u);
-  expect_same_lines(flat, sorted);
-  // The chain runs through consecutive x (positions encode the ids).
+  // The chain runs through consecutive x (positions encode the ids), and
+  // each vertex is anchored at its vertex of the segment's face.
+  EXPECT_EQ(flat[0].edge_faces, (std::vector<std::int32_t>{1, 2, 3, 4, 5, 6}));
   for (std::size_t k = 1; k < flat[0].vertices.size(); ++k)
     EXPECT_DOUBLE_EQ(
         std::abs(flat[0].vertices[k].position.x() - flat[0].vertices[k - 1].position.x()), 1.0);
+  for (const auto& v : flat[0].vertices)
+    EXPECT_EQ((v.anchor.position(strip.mesh()) - v.position).norm(), 0.0);
 }
 
 TEST(Chaining, SameAtOneAndTwoThreadsOnATorus) {

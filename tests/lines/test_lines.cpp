@@ -3,9 +3,11 @@
 // ridges on a Gaussian crest, closed contour loops after chaining, the
 // zero-crossing kernel's edge sharing, the comparison metric.
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <functional>
 
 #include "fabrica/core/camera.hpp"
@@ -48,7 +50,7 @@ TEST(Contours, SphereContourIsTheCircleFacingTheEye) {
   Surface sphere(test::make_icosphere(R, 5));
   const auto soups = extract(sphere, camera_at({0, 0, d}), {LineFamily::contour});
   ASSERT_EQ(soups.size(), 1u);
-  const auto& segs = soups[0].segments;
+  const auto& segs = soups[0].resolved();
   ASSERT_GT(segs.size(), 50u);
   // The tangent cone from the eye touches the sphere on the circle z = R²/d,
   // radius R sqrt(1 - R²/d²).
@@ -76,7 +78,7 @@ TEST(Contours, OrthographicSphereContourIsTheGreatCircle) {
   c.projection = Projection::orthographic;
   const auto soups = extract(sphere, c, {LineFamily::contour});
   ASSERT_GT(soups[0].segments.size(), 20u);
-  for (const auto& s : soups[0].segments)
+  for (const auto& s : soups[0].resolved())
     for (const auto& e : s.end) {
       EXPECT_NEAR(e.position.z(), 0.0, 0.02);
       EXPECT_NEAR(e.position.norm(), 2.0, 0.02);
@@ -89,7 +91,7 @@ TEST(Contours, MeshEdgeContoursFollowMeshEdges) {
   o.contour.mesh_edges = true;
   const auto soups = extract(sphere, camera_at({0, 0, 5}), {LineFamily::contour}, o);
   ASSERT_GT(soups[0].segments.size(), 10u);
-  for (const auto& s : soups[0].segments) {
+  for (const auto& s : soups[0].resolved()) {
     EXPECT_EQ(s.end[0].kind, EndKind::vertex);
     EXPECT_NEAR(s.end[0].position.z(), 0.2, 0.15);
   }
@@ -114,7 +116,7 @@ TEST(Suggestive, TorusHasSuggestiveContoursOnItsInnerSide) {
   // 0.01/s_f² = 2.5 removes everything at this scale; s_f = 0.5 gives 0.04.
   o.feature_size = 0.5;
   const auto soups = extract(torus, camera_at({0, -5, 4}), {LineFamily::suggestive}, o);
-  const auto& segs = soups[0].segments;
+  const auto& segs = soups[0].resolved();
   ASSERT_GT(segs.size(), 20u);
   for (const auto& s : segs)
     for (const auto& e : s.end)
@@ -137,7 +139,7 @@ TEST(Ridges, GaussianCrestHasItsRidgeOnTheCrestLine) {
   o.feature_size = 0.5;
   const auto soups = extract(s, camera_at({0.3, -1.0, 8.0}, Vec3::Zero(), Vec3::UnitY()),
                              {LineFamily::ridge, LineFamily::valley}, o);
-  const auto& ridges = soups[0].segments;
+  const auto& ridges = soups[0].resolved();
   ASSERT_GT(ridges.size(), 40u);
   double length = 0.0;
   for (const auto& seg : ridges) {
@@ -149,7 +151,7 @@ TEST(Ridges, GaussianCrestHasItsRidgeOnTheCrestLine) {
   }
   EXPECT_GT(length, 3.5);  // nearly the whole crest (4 long)
   // Valleys lie on both feet, symmetric: mean x close to 0, |x| well away from the crest.
-  const auto& valleys = soups[1].segments;
+  const auto& valleys = soups[1].resolved();
   ASSERT_GT(valleys.size(), 20u);
   double mean_x = 0.0;
   for (const auto& seg : valleys) {
@@ -279,6 +281,11 @@ TEST(Ridges, ThresholdListIsTheRawSegmentsAboveItAndExtractionUsesIt) {
   const double fs = 0.5;
   ro.threshold = t * fs;
   const SegmentSoup ridges = extract_ridges(pre, fields, fs, ro);
+  const std::vector<ResolvedSegment> got_all = ridges.resolved();
+  SegmentSoup raw_soup;
+  raw_soup.surface = &s;
+  raw_soup.segments = pre.raw_ridges();
+  const std::vector<ResolvedSegment> raw_all = raw_soup.resolved();
   std::size_t kept = 0;
   for (std::uint32_t i : expect) {
     const auto& corner = keys[i].corners;
@@ -287,8 +294,8 @@ TEST(Ridges, ThresholdListIsTheRawSegmentsAboveItAndExtractionUsesIt) {
       continue;
     ASSERT_LT(kept, ridges.segments.size());
     // The raw segment, with each end's strength the fade (m - t)/m.
-    const LineSegment& got = ridges.segments[kept];
-    const LineSegment& raw = pre.raw_ridges()[i];
+    const ResolvedSegment& got = got_all[kept];
+    const ResolvedSegment& raw = raw_all[i];
     EXPECT_EQ(got.face, raw.face);
     const float m[2] = {keys[i].m0, keys[i].m1};
     for (int e = 0; e < 2; ++e) {
@@ -330,6 +337,60 @@ TEST(Chaining, ShortChainsAreDropped) {
   EXPECT_EQ(chain_segments(soups[0], o).size(), 1u);
 }
 
+// The lean records of two soups, field by field (an end's t or float
+// barycentrics as their 8 bytes).
+bool same_records(const SegmentSoup& a, const SegmentSoup& b) {
+  if (a.family != b.family || a.segments.size() != b.segments.size()) return false;
+  for (std::size_t i = 0; i < a.segments.size(); ++i) {
+    const LineSegment &x = a.segments[i], &y = b.segments[i];
+    if (x.face != y.face) return false;
+    for (int k = 0; k < 2; ++k)
+      if (x.kind[k] != y.kind[k] || x.end[k].element != y.end[k].element ||
+          std::memcmp(&x.end[k].t, &y.end[k].t, sizeof(double)) != 0 ||
+          x.end[k].strength != y.end[k].strength)
+        return false;
+  }
+  return true;
+}
+
+// A one-shot extractor frees the vertex blocks and the tangent ring during
+// extract() (draw_lines' lower peak memory): the segments are those of a
+// kept extractor, at one thread (the pipelined D_t1 q1 path) and two, and a
+// second view rebuilds what was freed.
+TEST(LineExtractor, OneShotGivesTheSameSegments) {
+  const Surface torus(test::make_torus(2.0, 0.7, 96, 48, 0.05));
+  LineOptions o;
+  o.families = reference_families();
+  const Camera views[2] = {camera_at({0.5, -5, 3}), camera_at({3, 2, 4})};
+  for (const int threads : {1, 2}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
+                              static_cast<std::size_t>(threads));
+    LineExtractor kept(torus, o), once(torus, o);
+    once.set_one_shot(true);
+    for (const Camera& c : views) {
+      const auto want = kept.extract(c);
+      const auto got = once.extract(c);
+      ASSERT_EQ(want.size(), got.size());
+      std::size_t total = 0;
+      for (std::size_t k = 0; k < want.size(); ++k) {
+        EXPECT_TRUE(same_records(want[k], got[k])) << family_name(want[k].family);
+        total += got[k].segments.size();
+      }
+      EXPECT_GT(total, 200u);
+    }
+  }
+  // Released and built again: the same blocks and ring.
+  LinePrecompute pre(torus);
+  const auto blocks = pre.vertex_blocks().block;
+  const auto ring = pre.tangent_ring().x;
+  pre.release_vertex_blocks();
+  pre.release_tangent_ring();
+  const auto& again = pre.vertex_blocks().block;
+  ASSERT_EQ(again.size(), blocks.size());
+  EXPECT_EQ(std::memcmp(again.data(), blocks.data(), blocks.size() * sizeof(blocks[0])), 0);
+  EXPECT_EQ(pre.tangent_ring().x, ring);
+}
+
 TEST(Kernel, NeighbouringFacesShareBitIdenticalEdgePoints) {
   Surface torus(test::make_torus(2.0, 0.7, 90, 40, 0.2));
   const auto soups =
@@ -337,7 +398,7 @@ TEST(Kernel, NeighbouringFacesShareBitIdenticalEdgePoints) {
   for (const auto& soup : soups) {
     std::map<std::int32_t, Vec3> at_edge;
     std::size_t shared = 0;
-    for (const auto& s : soup.segments)
+    for (const auto& s : soup.resolved())
       for (const auto& e : s.end) {
         if (e.kind != EndKind::edge) continue;
         auto [it, inserted] = at_edge.emplace(e.element, e.position);

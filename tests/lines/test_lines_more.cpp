@@ -286,7 +286,8 @@ TEST(LinesSeg, WrittenFilesReadBackWithTheSameCounts) {
 namespace {
 
 struct RunOutput {
-  std::vector<SegmentSoup> soups;
+  std::vector<SegmentSoup> soups;  // their surface is gone: read `resolved`
+  std::vector<std::vector<ResolvedSegment>> resolved;
   LineSet lines;
   std::string svg;
 };
@@ -302,6 +303,7 @@ RunOutput run_with_threads(int threads, const TriangleMesh& mesh) {
   LineExtractor ex(surface, o);
   RunOutput r;
   r.soups = ex.extract(cam);
+  for (const auto& s : r.soups) r.resolved.push_back(s.resolved());
   ChainOptions co;
   co.camera = cam;
   co.min_length_px = 2.0;
@@ -329,7 +331,7 @@ TEST(LinesDeterminism, SameSegmentsAndLinesAtOneAndTwoThreads) {
   ASSERT_EQ(one.soups.size(), two.soups.size());
   std::size_t total = 0;
   for (std::size_t s = 0; s < one.soups.size(); ++s) {
-    const auto &a = one.soups[s].segments, &b = two.soups[s].segments;
+    const auto &a = one.resolved[s], &b = two.resolved[s];
     ASSERT_EQ(a.size(), b.size()) << family_name(one.soups[s].family);
     total += a.size();
     for (std::size_t i = 0; i < a.size(); ++i) {

@@ -29,7 +29,7 @@ Camera camera_at(const Vec3& eye, const Vec3& center, double fov_deg = 40.0) {
   return c;
 }
 
-bool same_end(const SegmentEnd& a, const SegmentEnd& b) {
+bool same_end(const ResolvedEnd& a, const ResolvedEnd& b) {
   return a.anchor.face == b.anchor.face && a.anchor.bary == b.anchor.bary &&
          a.position == b.position && a.element == b.element && a.kind == b.kind &&
          a.strength == b.strength;
@@ -39,9 +39,10 @@ bool same_end(const SegmentEnd& a, const SegmentEnd& b) {
 std::size_t differing(const SegmentSoup& a, const SegmentSoup& b) {
   if (a.segments.size() != b.segments.size()) return std::max(a.segments.size(), b.segments.size());
   std::size_t n = 0;
-  for (std::size_t i = 0; i < a.segments.size(); ++i) {
-    const LineSegment& s = a.segments[i];
-    const LineSegment& t = b.segments[i];
+  const auto ra = a.resolved(), rb = b.resolved();
+  for (std::size_t i = 0; i < ra.size(); ++i) {
+    const ResolvedSegment& s = ra[i];
+    const ResolvedSegment& t = rb[i];
     if (s.face != t.face || !same_end(s.end[0], t.end[0]) || !same_end(s.end[1], t.end[1])) ++n;
   }
   return n;
@@ -67,8 +68,8 @@ TEST(PhoticSphere, PelsAndLaplacianLinesTraceTheTerminator) {
     SCOPED_TRACE(family_name(soup.family));
     ASSERT_FALSE(soup.segments.empty());
     double length = 0.0;
-    for (const LineSegment& s : soup.segments) {
-      for (const SegmentEnd& e : s.end) {
+    for (const ResolvedSegment& s : soup.resolved()) {
+      for (const ResolvedEnd& e : s.end) {
         EXPECT_NEAR(e.position.x(), 0.0, 0.02 * r);  // on n·l = 0
         EXPECT_NEAR(e.position.norm(), r, 0.01 * r);
         EXPECT_GT(e.position.z(), -0.05 * r);  // the front half (back faces culled)

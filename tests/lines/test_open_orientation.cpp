@@ -65,7 +65,7 @@ std::vector<Vec3> midpoints(const TriangleMesh& mesh, LineFamily family, const A
   Camera camera;  // ridges and valleys do not depend on the view (without culling)
   std::vector<Vec3> out;
   for (const auto& soup : extractor.extract(camera))
-    for (const auto& s : soup.segments) {
+    for (const auto& s : soup.resolved()) {
       const Vec3 m = 0.5 * (s.end[0].position + s.end[1].position);
       if (m[a.axis] > a.lo + margin && m[a.axis] < a.hi - margin) out.push_back(m);
     }

@@ -100,7 +100,7 @@ double ridge_valley_density(const TriangleMesh& mesh, double min_curvature) {
   // Ink: each segment's length times its strength (the fade the drawing uses).
   double ink = 0.0;
   for (const auto& soup : extractor.extract(Camera{}))
-    for (const auto& seg : soup.segments)
+    for (const auto& seg : soup.resolved())
       ink += (seg.end[1].position - seg.end[0].position).norm() * 0.5 *
              (seg.end[0].strength + seg.end[1].strength);
   return ink / area(mesh);

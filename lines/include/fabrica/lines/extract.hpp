@@ -149,6 +149,11 @@ class LineExtractor {
   /// The same into `soups`, whose previous segment storage is recycled
   /// (for a redraw loop: no fresh memory per view once warmed up).
   void extract(const Camera& camera, std::vector<SegmentSoup>& soups);
+  /// One view only (the one-shot draw_lines): each extract() frees the
+  /// precompute's per-view inputs (LinePrecompute::vertex_blocks,
+  /// tangent_ring) as soon as its passes are through with them, which
+  /// lowers the peak memory; a further extract() would rebuild them.
+  void set_one_shot(bool one_shot) { one_shot_ = one_shot; }
 
  private:
   const Surface* surface_;
@@ -157,6 +162,7 @@ class LineExtractor {
   std::unique_ptr<LinePrecompute> precompute_;
   ViewFields fields_;
   std::unique_ptr<detail::FaceLists> apparent_faces_;  // listed by the contour scan
+  bool one_shot_ = false;
 };
 
 }  // namespace fabrica

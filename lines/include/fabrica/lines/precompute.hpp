@@ -128,6 +128,13 @@ class LinePrecompute {
     std::vector<std::uint8_t> valid;
   };
   const VertexBlocks& vertex_blocks() const;
+  /// Free vertex_blocks() / tangent_ring() (~144 and ~90 bytes per vertex)
+  /// when no further view will read them, as in the one-shot draw_lines
+  /// (LineExtractor::set_one_shot): the peak memory of one view is lower. A
+  /// later call of vertex_blocks() / tangent_ring() builds them again; a
+  /// reference obtained before the release must not be used after it.
+  void release_vertex_blocks() const;
+  void release_tangent_ring() const;
 
  private:
   struct Cache;

@@ -5,6 +5,13 @@
 // segment), so chaining can join segments by identity instead of by
 // coordinates (docs/algorithms.md §11).
 //
+// The record is lean (40 bytes, docs/algorithms.md §11 "lean segment
+// record"): an end stores only its element and, on an edge, the fraction t
+// along it; its barycentric coordinates and position are recomputed from the
+// mesh (SegmentGeometry) with the operations the kernels use, so they have
+// the bits the kernels computed. Interior ends (test-function clips) keep
+// two barycentric coordinates as floats.
+//
 // Positions are in the mesh's units (mm). Strength is the fade value in
 // [0,1] (docs/algorithms.md §0 step 4): 1 = fully drawn.
 #pragma once
@@ -12,6 +19,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "fabrica/core/surface.hpp"
 #include "fabrica/core/surface_point.hpp"
 #include "fabrica/core/types.hpp"
 #include "fabrica/lines/line_set.hpp"
@@ -22,30 +30,83 @@ namespace fabrica {
 enum class EndKind : std::uint8_t {
   edge,      ///< on mesh edge `element` (Topology edge id)
   vertex,    ///< at mesh vertex `element` (boundaries, creases, mesh-edge contours)
-  centroid,  ///< at the centroid of the segment's face (three-crossing join)
+  centroid,  ///< at the centroid of the segment's face (three-crossing join); element = face
   interior,  ///< inside the face (a test-function clip point): never joined
 };
 
+/// One end of a LineSegment (its kind is LineSegment::kind[i]).
 struct SegmentEnd {
-  SurfacePoint anchor;  ///< face + barycentric coordinates
-  Vec3 position = Vec3::Zero();
-  std::int32_t element = -1;  ///< edge or vertex id, by `kind`; -1 otherwise
-  EndKind kind = EndKind::interior;
+  /// edge: the fraction from the edge's lower vertex (Topology::edge(e)[0])
+  /// to its higher one, barycentrics 1 - t and t; interior: `bary`.
+  union {
+    double t = 0.0;
+    float bary[2];  ///< interior: the coordinates of face corners 0 and 1
+  };
+  std::int32_t element = -1;  ///< edge, vertex or face id, by kind; -1 for interior
   float strength = 1.0f;
 };
 
 struct LineSegment {
   std::int32_t face = -1;
+  EndKind kind[2] = {EndKind::interior, EndKind::interior};
   SegmentEnd end[2];
+};
+static_assert(sizeof(LineSegment) == 40);
+
+/// An end of a segment with its place on the mesh recomputed: face +
+/// barycentrics, position, and the record's element, kind and strength.
+struct ResolvedEnd {
+  SurfacePoint anchor;
+  Vec3 position = Vec3::Zero();
+  std::int32_t element = -1;
+  EndKind kind = EndKind::interior;
+  float strength = 1.0f;
+};
+
+/// A segment with both ends resolved (for tools and tests; the pipeline
+/// reads the lean records).
+struct ResolvedSegment {
+  std::int32_t face = -1;
+  ResolvedEnd end[2];
+};
+
+/// Recomputes ends' barycentrics and positions from the mesh: on an edge
+/// (1 - t) p_lo + t p_hi per component, at a vertex its position, at the
+/// centroid (p0 + p1 + p2) / 3 per component, inside the face the
+/// barycentric combination of the corners. Holds pointers into the
+/// Surface (which must outlive it).
+class SegmentGeometry {
+ public:
+  explicit SegmentGeometry(const Surface& surface);
+
+  SurfacePoint anchor(const LineSegment& s, int i) const;
+  Vec3 position(const LineSegment& s, int i) const;
+  ResolvedEnd resolve(const LineSegment& s, int i) const;
+
+  /// Sets end i of s to an interior point of its face with
+  /// barycentrics `bary` (the stored precision: float).
+  static void set_interior(LineSegment& s, int i, const double bary[3]);
+
+ private:
+  const Face* faces_;
+  const Vec3* pos_;
+  const Topology* topo_;
 };
 
 /// All segments of one family, in a deterministic order (by face, then
-/// extraction order inside the face) at any thread count.
+/// extraction order inside the face) at any thread count. `surface` is the
+/// mesh the ends refer to (it must outlive the soup's use).
 struct SegmentSoup {
   LineFamily family = LineFamily::contour;
+  const Surface* surface = nullptr;
   std::vector<LineSegment> segments;
 
   double total_length() const;
+  /// The geometry of the ends (throws an internal Error when the soup has
+  /// segments but no surface).
+  SegmentGeometry geometry() const;
+  /// The segments with their ends resolved, in order.
+  std::vector<ResolvedSegment> resolved() const;
 };
 
 }  // namespace fabrica
