@@ -2,4 +2,7 @@
 // the method hide it like the background does: q = 0, t1 undefined (0.5, 0.5
 // encodes the zero vector), coverage 0.
 layout(location = 0) out vec4 o_data;
-void main() { o_data = vec4(0.0, 0.5, 0.5, 0.0); }
+void main() {
+  cutaway_discard();
+  o_data = vec4(0.0, 0.5, 0.5, 0.0);
+}

@@ -11,6 +11,7 @@ in vec3 v_packed;
 #endif
 layout(location = 0) out vec4 o_data;
 void main() {
+  cutaway_discard();
 #ifdef PER_FRAGMENT
   mat3 S = mat3(v_s_diagonal.x, v_s_off.x, v_s_off.y,
                 v_s_off.x, v_s_diagonal.y, v_s_off.z,

@@ -1,2 +1,2 @@
-// Depth only.
-void main() {}
+// Depth only (cut context dropped: cutaway.glsl).
+void main() { cutaway_discard(); }

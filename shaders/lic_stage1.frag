@@ -11,6 +11,7 @@ in float v_level;
 in vec2 v_doubled;
 layout(location = 0) out vec4 o_data;
 void main() {
+  cutaway_discard();
   float noise = lic_noise(v_object * u_inv_cell);
   float mask = clamp(v_level, 0.0, 1.0);
   float len = length(v_doubled);

@@ -34,7 +34,7 @@ void main() {
   scene = max(scene, texelFetch(u_depth, clamp(p + ivec2(0, 1), ivec2(0), size), 0).r);
   scene = max(scene, texelFetch(u_depth, clamp(p + ivec2(0, -1), ivec2(0), size), 0).r);
   bool hidden = scene < 1.0 && linear_depth(gl_FragCoord.z) > linear_depth(scene) + u_depth_tolerance;
-  float alpha = u_line_color.a * coverage;
+  float alpha = u_line_color.a * coverage * cutaway().x;
   if (u_fade_by_strength == 1) alpha *= clamp(v_strength, 0.0, 1.0);
   if (hidden) {
     if (u_hidden_mode == 0) discard;

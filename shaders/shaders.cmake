@@ -1,6 +1,7 @@
 # The GLSL files embedded into fabrica_render (explicit list).
 set(FABRICA_SHADER_FILES
   common.glsl shading.glsl apparent_ridges.glsl
+  cutaway.glsl cutaway_seed.frag cutaway_far.vert cutaway_jfa.frag
   mesh.vert mesh.frag mesh_oit.frag depth.frag fullscreen.vert oit_composite.frag
   lines.vert lines.frag
   ar_stage1.vert ar_stage1.frag ar_occluder.frag ar_stage2.frag ar_mask.frag

@@ -1,6 +1,7 @@
 // `fabrica render MESH_OR_SCENE [--camera FILE | --view NAME] [--style S]
 //  [--lines LIST] [--hybrid-ar] [--lic [--lic-length L] [--lic-noise-scale MM]
-//  [--lic-strength S]] [--context MESH ...] [--size WxH]
+//  [--lic-strength S]] [--cutaway [--cutaway-margin PX] [--cutaway-fade PX]
+//  [--cutaway-rim]] [--context MESH ...] [--size WxH]
 //  [--transparent] [--backend egl|osmesa] [--svg OUT.svg] [--pdf OUT.pdf]
 //  [--labels] [--legend] [--scale-bar] [--orientation-marker] [--annotate]
 //  [--font-size PX] -o OUT.png`:
@@ -36,6 +37,8 @@ struct RenderArgs {
   std::vector<std::string> context;
   std::optional<double> tau, lambda, threshold, line_width, context_opacity;
   std::optional<double> lic_length, lic_noise_scale, lic_strength;
+  std::optional<double> cutaway_margin, cutaway_fade;
+  bool cutaway = false, cutaway_rim = false;
   std::optional<int> smooth;
   std::optional<double> font_size;
   bool labels = false, legend = false, scale_bar = false, orientation = false, annotate = false;
@@ -107,6 +110,23 @@ int run_render(const RenderArgs& a) {
     spec.lic.strength = *a.lic_strength;
     render::validate(spec.lic, "--lic-strength");
   }
+  // Cutaway: the options add to the scene's "cutaway".
+  if (a.cutaway) spec.cutaway.enabled = true;
+  if (!spec.cutaway.enabled && (a.cutaway_margin || a.cutaway_fade || a.cutaway_rim))
+    throw InputError(
+        "--cutaway-margin, --cutaway-fade and --cutaway-rim need --cutaway (or a scene whose "
+        "cutaway is enabled)");
+  auto cutaway_px = [](const std::optional<double>& v, const char* option, double& into) {
+    if (!v) return;
+    if (!(*v >= 0.0 && *v <= render::kCutawayMaxPx))
+      throw InputError(std::string(option) + " must be between 0 and " +
+                       std::to_string(static_cast<int>(render::kCutawayMaxPx)) +
+                       " (pixels at 1024 px; got " + std::to_string(*v) + ")");
+    into = *v;
+  };
+  cutaway_px(a.cutaway_margin, "--cutaway-margin", spec.cutaway.margin_px);
+  cutaway_px(a.cutaway_fade, "--cutaway-fade", spec.cutaway.fade_px);
+  if (a.cutaway_rim) spec.cutaway.rim = true;
   for (auto& s : spec.structures) {
     if (space_override) s.space = space_override;
     if (a.smooth) s.style.smooth = *a.smooth;
@@ -236,6 +256,14 @@ void add_render_command(CLI::App& app, Action& action) {
                   "LIC: noise cell size on the surface in mm (0 = bounding radius / 200)");
   cmd->add_option("--lic-strength", args->lic_strength,
                   "LIC: how much of the shading the texture replaces, in [0, 1] (0.8)");
+  cmd->add_flag("--cutaway", args->cutaway,
+                "Cut away the context in front of the focus near its outline (docs/rendering.md)");
+  cmd->add_option("--cutaway-margin", args->cutaway_margin,
+                  "Cutaway: fully cut up to this distance from the focus outline, pixels at "
+                  "1024 px, in [0, 256] (12)");
+  cmd->add_option("--cutaway-fade", args->cutaway_fade,
+                  "Cutaway: the context fades back in over this many more pixels, in [0, 256] (8)");
+  cmd->add_flag("--cutaway-rim", args->cutaway_rim, "Cutaway: draw the cut's border as a line");
   cmd->add_option("--context", args->context, "Context mesh (repeatable): ghosted, silhouettes");
   cmd->add_option("--frame", args->frame,
                   "What the view frames: focus (default when there is context) or all");

@@ -44,12 +44,13 @@ double parse_number(const std::string& text, const std::string& what) {
 
 /// KEY=VALUE: VALUE as JSON when it parses (numbers, true, [1,0,0]), else as
 /// a string; `lines` also takes a comma-separated list of families.
-nlohmann::json parse_keys(const std::vector<std::string>& words, std::size_t first) {
+nlohmann::json parse_keys(const std::vector<std::string>& words, std::size_t first,
+                          const std::string& command = "set") {
   nlohmann::json keys = nlohmann::json::object();
   for (std::size_t i = first; i < words.size(); ++i) {
     const auto eq = words[i].find('=');
     if (eq == std::string::npos || eq == 0)
-      throw InputError("set: \"" + words[i] + "\" must be KEY=VALUE");
+      throw InputError(command + ": \"" + words[i] + "\" must be KEY=VALUE");
     const std::string key = words[i].substr(0, eq), text = words[i].substr(eq + 1);
     nlohmann::json value = nlohmann::json::parse(text, nullptr, false);
     if (value.is_discarded()) value = text;
@@ -163,6 +164,26 @@ int run_script(Viewer& v, const std::filesystem::path& path) {
           throw InputError("clip: unknown orientation \"" + w[1] + "\" (" + usage + ")");
         }
         v.frame();
+      } else if (cmd == "cutaway") {
+        // cutaway off | cutaway on [MARGIN_PX [FADE_PX]] | cutaway KEY=VALUE...
+        const char* usage =
+            "cutaway off | cutaway on [MARGIN_PX [FADE_PX]] | cutaway KEY=VALUE... (keys "
+            "enabled, margin_px, fade_px, rim, rim_color)";
+        if (w.size() < 2) throw InputError(std::string("usage: ") + usage);
+        render::Cutaway c = v.cutaway();
+        if (w[1] == "off" || w[1] == "on") {
+          expect_args(w, 1, w[1] == "on" ? 3 : 1, usage);
+          c.enabled = w[1] == "on";
+          if (w.size() > 2) c.margin_px = parse_number(w[2], "cutaway MARGIN_PX");
+          if (w.size() > 3) c.fade_px = parse_number(w[3], "cutaway FADE_PX");
+        } else if (w[1].find('=') != std::string::npos) {
+          c = render::cutaway_from_json(parse_keys(w, 1, "cutaway"), "cutaway", c);
+        } else {
+          throw InputError("cutaway: unknown argument \"" + w[1] + "\" (" + usage + ")");
+        }
+        loaded();
+        v.set_cutaway(c);
+        v.frame();
       } else if (cmd == "camera") {
         expect_args(w, 1, 1, "camera FILE");
         Camera c = read_camera(w[1]);
@@ -247,11 +268,12 @@ int run_script(Viewer& v, const std::filesystem::path& path) {
         expect_args(w, 0, 0, "quit");
         return 0;
       } else {
-        throw InputError("unknown command \"" + cmd +
-                         "\" (open, focus, context, hide, show, set, view, camera, fit, orbit, "
-                         "wait, screenshot, screenshot-window, panel, export-svg, save-scene, "
-                         "save-camera, click, measure, "
-                         "quit)");
+        throw InputError(
+            "unknown command \"" + cmd +
+            "\" (open, focus, context, hide, show, set, view, clip, cutaway, camera, fit, orbit, "
+            "wait, screenshot, screenshot-window, panel, export-svg, save-scene, "
+            "save-camera, click, measure, "
+            "quit)");
       }
     } catch (const Error& e) {
       throw Error(e.kind(), path.string() + ":" + std::to_string(number) + ": " + e.what());

@@ -156,6 +156,30 @@ bool combo(const char* label, int& current, const char* const* items, int count)
   return ImGui::Combo(label, &current, items, count);
 }
 
+// Focus and context: the cutaway (script: cutaway on|off [MARGIN_PX
+// [FADE_PX]], cutaway KEY=VALUE...; docs/viewer.md).
+void cutaway_section(Viewer& v) {
+  if (v.structures().empty() || !ImGui::CollapsingHeader("Cutaway")) return;
+  render::Cutaway c = v.cutaway();
+  bool changed = ImGui::Checkbox("cut away the context in front of the focus", &c.enabled);
+  if (c.enabled) {
+    const float top = static_cast<float>(render::kCutawayMaxPx) / 4.0f;
+    float margin = static_cast<float>(c.margin_px), fade = static_cast<float>(c.fade_px);
+    if (ImGui::SliderFloat("margin (px)", &margin, 0.0f, top, "%.1f")) {
+      c.margin_px = margin;
+      changed = true;
+    }
+    if (ImGui::SliderFloat("fade (px)", &fade, 0.0f, top, "%.1f")) {
+      c.fade_px = fade;
+      changed = true;
+    }
+    changed |= ImGui::Checkbox("rim", &c.rim);
+    if (c.rim)
+      changed |= ImGui::ColorEdit3("rim colour", &c.rim_color.r, ImGuiColorEditFlags_NoInputs);
+  }
+  if (changed) guarded(v, [&] { v.set_cutaway(c); });
+}
+
 void structure_panel(Viewer& v) {
   if (!ui().show_structures) return;
   ImGui::SetNextWindowPos(ImVec2(8, 28), ImGuiCond_FirstUseEver);
@@ -265,6 +289,7 @@ void structure_panel(Viewer& v) {
     if (changed) v.style_changed();
     ImGui::PopID();
   }
+  cutaway_section(v);
   ImGui::End();
 }
 

@@ -150,6 +150,7 @@ void Viewer::adopt_loaded() {
         clip_.mode = ClipSettings::Mode::fixed;
         clip_.fixed = *f.scene->clip;
       }
+      cutaway_ = f.scene->cutaway;
       if (f.scene->camera) {
         const int w = camera_.width, h = camera_.height;
         camera_ = *f.scene->camera;
@@ -393,6 +394,12 @@ void Viewer::set_clip(ClipSettings::Mode mode, AnatomicalView side, double offse
   lines_dirty_ = true;
 }
 
+void Viewer::set_cutaway(const render::Cutaway& cutaway) {
+  // The scene key's checks (ranges), one place for both.
+  cutaway_ = render::cutaway_from_json(render::cutaway_to_json(cutaway), "cutaway");
+  redraw_ = true;
+}
+
 std::uint64_t Viewer::post_lines(const Camera& camera, bool force, bool lod) {
   if (!force && !lines_dirty_ && posted_revision_ == camera_revision_ && posted_lod_ == lod)
     return lines_version_;
@@ -420,6 +427,7 @@ render::Scene Viewer::build_scene(const LinesResult* lines, bool fading) {
   render::Scene scene;
   scene.background = background_;
   scene.clip = clip_plane();
+  scene.cutaway = cutaway_;
   for (auto& s : structures_) {
     if (!s.visible) continue;
     render::Structure st;
@@ -646,6 +654,7 @@ void Viewer::save_scene(const std::filesystem::path& path) {
   spec.transparent = transparent_;
   spec.camera = camera_;
   spec.clip = clip_plane();
+  spec.cutaway = cutaway_;
   const std::filesystem::path dir = path.parent_path();
   const std::string mesh_dir = structure_name_from_file(path) + ".meshes";
   for (const auto& s : structures_) {
@@ -678,13 +687,17 @@ std::optional<SurfacePick> Viewer::pick(int x, int y) {
   // its index, through the same renderer (one draw, read back one pixel).
   render::Scene ids;
   ids.background = {0.0f, 0.0f, 0.0f, 1.0f};
+  // The focus is picked through the cutaway (a hard cut: no blended ids).
+  ids.cutaway = cutaway_;
+  ids.cutaway.fade_px = 0.0;
+  ids.cutaway.rim = false;
   std::vector<std::size_t> index;
   for (std::size_t i = 0; i < structures_.size(); ++i) {
     const auto& s = structures_[i];
     if (!s.visible) continue;
     render::Structure st;
     st.name = s.name;
-    st.role = render::Role::focus;
+    st.role = s.role;  // the renderer only cuts the context by it
     st.style.shading = render::Shading::flat;
     st.style.opacity = 1.0;
     st.style.ambient = 1.0;

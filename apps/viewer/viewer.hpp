@@ -127,6 +127,12 @@ class Viewer {
   void set_clip(ClipSettings::Mode mode, AnatomicalView side = AnatomicalView::anterior,
                 double offset = 0.0);
 
+  // --- cutaway (issue 18, item 4): the scene's "cutaway" (render::Cutaway)
+  const render::Cutaway& cutaway() const { return cutaway_; }
+  /// `cutaway on|off [MARGIN_PX [FADE_PX]]`, `cutaway KEY=VALUE...` (script)
+  /// and the Structures panel; validated as the scene key is.
+  void set_cutaway(const render::Cutaway& cutaway);
+
   // --- outputs
   render::Image screenshot(int width, int height, bool transparent);
   /// The lines of the current view, hidden lines removed, as SVG or PDF (by extension).
@@ -197,6 +203,7 @@ class Viewer {
   bool transparent_ = false;
   render::HybridOptions hybrid_;
   ClipSettings clip_;
+  render::Cutaway cutaway_;
   std::vector<std::string> errors_;
   std::vector<std::filesystem::path> recent_;
   std::vector<SurfacePick> measure_;

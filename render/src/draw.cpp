@@ -6,6 +6,7 @@
 #include <string>
 #include <utility>
 
+#include "cutaway_field.hpp"
 #include "fabrica/core/error.hpp"
 #include "fabrica/io/prepare.hpp"
 #include "fabrica/lines/draw.hpp"
@@ -99,6 +100,7 @@ Scene build_scene(const SceneSurfaces& scene, const Camera& camera) {
     out.structures.push_back(std::move(st));
   }
   out.clip = scene.spec.clip;
+  out.cutaway = scene.spec.cutaway;
   return out;
 }
 
@@ -134,25 +136,27 @@ RenderedScene render_scene(const SceneSurfaces& scene, const Camera& camera,
 
 namespace {
 
-/// The parts of `lines` on the kept side of `plane`: a polyline is cut
-/// where its vertices leave that side (as the GPU clips the line quads).
-LineSet clip_lines(const LineSet& lines, const ClipPlane& plane) {
+/// The parts of `lines` whose vertices `keeps`: a polyline is cut where
+/// its vertices leave the kept region (a clipping plane's side, as the GPU
+/// clips the line quads; outside the cutaway).
+template <typename Keeps>
+LineSet keep_lines(const LineSet& lines, const Keeps& keeps) {
   LineSet out;
   for (const Polyline& pl : lines.polylines) {
     const std::size_t n = pl.vertices.size();
     std::size_t kept = 0;
-    for (const auto& v : pl.vertices) kept += plane.keeps(v.position);
+    for (const auto& v : pl.vertices) kept += keeps(v.position);
     if (kept == n) {
       out.polylines.push_back(pl);
       continue;
     }
     for (std::size_t i = 0; i < n;) {
-      if (!plane.keeps(pl.vertices[i].position)) {
+      if (!keeps(pl.vertices[i].position)) {
         ++i;
         continue;
       }
       std::size_t j = i;
-      while (j < n && plane.keeps(pl.vertices[j].position)) ++j;
+      while (j < n && keeps(pl.vertices[j].position)) ++j;
       if (j - i >= 2) {
         Polyline part;
         part.family = pl.family;
@@ -169,21 +173,48 @@ LineSet clip_lines(const LineSet& lines, const ClipPlane& plane) {
   return out;
 }
 
+/// The cutaway of `drawn` for vector output (docs/algorithms.md §15), or
+/// none when it does not apply (off, or no focus or no context).
+std::unique_ptr<detail::CutawayField> cutaway_field(const SceneSurfaces& scene, const Scene& drawn,
+                                                    const Camera& camera, double reference_size) {
+  if (!drawn.cutaway.enabled) return nullptr;
+  TriangleMesh focus;
+  bool context = false;
+  for (std::size_t i = 0; i < scene.surfaces.size(); ++i) {
+    if (drawn.structures[i].role != Role::focus) {
+      context = true;
+      continue;
+    }
+    const TriangleMesh& m = scene.surfaces[i]->mesh();
+    const auto base = static_cast<std::int32_t>(focus.positions.size());
+    focus.positions.insert(focus.positions.end(), m.positions.begin(), m.positions.end());
+    for (Face f : m.faces) focus.faces.push_back({f[0] + base, f[1] + base, f[2] + base});
+  }
+  if (focus.faces.empty() || !context) return nullptr;
+  const double scale = std::min(camera.width, camera.height) / std::max(1.0, reference_size);
+  return std::make_unique<detail::CutawayField>(render_depth(focus, camera), camera, drawn.cutaway,
+                                                scale);
+}
+
 /// Each drawn structure's lines with CPU visibility: a focus (opaque)
 /// structure's lines hidden by the opaque structures, a ghosted one's by
-/// every surface.
+/// every surface. With a cutaway, context lines are removed where it keeps
+/// less than half of the surface, and context faces cut at all hide nothing
+/// (as the GPU's depth passes drop them).
 std::vector<LineSet> visible_lines(const SceneSurfaces& scene, const Scene& drawn,
-                                   const Camera& camera) {
+                                   const Camera& camera, double reference_size) {
+  const auto cut = cutaway_field(scene, drawn, camera, reference_size);
   TriangleMesh opaque, all;
   // A clipped (context) structure hides with the faces whose centroid the
-  // plane keeps.
-  auto append = [](TriangleMesh& dst, const TriangleMesh& src, const ClipPlane* clip) {
+  // plane keeps (and the cutaway keeps whole).
+  auto append = [&](TriangleMesh& dst, const TriangleMesh& src, const ClipPlane* clip,
+                    bool context) {
     const auto base = static_cast<std::int32_t>(dst.positions.size());
     dst.positions.insert(dst.positions.end(), src.positions.begin(), src.positions.end());
     for (Face f : src.faces) {
-      if (clip != nullptr &&
-          !clip->keeps((src.positions[f[0]] + src.positions[f[1]] + src.positions[f[2]]) / 3.0))
-        continue;
+      const Vec3 centroid = (src.positions[f[0]] + src.positions[f[1]] + src.positions[f[2]]) / 3.0;
+      if (clip != nullptr && !clip->keeps(centroid)) continue;
+      if (cut && context && cut->keep(centroid) < 1.0) continue;
       dst.faces.push_back({f[0] + base, f[1] + base, f[2] + base});
     }
   };
@@ -191,9 +222,10 @@ std::vector<LineSet> visible_lines(const SceneSurfaces& scene, const Scene& draw
     return drawn.clip && drawn.structures[i].role == Role::context ? &*drawn.clip : nullptr;
   };
   for (std::size_t i = 0; i < scene.surfaces.size(); ++i) {
-    append(all, scene.surfaces[i]->mesh(), clip_of(i));
+    const bool context = drawn.structures[i].role == Role::context;
+    append(all, scene.surfaces[i]->mesh(), clip_of(i), context);
     if (drawn.structures[i].style.opacity >= 0.999)
-      append(opaque, scene.surfaces[i]->mesh(), clip_of(i));
+      append(opaque, scene.surfaces[i]->mesh(), clip_of(i), context);
   }
   // When every structure is opaque (a single mesh, say) the two buffers are
   // the same: rasterise once (at 2048² this pass was a tenth of an item).
@@ -204,8 +236,11 @@ std::vector<LineSet> visible_lines(const SceneSurfaces& scene, const Scene& draw
   const DepthBuffer& opaque_depth = opaque.faces.empty() || all_opaque ? depth_all : depth_opaque;
   std::vector<LineSet> out;
   for (std::size_t i = 0; i < scene.surfaces.size(); ++i) {
-    LineSet ls =
-        clip_of(i) ? clip_lines(drawn.structures[i].lines, *clip_of(i)) : drawn.structures[i].lines;
+    LineSet ls = clip_of(i) ? keep_lines(drawn.structures[i].lines,
+                                         [&](const Vec3& p) { return clip_of(i)->keeps(p); })
+                            : drawn.structures[i].lines;
+    if (cut && drawn.structures[i].role == Role::context)
+      ls = keep_lines(ls, [&](const Vec3& p) { return cut->keep(p) >= 0.5; });
     compute_visibility(ls, *scene.surfaces[i], camera, {},
                        drawn.structures[i].style.opacity >= 0.999 ? &opaque_depth : &depth_all);
     out.push_back(std::move(ls));
@@ -217,14 +252,14 @@ std::vector<LineSet> visible_lines(const SceneSurfaces& scene, const Scene& draw
 
 LineSet vector_lines(const SceneSurfaces& scene, const Scene& drawn, const Camera& camera) {
   LineSet merged;
-  for (const LineSet& ls : visible_lines(scene, drawn, camera))
+  for (const LineSet& ls : visible_lines(scene, drawn, camera, 1024.0))
     merged.polylines.insert(merged.polylines.end(), ls.polylines.begin(), ls.polylines.end());
   return merged;
 }
 
 std::vector<LineLayer> vector_layers(const SceneSurfaces& scene, const Scene& drawn,
                                      const Camera& camera, double reference_size) {
-  std::vector<LineSet> lines = visible_lines(scene, drawn, camera);
+  std::vector<LineSet> lines = visible_lines(scene, drawn, camera, reference_size);
   std::vector<LineLayer> out;
   for (Role role : {Role::context, Role::focus}) {
     for (std::size_t i = 0; i < drawn.structures.size(); ++i) {

@@ -1,5 +1,5 @@
 // A coarse copy of a mesh for drawing ghosted context while the camera moves
-// (docs/algorithms.md §15).
+// (docs/algorithms.md §16).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>

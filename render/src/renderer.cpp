@@ -74,19 +74,18 @@ struct PixelRect {
 
 // Pixels the meshes can cover: their bounding spheres' enclosing cubes
 // projected, 2 px wider for rounding; the whole image when a corner is not
-// in front of the eye.
-PixelRect projected_rect(const Matrices& m, const std::vector<const RenderMesh*>& meshes, int width,
-                         int height) {
+// in front of the eye. projected_boxes: the same for boxes.
+PixelRect projected_boxes(const Matrices& m, const std::vector<BoundingBox>& boxes, int width,
+                          int height) {
   const PixelRect whole{0, 0, width, height};
   const Eigen::Matrix4d mvp =
       Eigen::Map<const Eigen::Matrix4f>(m.projection.data()).cast<double>() *
       Eigen::Map<const Eigen::Matrix4f>(m.model_view.data()).cast<double>();
   double lo_x = 1e300, lo_y = 1e300, hi_x = -1e300, hi_y = -1e300;
-  for (const RenderMesh* mesh : meshes) {
+  for (const BoundingBox& box : boxes) {
     for (int corner = 0; corner < 8; ++corner) {
-      const Vec3 p =
-          mesh->center + mesh->radius * Vec3(corner & 1 ? 1.0 : -1.0, corner & 2 ? 1.0 : -1.0,
-                                             corner & 4 ? 1.0 : -1.0);
+      const Vec3 p(corner & 1 ? box.max.x() : box.min.x(), corner & 2 ? box.max.y() : box.min.y(),
+                   corner & 4 ? box.max.z() : box.min.z());
       const Eigen::Vector4d clip = mvp * Eigen::Vector4d(p.x(), p.y(), p.z(), 1.0);
       if (!(clip.w() > 1e-9)) return whole;
       const double x = (0.5 * clip.x() / clip.w() + 0.5) * width;
@@ -96,12 +95,21 @@ PixelRect projected_rect(const Matrices& m, const std::vector<const RenderMesh*>
       lo_y = std::min(lo_y, y), hi_y = std::max(hi_y, y);
     }
   }
-  if (meshes.empty()) return {};
+  if (boxes.empty()) return {};
   auto to_int = [](double v, int lo, int hi) {
     return static_cast<int>(std::clamp(v, static_cast<double>(lo), static_cast<double>(hi)));
   };
   return {to_int(std::floor(lo_x) - 2.0, 0, width), to_int(std::floor(lo_y) - 2.0, 0, height),
           to_int(std::ceil(hi_x) + 2.0, 0, width), to_int(std::ceil(hi_y) + 2.0, 0, height)};
+}
+
+PixelRect projected_rect(const Matrices& m, const std::vector<const RenderMesh*>& meshes, int width,
+                         int height) {
+  std::vector<BoundingBox> boxes;
+  for (const RenderMesh* mesh : meshes)
+    boxes.push_back(
+        {mesh->center - Vec3::Constant(mesh->radius), mesh->center + Vec3::Constant(mesh->radius)});
+  return projected_boxes(m, boxes, width, height);
 }
 
 // `region` in the pixels of tile `t` (render region, margins included),
@@ -170,6 +178,9 @@ struct FrameState {
   PixelRect ghost_region;  // what the ghosted (transparent) structures can cover
   LicKernel lic_kernel;
   float lic_inv_cell = 1.0f;
+  bool cut = false;            // a cutaway with focus and context (pass_cutaway)
+  PixelRect cut_region;        // the focus's pixels widened by the cutaway's reach
+  bool cut_fade_only = false;  // the transparency pass draws only the cut's fade
 };
 
 void check_size(const Camera& camera) {
@@ -191,6 +202,30 @@ float hybrid_scale(const RenderMesh& mesh, const HybridOptions& o) {
   if (!std::isfinite(tau)) throw InputError("hybrid apparent ridges: tau must be finite");
   return static_cast<float>(std::exp2(tau));
 }
+
+// The cutaway (docs/algorithms.md §15): on when enabled and the scene has
+// both focus and context structures.
+bool cutaway_applies(const Scene& scene) {
+  if (!scene.cutaway.enabled) return false;
+  bool focus = false, context = false;
+  for (const auto& s : scene.structures) (s.role == Role::focus ? focus : context) = true;
+  return focus && context;
+}
+
+// How far (pixels of the picture) the cutaway reaches from the focus's
+// footprint: margin + fade (+ rim), `scale` the line scale.
+double cutaway_reach(const Cutaway& c, double scale) {
+  return (c.margin_px + c.fade_px + (c.rim ? kCutawayRimPx : 0.0)) * scale;
+}
+
+// Tiles' margin with a cutaway: every pixel of a tile sees the focus
+// pixels within reach (the distance field is computed per tile).
+int cutaway_margin(const Cutaway& c, double scale) {
+  return static_cast<int>(std::ceil(cutaway_reach(c, scale))) + 2;
+}
+
+// Texture units the cutaway's textures stay bound to while a tile is drawn.
+constexpr int kCutSeedUnit = 5, kCutDepthUnit = 6;
 
 }  // namespace
 
@@ -217,6 +252,26 @@ struct Renderer::Impl {
   // the depth-stencil lic_depth (stencil 1 where a LIC mesh is visible);
   // stage 2 multiplies into main_color through lic_out_fbo (lic_stage2).
   GLuint lic_fbo = 0, lic_color = 0, lic_depth = 0, lic_out_fbo = 0;
+  // Cutaway (pass_cutaway): the focus's front depth (cut_depth, drawn
+  // through cut_fbo) and the jump-flooding ping-pong of nearest focus
+  // pixels (cut_seeds, RG32F); cut_params = (margin, fade, rim width) in
+  // pixels of the picture, as cutaway.glsl takes them.
+  GLuint cut_fbo = 0, cut_depth = 0;
+  GLuint cut_seeds[2] = {0, 0}, cut_seed_fbos[2] = {0, 0};
+  std::array<float, 3> cut_params{};
+  Color cut_rim_color;
+  PixelRect cut_rect;  // F.cut_region in the tile's pixels: where anything can be cut
+
+  // Scissor to cut_rect (the passes that only draw the cut), or off.
+  void cut_scissor(bool on) {
+    if (!on) {
+      gl().Disable(GL_SCISSOR_TEST);
+      return;
+    }
+    gl().Enable(GL_SCISSOR_TEST);
+    gl().Scissor(cut_rect.x0, cut_rect.y0, std::max(0, cut_rect.x1 - cut_rect.x0),
+                 std::max(0, cut_rect.y1 - cut_rect.y0));
+  }
 
   explicit Impl(std::unique_ptr<GlContext> c) : ctx(std::move(c)) {
     ctx->make_current();
@@ -258,25 +313,25 @@ struct Renderer::Impl {
     };
     std::vector<ShaderStage> stages;
     if (key == "mesh")
-      stages = {vs({"mesh.vert"}), fs({"shading.glsl", "mesh.frag"})};
+      stages = {vs({"mesh.vert"}), fs({"shading.glsl", "cutaway.glsl", "mesh.frag"})};
     else if (key == "mesh_oit")
-      stages = {vs({"mesh.vert"}), fs({"shading.glsl", "mesh_oit.frag"})};
+      stages = {vs({"mesh.vert"}), fs({"shading.glsl", "cutaway.glsl", "mesh_oit.frag"})};
     else if (key == "depth")
-      stages = {vs({"mesh.vert"}), fs({"depth.frag"})};
+      stages = {vs({"mesh.vert"}), fs({"cutaway.glsl", "depth.frag"})};
     else if (key == "oit_composite")
       stages = {vs({"fullscreen.vert"}), fs({"oit_composite.frag"})};
     else if (key == "lines")
-      stages = {vs({"lines.vert"}), fs({"lines.frag"})};
+      stages = {vs({"lines.vert"}), fs({"cutaway.glsl", "lines.frag"})};
     else if (key == "ar1")
       stages = {vs({"apparent_ridges.glsl", "ar_stage1.vert"}),
-                fs({"apparent_ridges.glsl", "ar_stage1.frag"})};
+                fs({"apparent_ridges.glsl", "cutaway.glsl", "ar_stage1.frag"})};
     else if (key == "ar1_per_fragment")
       stages = {vs({"apparent_ridges.glsl", "ar_stage1.vert"}, {"PER_FRAGMENT"}),
-                fs({"apparent_ridges.glsl", "ar_stage1.frag"}, {"PER_FRAGMENT"})};
+                fs({"apparent_ridges.glsl", "cutaway.glsl", "ar_stage1.frag"}, {"PER_FRAGMENT"})};
     else if (key == "ar2")
       stages = {vs({"fullscreen.vert"}), fs({"ar_stage2.frag"})};
     else if (key == "ar_occluder")
-      stages = {vs({"mesh.vert"}), fs({"ar_occluder.frag"})};
+      stages = {vs({"mesh.vert"}), fs({"cutaway.glsl", "ar_occluder.frag"})};
     else if (key == "ar_mask")
       stages = {vs({"fullscreen.vert"}), fs({"ar_mask.frag"})};
     else if (key == "ar_bare1")
@@ -284,7 +339,7 @@ struct Renderer::Impl {
     else if (key == "ar_bare2")
       stages = {vs({"fullscreen.vert"}), fs({"ar_bare_stage2.frag"})};
     else if (key == "lic1")
-      stages = {vs({"lic_stage1.vert"}), fs({"lic_noise.glsl", "lic_stage1.frag"})};
+      stages = {vs({"lic_stage1.vert"}), fs({"lic_noise.glsl", "cutaway.glsl", "lic_stage1.frag"})};
     else if (key == "lic_mask")
       stages = {vs({"fullscreen.vert"}), fs({"lic_mask.frag"})};
     else if (key == "lic2")
@@ -292,6 +347,10 @@ struct Renderer::Impl {
     else if (key == "lic2_value")
       stages = {vs({"fullscreen.vert"}),
                 fs({"lic_stage2.frag"}, {kLicMaxStepsDefine, "LIC_VALUE"})};
+    else if (key == "cut_seed")
+      stages = {vs({"mesh.vert"}), fs({"cutaway_seed.frag"})};
+    else if (key == "cut_jfa")
+      stages = {vs({"cutaway_far.vert"}), fs({"cutaway_jfa.frag"})};
     else
       throw Error(ErrorKind::internal, "unknown program " + key);
     return programs.emplace(key, ShaderProgram(gl(), key, stages)).first->second;
@@ -421,6 +480,7 @@ struct Renderer::Impl {
     main_fbo = overlay_fbo = oit_fbo = depthb_fbo = ar_fbo = ar_out_fbo = 0;
     main_color = depth_a = accum = reveal = depth_b = ar_color = ar_depth = 0;
     lic_fbo = lic_out_fbo = lic_color = lic_depth = 0;
+    release_cutaway();
     target_w = target_h = 0;
   }
 
@@ -589,6 +649,51 @@ struct Renderer::Impl {
     check_fbo("LIC output framebuffer");
   }
 
+  void ensure_cutaway() {
+    if (cut_fbo != 0) return;
+    const GlFunctions& g = gl();
+    cut_depth =
+        make_texture(GL_DEPTH_COMPONENT24, GL_DEPTH_COMPONENT, GL_UNSIGNED_INT, target_w, target_h);
+    for (GLuint& seeds : cut_seeds)
+      seeds = make_texture(GL_RG32F, GL_RG, GL_FLOAT, target_w, target_h);
+    // The focus pass: its depth and its seeds in both targets.
+    g.GenFramebuffers(1, &cut_fbo);
+    g.BindFramebuffer(GL_FRAMEBUFFER, cut_fbo);
+    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, cut_depth, 0);
+    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, cut_seeds[0], 0);
+    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, cut_seeds[1], 0);
+    const GLenum both[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+    g.DrawBuffers(2, both);
+    check_fbo("cutaway focus framebuffer");
+    // The flood passes: one target each, depth-tested against the focus.
+    g.GenFramebuffers(2, cut_seed_fbos);
+    for (int k = 0; k < 2; ++k) {
+      g.BindFramebuffer(GL_FRAMEBUFFER, cut_seed_fbos[k]);
+      g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, cut_seeds[k], 0);
+      g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, cut_depth, 0);
+      check_fbo("cutaway distance framebuffer");
+    }
+  }
+
+  void release_cutaway() {
+    const GlFunctions& g = gl();
+    g.DeleteFramebuffers(1, &cut_fbo);
+    g.DeleteFramebuffers(2, cut_seed_fbos);
+    g.DeleteTextures(1, &cut_depth);
+    g.DeleteTextures(2, cut_seeds);
+    cut_fbo = cut_depth = 0;
+    cut_seeds[0] = cut_seeds[1] = cut_seed_fbos[0] = cut_seed_fbos[1] = 0;
+  }
+
+  // The cutaway's uniforms (cutaway.glsl) on every program set_common sets
+  // up; u_cutaway itself is set per draw (set_clip).
+  void set_cut_uniforms(const ShaderProgram& p) {
+    p.set("u_cut_seeds", kCutSeedUnit);
+    p.set("u_cut_depth", kCutDepthUnit);
+    p.set("u_cut", cut_params[0], cut_params[1], cut_params[2]);
+    p.set("u_cut_rim_color", cut_rim_color.r, cut_rim_color.g, cut_rim_color.b, cut_rim_color.a);
+  }
+
   // ------------------------------------------------------------- helpers
   int tile_inner_size(int requested, int margin = kTileMargin) const {
     int limit = std::min(ctx->max_framebuffer_size(), 4096);
@@ -602,6 +707,7 @@ struct Renderer::Impl {
     p.set_mat3("u_normal_matrix", m.normal.data());
     p.set("u_tile", t.transform[0], t.transform[1], t.transform[2], t.transform[3]);
     p.set("u_orthographic", m.orthographic ? 1 : 0);
+    set_cut_uniforms(p);
   }
 
   void draw_fullscreen() {
@@ -658,6 +764,7 @@ struct Renderer::Impl {
     bool occluder;
     bool clipped = false;  // a context structure of a scene with a clip
     bool cull = false;     // back faces culled (cullable)
+    bool cut = false;      // a context structure of a frame with a cutaway
   };
   // The clipping plane as the shaders take it (common.glsl, clip_at).
   std::array<float, 4> clip{0.0f, 0.0f, 0.0f, 1.0f};
@@ -665,7 +772,9 @@ struct Renderer::Impl {
   // Mesa's llvmpipe kept clipping a draw after glDisable(GL_CLIP_DISTANCE0)
   // when the previous draw of the same program had it enabled (a focus
   // structure after a clipped context one lost its clipped half).
-  void set_clip(const ShaderProgram& p, bool clipped) {
+  // `cut`: a context structure of a frame with a cutaway (cutaway.glsl).
+  void set_clip(const ShaderProgram& p, bool clipped, bool cut = false) {
+    p.set("u_cutaway", cut ? 1 : 0);
     if (clipped) {
       gl().Enable(GL_CLIP_DISTANCE0);
       p.set("u_clip", clip[0], clip[1], clip[2], clip[3]);
@@ -697,7 +806,7 @@ struct Renderer::Impl {
         }
       }
       if (!d.occluder) p.set("u_scale", d.scale);
-      set_clip(q, d.clipped);
+      set_clip(q, d.clipped, d.cut);
       set_cull(d.cull);
       g.StencilFunc(GL_ALWAYS, d.occluder ? 0 : 1, 0xFF);
       draw_mesh(*d.mesh);
@@ -771,6 +880,7 @@ struct Renderer::Impl {
   struct LicDraw {
     const GpuMesh* mesh;
     bool clipped = false;  // a context structure of a scene with a clip
+    bool cut = false;      // a context structure of a frame with a cutaway
   };
   void lic_stage1(const std::vector<LicDraw>& draws, const Matrices& m, const Tile& t,
                   float inv_cell, int image_w, int image_h) {
@@ -795,7 +905,7 @@ struct Renderer::Impl {
     p.set("u_image_size", static_cast<float>(image_w), static_cast<float>(image_h));
     p.set("u_inv_cell", inv_cell);
     for (const auto& d : draws) {
-      set_clip(p, d.clipped);
+      set_clip(p, d.clipped, d.cut);
       draw_mesh(*d.mesh);
     }
     g.Disable(GL_CLIP_DISTANCE0);
@@ -875,7 +985,7 @@ struct Renderer::Impl {
       const bool fill = s.style.shading != Shading::none;
       g.ColorMask(fill, fill, fill, fill);
       set_shading(p, s.style, 1.0f);
-      set_clip(p, clipped(F, s));
+      set_clip(p, clipped(F, s), cut(F, s));
       set_cull(cullable(F, s));
       draw_mesh(*F.gpu[i]);
     }
@@ -891,7 +1001,7 @@ struct Renderer::Impl {
     std::vector<LicDraw> draws;
     for (std::size_t i = 0; i < F.scene.structures.size(); ++i) {
       const Structure& s = F.scene.structures[i];
-      if (opaque(s) && s.style.lic) draws.push_back({F.gpu[i], clipped(F, s)});
+      if (opaque(s) && s.style.lic) draws.push_back({F.gpu[i], clipped(F, s), cut(F, s)});
     }
     lic_stage1(draws, F.M, t, F.lic_inv_cell, F.camera.width, F.camera.height);
     lic_stage2(F.lic_kernel, static_cast<float>(F.options.lic.strength), t, F.lic_region, false);
@@ -907,8 +1017,17 @@ struct Renderer::Impl {
     const GlFunctions& g = gl();
     ensure_oit();
     g.BindFramebuffer(GL_FRAMEBUFFER, oit_fbo);
+    // Scissored to where what it draws can be (ghosted structures, the fade
+    // of cut opaque context), and to the cut's reach where only that is drawn.
+    auto scissor = [&](bool cut_only) {
+      PixelRect q = r;
+      if (cut_only)
+        q = {std::max(q.x0, cut_rect.x0), std::max(q.y0, cut_rect.y0), std::min(q.x1, cut_rect.x1),
+             std::min(q.y1, cut_rect.y1)};
+      g.Scissor(q.x0, q.y0, std::max(0, q.x1 - q.x0), std::max(0, q.y1 - q.y0));
+    };
     g.Enable(GL_SCISSOR_TEST);
-    g.Scissor(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
+    scissor(F.cut_fade_only);
     const float zero[4] = {0, 0, 0, 0};
     g.ClearBufferfv(GL_COLOR, 0, zero);
     g.ClearBufferfv(GL_COLOR, 1, zero);
@@ -921,11 +1040,13 @@ struct Renderer::Impl {
     set_common(p, F.M, t);
     for (std::size_t i = 0; i < F.scene.structures.size(); ++i) {
       const Structure& s = F.scene.structures[i];
-      if (!ghosted(s)) continue;
+      if (!in_transparency_pass(F, s)) continue;
       set_shading(p, s.style, static_cast<float>(s.style.opacity));
-      set_clip(p, clipped(F, s));
+      set_clip(p, clipped(F, s), cut(F, s));
+      scissor(F.cut_fade_only || opaque(s));
       draw_mesh(*F.gpu[i]);
     }
+    scissor(F.cut_fade_only);
     g.Disable(GL_CLIP_DISTANCE0);
     g.BindFramebuffer(GL_FRAMEBUFFER, overlay_fbo);
     set_state_overlay();
@@ -940,6 +1061,81 @@ struct Renderer::Impl {
     draw_fullscreen();
     g.ActiveTexture(GL_TEXTURE0);
     g.Disable(GL_SCISSOR_TEST);
+  }
+
+  // The cutaway (docs/algorithms.md §15), before anything context is drawn:
+  // the focus structures' front depth, then the nearest focus pixel of
+  // every pixel within reach by jump flooding (log2 of the reach passes and
+  // one more of step 1), left bound to kCutSeedUnit and kCutDepthUnit for
+  // the tile's passes (cutaway.glsl).
+  void pass_cutaway(const FrameState& F, const Tile& t) {
+    if (!F.cut) return;
+    const GlFunctions& g = gl();
+    ensure_cutaway();
+    const Cutaway& c = F.scene.cutaway;
+    const double scale = F.line_scale;
+    cut_params = {static_cast<float>(c.margin_px * scale), static_cast<float>(c.fade_px * scale),
+                  static_cast<float>(c.rim ? kCutawayRimPx * scale : 0.0)};
+    cut_rim_color = c.rim_color;
+    const int ox = t.x - t.margin, oy = t.y - t.margin;
+    cut_rect = {std::max(0, F.cut_region.x0 - ox), std::max(0, F.cut_region.y0 - oy),
+                std::min(t.render_w, F.cut_region.x1 - ox),
+                std::min(t.render_h, F.cut_region.y1 - oy)};
+    for (int unit : {kCutSeedUnit, kCutDepthUnit}) {  // drawn into below
+      g.ActiveTexture(static_cast<GLenum>(GL_TEXTURE0 + unit));
+      g.BindTexture(GL_TEXTURE_2D, 0);
+    }
+    g.ActiveTexture(GL_TEXTURE0);
+    // The focus's depth, and its pixels as seeds in both targets (no seed
+    // elsewhere).
+    g.BindFramebuffer(GL_FRAMEBUFFER, cut_fbo);
+    g.Viewport(0, 0, t.render_w, t.render_h);
+    set_state_opaque();
+    g.ClearDepth(1.0);
+    g.Clear(GL_DEPTH_BUFFER_BIT);
+    const float none[4] = {-1.0f, -1.0f, 0.0f, 0.0f};
+    g.ClearBufferfv(GL_COLOR, 0, none);
+    g.ClearBufferfv(GL_COLOR, 1, none);
+    const ShaderProgram& d = program("cut_seed");
+    d.use();
+    set_common(d, F.M, t);
+    set_clip(d, false, false);
+    // The picture's pixels in the tile: only they seed (tiling changes nothing).
+    d.set("u_picture", static_cast<float>(-ox), static_cast<float>(-oy),
+          static_cast<float>(F.camera.width - ox), static_cast<float>(F.camera.height - oy));
+    for (std::size_t i = 0; i < F.scene.structures.size(); ++i)
+      if (F.scene.structures[i].role == Role::focus) draw_mesh(*F.gpu[i]);
+    // The flood: inside cut_rect, where no focus is drawn (depth 1).
+    g.DepthFunc(GL_EQUAL);
+    g.DepthMask(GL_FALSE);
+    cut_scissor(true);
+    const ShaderProgram& j = program("cut_jfa");
+    j.use();
+    j.set("u_input", 0);
+    j.set("u_size", static_cast<float>(t.render_w), static_cast<float>(t.render_h));
+    int current = 0;
+    auto flood = [&](int step, GLuint input, int into) {
+      g.BindFramebuffer(GL_FRAMEBUFFER, cut_seed_fbos[into]);
+      g.BindTexture(GL_TEXTURE_2D, input);
+      j.set("u_step", step);
+      draw_fullscreen();
+      current = into;
+    };
+    int step = 1;
+    while (2.0 * step <= cutaway_reach(c, scale)) step *= 2;
+    for (; step >= 1; step /= 2) flood(step, cut_seeds[current], 1 - current);
+    flood(1, cut_seeds[current], 1 - current);
+    cut_scissor(false);
+    g.DepthFunc(GL_LESS);
+    g.Disable(GL_DEPTH_TEST);
+    g.BindTexture(GL_TEXTURE_2D, 0);
+    g.ActiveTexture(static_cast<GLenum>(GL_TEXTURE0 + kCutSeedUnit));
+    g.BindTexture(GL_TEXTURE_2D, cut_seeds[current]);
+    g.ActiveTexture(static_cast<GLenum>(GL_TEXTURE0 + kCutDepthUnit));
+    g.BindTexture(GL_TEXTURE_2D, cut_depth);
+    g.ActiveTexture(GL_TEXTURE0);
+    g.DepthMask(GL_TRUE);
+    check_gl_error(g, "drawing the cutaway");
   }
 
   // Depth of every surface, for lines of ghosted structures.
@@ -958,7 +1154,7 @@ struct Renderer::Impl {
     set_common(p, F.M, t);
     for (std::size_t i = 0; i < F.scene.structures.size(); ++i) {
       if (opaque(F.scene.structures[i])) continue;
-      set_clip(p, clipped(F, F.scene.structures[i]));
+      set_clip(p, clipped(F, F.scene.structures[i]), cut(F, F.scene.structures[i]));
       draw_mesh(*F.gpu[i]);
     }
     g.Disable(GL_CLIP_DISTANCE0);
@@ -972,9 +1168,9 @@ struct Renderer::Impl {
       const Structure& s = F.scene.structures[i];
       if (s.style.hybrid_apparent_ridges)
         draws.push_back({F.gpu[i], hybrid_scale(*s.mesh, F.options.hybrid), false, clipped(F, s),
-                         opaque(s) && cullable(F, s)});
+                         opaque(s) && cullable(F, s), cut(F, s)});
       else if (opaque(s))
-        draws.push_back({F.gpu[i], 1.0f, true, clipped(F, s), cullable(F, s)});
+        draws.push_back({F.gpu[i], 1.0f, true, clipped(F, s), cullable(F, s), cut(F, s)});
     }
     hybrid_stage1(draws, F.options.hybrid, F.M, t, false);
     hybrid_stage2(F.options.hybrid, t, F.hybrid_region, false);
@@ -1011,7 +1207,7 @@ struct Renderer::Impl {
       p.set("u_hidden_mode", static_cast<int>(ls.hidden));
       p.set("u_hidden_opacity", static_cast<float>(ls.hidden_opacity));
       p.set("u_dash_px", static_cast<float>(ls.dash * F.line_scale));
-      set_clip(p, clipped(F, s));
+      set_clip(p, clipped(F, s), cut(F, s));
       g.DrawElements(GL_TRIANGLES, b.count, GL_UNSIGNED_INT,
                      reinterpret_cast<const void*>(std::size_t(b.first) * sizeof(std::uint32_t)));
     }
@@ -1027,7 +1223,7 @@ struct Renderer::Impl {
   // closed and outward (RenderMesh::closed_outward) and the near plane does
   // not reach its bounding sphere: every pixel then sees a front face first,
   // so the picture is the same with half the triangles rasterised
-  // (docs/algorithms.md §15). Context structures are never culled: the
+  // (docs/algorithms.md §16). Context structures are never culled: the
   // clipping plane (and any cutaway) opens them.
   static bool cullable(const FrameState& F, const Structure& s) {
     if (!s.mesh->closed_outward || s.role != Role::focus) return false;
@@ -1043,6 +1239,15 @@ struct Renderer::Impl {
   // Context structures lose the far side of the scene's clipping plane.
   static bool clipped(const FrameState& F, const Structure& s) {
     return F.scene.clip && s.role == Role::context;
+  }
+  // Context structures lose what is in front of the focus (pass_cutaway).
+  static bool cut(const FrameState& F, const Structure& s) {
+    return F.cut && s.role == Role::context;
+  }
+  // What the transparency pass draws: ghosted structures, and the fade of
+  // the cut of opaque context with a cutaway (mesh_oit.frag).
+  static bool in_transparency_pass(const FrameState& F, const Structure& s) {
+    return ghosted(s) || (opaque(s) && cut(F, s) && s.style.shading != Shading::none);
   }
 
   void set_shading(const ShaderProgram& p, const StructureStyle& st, float alpha) {
@@ -1242,6 +1447,11 @@ void Renderer::draw(const Scene& scene, const Camera& camera, const RenderOption
       lic_radius = std::max(lic_radius, s.mesh->radius);
     }
   }
+  F.cut = cutaway_applies(scene);
+  if (F.cut) {  // the fade of a cut is blended (pass_transparent)
+    F.cut_fade_only = !F.any_transparent;
+    F.any_transparent = true;
+  }
   F.batches = I.upload_lines(scene);
   for (const auto& b : F.batches)
     if (!Impl::opaque(scene.structures[b.structure])) F.lines_need_depth_b = true;
@@ -1257,6 +1467,13 @@ void Renderer::draw(const Scene& scene, const Camera& camera, const RenderOption
     margin = std::max(
         margin, static_cast<int>(std::ceil(F.lic_kernel.steps * double(F.lic_kernel.step_px))) + 2);
   }
+  // With a cutaway and several tiles, margins as wide as it reaches (one
+  // tile sees the whole picture: the cut seeds only on the picture's pixels).
+  if (F.cut) {
+    const int one = I.tile_inner_size(options.max_tile_size, margin);
+    if (camera.width > one || camera.height > one)
+      margin = std::max(margin, cutaway_margin(scene.cutaway, F.line_scale));
+  }
   const int inner = I.tile_inner_size(options.max_tile_size, margin);
   const auto tiles = make_tiles(camera.width, camera.height, inner, margin);
 
@@ -1269,11 +1486,29 @@ void Renderer::draw(const Scene& scene, const Camera& camera, const RenderOption
     return projected_rect(F.M, meshes, camera.width, camera.height);
   };
   if (F.any_transparent)
-    F.ghost_region = region_of([](const Structure& s) { return Impl::ghosted(s); });
+    F.ghost_region =
+        region_of([&F](const Structure& s) { return Impl::in_transparency_pass(F, s); });
   if (F.any_hybrid)
     F.hybrid_region = region_of([](const Structure& s) { return s.style.hybrid_apparent_ridges; });
   if (F.any_lic)
     F.lic_region = region_of([](const Structure& s) { return s.style.lic && Impl::opaque(s); });
+  if (F.cut) {  // the focus's vertices' box: tighter than its sphere
+    std::vector<BoundingBox> boxes;
+    for (const auto& s : scene.structures) {
+      if (s.role != Role::focus) continue;
+      const std::vector<float>& p = s.mesh->positions;
+      BoundingBox b{Vec3::Constant(1e300), Vec3::Constant(-1e300)};
+      for (std::size_t i = 0; i + 2 < p.size(); i += 3) {
+        const Vec3 v(p[i], p[i + 1], p[i + 2]);
+        b.min = b.min.cwiseMin(v);
+        b.max = b.max.cwiseMax(v);
+      }
+      boxes.push_back(b);
+    }
+    const PixelRect r = projected_boxes(F.M, boxes, camera.width, camera.height);
+    const int reach = static_cast<int>(std::ceil(cutaway_reach(scene.cutaway, F.line_scale))) + 2;
+    F.cut_region = {r.x0 - reach, r.y0 - reach, r.x1 + reach, r.y1 + reach};
+  }
 
   if (blit != nullptr && tiles.size() != 1)
     throw InputError("render_to_framebuffer: the picture must fit one tile (" +
@@ -1286,6 +1521,7 @@ void Renderer::draw(const Scene& scene, const Camera& camera, const RenderOption
   F.bg_alpha = options.transparent_background ? 0.0f : scene.background.a;
   const GlFunctions& g = I.gl();
   for (const Tile& t : tiles) {
+    I.pass_cutaway(F, t);
     I.pass_opaque(F, t);
     I.pass_lic(F, t);
     I.pass_transparent(F, t);

@@ -138,12 +138,15 @@ T choice(const nlohmann::json& j, const char* key, Parse parse,
                    did_you_mean(v, choices) + " (use " + list + ")");
 }
 
-const std::vector<std::string> kSceneKeys = {"background", "transparent", "camera", "view", "frame",
-                                             "structures", "annotation",  "lic",    "clip"};
+const std::vector<std::string> kSceneKeys = {"background", "transparent", "camera",     "view",
+                                             "frame",      "structures",  "annotation", "lic",
+                                             "clip",       "cutaway"};
 const std::vector<std::string> kAnnotationKeys = {"labels", "legend", "scale_bar", "orientation",
                                                   "font_size"};
 const std::vector<std::string> kLicKeys = {"kernel_length", "noise_scale", "strength"};
 const std::vector<std::string> kClipKeys = {"point", "normal"};
+const std::vector<std::string> kCutawayKeys = {"enabled", "margin_px", "fade_px", "rim",
+                                               "rim_color"};
 // structures[].hatching as an object: numbers with their ranges (lo, hi,
 // whether lo itself is allowed), the flags, and "method".
 struct HatchingNumber {
@@ -440,6 +443,7 @@ SceneSpec scene_spec_from_json(const nlohmann::json& j, const std::filesystem::p
         throw InputError(what + ": clip.normal must not be the zero vector");
       spec.clip = plane;
     }
+    if (j.contains("cutaway")) spec.cutaway = cutaway_from_json(j["cutaway"], what);
     if (!j.contains("structures") || !j["structures"].is_array() || j["structures"].empty())
       throw InputError(what + ": 'structures' must be a non-empty array");
     std::vector<std::string> family_names;
@@ -558,6 +562,12 @@ nlohmann::json scene_spec_to_json(const SceneSpec& spec) {
   if (spec.clip)
     j["clip"] = {{"point", {spec.clip->point.x(), spec.clip->point.y(), spec.clip->point.z()}},
                  {"normal", {spec.clip->normal.x(), spec.clip->normal.y(), spec.clip->normal.z()}}};
+  const Cutaway defaults;
+  const Cutaway& cut = spec.cutaway;
+  if (cut.enabled || cut.margin_px != defaults.margin_px || cut.fade_px != defaults.fade_px ||
+      cut.rim || to_hex(cut.rim_color) != to_hex(defaults.rim_color) ||
+      cut.rim_color.a != defaults.rim_color.a)
+    j["cutaway"] = cutaway_to_json(cut);
   nlohmann::json list = nlohmann::json::array();
   for (const auto& s : spec.structures) {
     nlohmann::json o;
@@ -597,6 +607,42 @@ nlohmann::json scene_spec_to_json(const SceneSpec& spec) {
   }
   j["structures"] = list;
   return j;
+}
+
+double cutaway_keep(const Cutaway& c, double distance, double scale) {
+  const double margin = c.margin_px * scale, fade = c.fade_px * scale;
+  if (!(distance > margin)) return 0.0;
+  if (!(distance < margin + fade)) return 1.0;
+  const double t = (distance - margin) / fade;
+  return t * t * (3.0 - 2.0 * t);
+}
+
+Cutaway cutaway_from_json(const nlohmann::json& c, const std::string& what, Cutaway cut) {
+  if (!c.is_object())
+    throw InputError(what +
+                     ": cutaway must be an object {enabled, margin_px, fade_px, rim, rim_color}");
+  check_keys(c, kCutawayKeys, what, "cutaway");
+  try {
+    if (c.contains("enabled")) cut.enabled = boolean(c, "enabled", what, "cutaway");
+    if (c.contains("margin_px"))
+      cut.margin_px = number(c, "margin_px", 0.0, kCutawayMaxPx, what, "cutaway");
+    if (c.contains("fade_px"))
+      cut.fade_px = number(c, "fade_px", 0.0, kCutawayMaxPx, what, "cutaway");
+    if (c.contains("rim")) cut.rim = boolean(c, "rim", what, "cutaway");
+    if (c.contains("rim_color"))
+      cut.rim_color = color_from_json(c["rim_color"], what + ": cutaway.rim_color");
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(what + ": cutaway: " + e.what());
+  }
+  return cut;
+}
+
+nlohmann::json cutaway_to_json(const Cutaway& c) {
+  return {{"enabled", c.enabled},
+          {"margin_px", c.margin_px},
+          {"fade_px", c.fade_px},
+          {"rim", c.rim},
+          {"rim_color", color_to_json(c.rim_color)}};
 }
 
 SceneSpec read_scene_spec(const std::filesystem::path& path) {

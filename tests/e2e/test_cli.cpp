@@ -1074,6 +1074,21 @@ TEST(Render, SmoothFlagAndSceneKey) {
 
 // Surface LIC (issue 21, item 2): --lic, its parameters and the scene keys;
 // bad values exit 2 with a one-line message naming the option or key.
+// `fabrica render` of the aneurysm with each case's extra options exits 2
+// with one line containing the case's text.
+void expect_bad_render_options(
+    const fs::path& dir,
+    const std::vector<std::pair<std::vector<std::string>, std::string>>& bad_cases) {
+  for (const auto& [extra, needle] : bad_cases) {
+    std::vector<std::string> args = {"render", aneurysm().string(), "-o", (dir / "c.png").string()};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const Outcome bad = run_fabrica(args);
+    EXPECT_EQ(bad.code, 2) << describe(bad);
+    EXPECT_TRUE(one_line(bad.err)) << describe(bad);
+    EXPECT_NE(bad.err.find(needle), std::string::npos) << describe(bad);
+  }
+}
+
 TEST(Render, LicFlagAndSceneKeys) {
   if (!has_command("render")) GTEST_SKIP() << "no render command in this build";
   const fs::path dir = work_dir();
@@ -1099,18 +1114,50 @@ TEST(Render, LicFlagAndSceneKeys) {
       {{"--lic", "--lic-noise-scale", "-1"}, "--lic-noise-scale"},
       {{"--lic-length", "4"}, "need --lic"},
       {{"--lic-lenght", "4"}, "--lic-length"}};
-  for (const auto& [extra, needle] : bad_cases) {
-    std::vector<std::string> args = {"render", aneurysm().string(), "-o", (dir / "c.png").string()};
-    args.insert(args.end(), extra.begin(), extra.end());
-    const Outcome bad = run_fabrica(args);
-    EXPECT_EQ(bad.code, 2) << describe(bad);
-    EXPECT_TRUE(one_line(bad.err)) << describe(bad);
-    EXPECT_NE(bad.err.find(needle), std::string::npos) << describe(bad);
-  }
+  expect_bad_render_options(dir, bad_cases);
   const Outcome key =
       run_fabrica({"render", (dir / "bad.json").string(), "-o", (dir / "c.png").string()});
   EXPECT_EQ(key.code, 2) << describe(key);
   EXPECT_NE(key.err.find("kernel_length"), std::string::npos) << describe(key);
+  EXPECT_FALSE(fs::exists(dir / "c.png"));
+}
+
+// The cutaway's options (issue 18, item 4): saved into the scene, which
+// re-renders to the same picture; bad values exit 2 with one line naming
+// the option or key.
+TEST(Render, CutawayFlagsAndSceneKeys) {
+  if (!has_command("render")) GTEST_SKIP() << "no render command in this build";
+  const fs::path dir = work_dir();
+  const Outcome r = run_fabrica({"render", aneurysm().string(), "--context", aneurysm().string(),
+                                 "-o", (dir / "a.png").string(), "--size", "128x128", "--cutaway",
+                                 "--cutaway-margin", "20", "--cutaway-fade", "0", "--cutaway-rim",
+                                 "--save-scene", (dir / "saved.json").string(), "-q"});
+  if (r.code == 4) GTEST_SKIP() << "no headless GL: " << r.err;
+  ASSERT_EQ(r.code, 0) << describe(r);
+  const auto saved = nlohmann::json::parse(read_text(dir / "saved.json"));
+  EXPECT_TRUE(saved.at("cutaway").at("enabled").get<bool>());
+  EXPECT_EQ(saved.at("cutaway").at("margin_px").get<double>(), 20.0);
+  EXPECT_EQ(saved.at("cutaway").at("fade_px").get<double>(), 0.0);
+  EXPECT_TRUE(saved.at("cutaway").at("rim").get<bool>());
+  const Outcome again =
+      run_fabrica({"render", (dir / "saved.json").string(), "-o", (dir / "b.png").string(), "-q"});
+  ASSERT_EQ(again.code, 0) << describe(again);
+  EXPECT_EQ(read_text(dir / "a.png"), read_text(dir / "b.png")) << "the saved scene re-renders";
+  write_bytes(dir / "bad.json", "{\"cutaway\": {\"margin\": 4}, \"structures\": [{\"mesh\": \"" +
+                                    aneurysm().generic_string() + "\"}]}");
+  const std::vector<std::pair<std::vector<std::string>, std::string>> bad_cases = {
+      {{"--cutaway", "--cutaway-margin", "-1"}, "--cutaway-margin"},
+      {{"--cutaway", "--cutaway-fade", "300"}, "--cutaway-fade"},
+      {{"--cutaway", "--cutaway-margin", "wide"}, "--cutaway-margin"},
+      {{"--cutaway-margin", "4"}, "need --cutaway"},
+      {{"--cutaway-rim"}, "need --cutaway"}};
+  expect_bad_render_options(dir, bad_cases);
+  const Outcome key =
+      run_fabrica({"render", (dir / "bad.json").string(), "-o", (dir / "c.png").string()});
+  EXPECT_EQ(key.code, 2) << describe(key);
+  EXPECT_NE(key.err.find("cutaway.margin: unknown key (did you mean 'margin_px'"),
+            std::string::npos)
+      << describe(key);
   EXPECT_FALSE(fs::exists(dir / "c.png"));
 }
 

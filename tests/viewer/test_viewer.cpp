@@ -529,3 +529,96 @@ TEST(Viewer, GhostedContextIsCoarseOnlyWhileTheCameraMoves) {
                                            render::read_png(dir / "cli.png"), 0);
   EXPECT_EQ(same.max_abs, 0) << "mean " << same.mean_abs;
 }
+
+// The cutaway (issue 18, item 4): the aorta seen from behind with opaque
+// vertebrae in front of it. `cutaway on` shows the aorta through them (its
+// colour at its centre pixel, absent without the cutaway); pixels far from
+// the aorta do not change; `cutaway off` gives the first picture back; the
+// saved scene keeps the cutaway and `fabrica render` draws the same
+// pixels; a bad value stops the script with its line number.
+TEST(Viewer, CutawayShowsTheFocusThroughTheContext) {
+  const fs::path dir = work_dir();
+  auto shot = [&](const std::string& name) {
+    return "screenshot " + quote((dir / name).string()) + " 400x300\n";
+  };
+  std::string script = "open " + quote(volume().string()) + "\nwait\nfocus aorta\n";
+  for (const char* bone : {"vertebrae_T11", "vertebrae_T12", "vertebrae_L1", "vertebrae_L2",
+                           "autochthon_left", "autochthon_right"})
+    script += "set " + std::string(bone) + " opacity=1\n";
+  script += "view posterior\nwait\n" + shot("plain.png") + "cutaway on 12 8\nwait\n" +
+            shot("cut.png") + "save-scene " + quote((dir / "scene.json").string()) +
+            "\ncutaway off\nwait\n" + shot("off.png") + "cutaway rim=true margin_px=30\n" +
+            "cutaway on wide\n";
+  const Outcome r = run_viewer(dir, script, "640x400");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find(":21: cutaway MARGIN_PX must be a number (got \"wide\")"), std::string::npos)
+      << r.err;
+
+  const auto scene = nlohmann::json::parse(read_text(dir / "scene.json"));
+  ASSERT_TRUE(scene.contains("cutaway")) << scene.dump();
+  EXPECT_TRUE(scene["cutaway"]["enabled"].get<bool>());
+  EXPECT_EQ(scene["cutaway"]["margin_px"].get<double>(), 12.0);
+  Camera camera = camera_from_json(scene["camera"]);
+  camera.width = 400;
+  camera.height = 300;
+  const render::Image plain = render::read_png(dir / "plain.png");
+  const render::Image cut = render::read_png(dir / "cut.png");
+  EXPECT_EQ(render::compare_images(plain, render::read_png(dir / "off.png"), 0).max_abs, 0);
+  // The aorta's interior pixels: its colour (from the volume's label
+  // table: each channel 0 or 1) with the cutaway, shaded.
+  const auto aorta = label_pixels(52, camera);
+  ASSERT_GT(aorta.size(), 100u);
+  nlohmann::json colour;
+  for (const auto& st : scene["structures"])
+    if (st["name"] == "aorta") colour = st["color"];
+  ASSERT_TRUE(colour.is_array()) << scene.dump();
+  auto red = [&](const std::uint8_t* p) {  // "shows the aorta's colour"
+    for (int k = 0; k < 3; ++k)
+      if (colour[k].get<double>() > 0.5 ? p[k] < 80 : p[k] > 40) return false;
+    return true;
+  };
+  std::size_t red_plain = 0, red_cut = 0;
+  double sx = 0, sy = 0;
+  for (auto [x, y] : aorta) {
+    red_plain += red(plain.pixel(x, y));
+    red_cut += red(cut.pixel(x, y));
+    sx += x, sy += y;
+  }
+  std::printf("aorta pixels %zu, its colour without the cutaway %zu, with %zu\n", aorta.size(),
+              red_plain, red_cut);
+  EXPECT_GT(red_cut, aorta.size() * 9 / 10);
+  EXPECT_LT(red_plain, aorta.size() / 2);
+  auto centre = aorta.front();
+  double best = 1e30;
+  for (auto [x, y] : aorta) {
+    const double d = std::hypot(x - sx / aorta.size(), y - sy / aorta.size());
+    if (d < best) best = d, centre = {x, y};
+  }
+  EXPECT_TRUE(red(cut.pixel(centre.first, centre.second)));
+  EXPECT_FALSE(red(plain.pixel(centre.first, centre.second)));
+  // Far from the aorta (30 px: margin + fade at this size are 6 px) the
+  // picture is unchanged.
+  std::vector<bool> near(400 * 300, false);
+  for (auto [x, y] : aorta)
+    for (int dy = -30; dy <= 30; ++dy)
+      for (int dx = -30; dx <= 30; ++dx)
+        if (x + dx >= 0 && x + dx < 400 && y + dy >= 0 && y + dy < 300)
+          near[static_cast<std::size_t>((y + dy) * 400 + x + dx)] = true;
+  std::size_t far = 0, far_changed = 0;
+  for (int y = 0; y < 300; ++y)
+    for (int x = 0; x < 400; ++x) {
+      if (near[static_cast<std::size_t>(y * 400 + x)]) continue;
+      ++far;
+      const auto *a = plain.pixel(x, y), *b = cut.pixel(x, y);
+      far_changed += a[0] != b[0] || a[1] != b[1] || a[2] != b[2] || a[3] != b[3];
+    }
+  EXPECT_GT(far, 40000u);
+  EXPECT_EQ(far_changed, 0u);
+  // One renderer: the saved scene (with its cutaway) through `fabrica render`.
+  const Outcome cli =
+      run(shell_quote(FABRICA_EXE) + " render " + shell_quote((dir / "scene.json").string()) +
+              " --size 400x300 -q -o " + shell_quote((dir / "cli.png").string()),
+          dir);
+  ASSERT_EQ(cli.code, 0) << cli.err;
+  EXPECT_EQ(render::compare_images(cut, render::read_png(dir / "cli.png"), 0).max_abs, 0);
+}

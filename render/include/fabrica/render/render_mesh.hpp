@@ -36,7 +36,7 @@ struct RenderMesh {
   /// facing outward (positive signed volume): seen from outside its faces
   /// wind counter-clockwise, and the renderer may cull its back faces where
   /// nothing cuts it open (a focus structure beyond the near plane;
-  /// docs/algorithms.md §15).
+  /// docs/algorithms.md §16).
   bool closed_outward = false;
 
   std::size_t vertex_count() const { return positions.size() / 3; }
@@ -57,7 +57,7 @@ RenderMesh make_render_mesh(const TriangleMesh& mesh, const std::vector<Vec3>& v
 RenderMesh make_render_mesh(const Surface& surface, bool with_curvature);
 
 /// A coarse copy of `mesh` with about `target_faces` faces (at most 25% more)
-/// by vertex clustering on a uniform grid (docs/algorithms.md §15): the
+/// by vertex clustering on a uniform grid (docs/algorithms.md §16): the
 /// viewer draws ghosted context with it while the camera moves. Returns `mesh` itself when it has
 /// no more faces than that. Deterministic; unreferenced vertices are dropped.
 TriangleMesh cluster_simplify(const TriangleMesh& mesh, std::size_t target_faces);

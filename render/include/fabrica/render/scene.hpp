@@ -104,10 +104,41 @@ struct ClipPlane {
   bool keeps(const Vec3& p) const { return (p - point).dot(normal) <= 0.0; }
 };
 
+/// The cutaway (issue 18, item 4; docs/rendering.md#cutaway): context
+/// structures lose what lies in front of the focus (nearer than the focus's
+/// front surface) inside the focus's screen footprint widened by
+/// `margin_px`, and fade back in over the next `fade_px` pixels; opaque
+/// context too. The focus is never cut. Distances in pixels of a picture
+/// whose smaller side is RenderOptions::line_reference_size (1024), scaled
+/// with the picture as line widths are. Scene JSON: "cutaway": {"enabled",
+/// "margin_px", "fade_px", "rim", "rim_color"}.
+struct Cutaway {
+  bool enabled = false;
+  double margin_px = 12.0;  ///< fully cut up to this distance from the focus's silhouette
+  double fade_px = 8.0;     ///< then the context's opacity ramps back to 1 over this distance
+  bool rim = false;         ///< a line along the outer border of the cut, on the context
+  Color rim_color{0.15f, 0.15f, 0.15f, 1.0f};
+};
+/// Largest margin_px and fade_px (reference pixels).
+inline constexpr double kCutawayMaxPx = 256.0;
+/// Width of the rim line in reference pixels.
+inline constexpr double kCutawayRimPx = 1.5;
+/// The fraction of a context surface kept at `distance` pixels (of the
+/// picture) from the focus's footprint, where it lies in front of the
+/// focus: 0 up to the margin, a smoothstep up to margin + fade, then 1.
+/// `scale` converts reference pixels to the picture's (the renderer's line
+/// scale). The shader cutaway.glsl computes the same.
+double cutaway_keep(const Cutaway& cutaway, double distance, double scale = 1.0);
+/// Reads the "cutaway" object over `base` (strict: unknown keys, wrong
+/// types and values out of range throw InputError naming `what`).
+Cutaway cutaway_from_json(const nlohmann::json& j, const std::string& what, Cutaway base = {});
+nlohmann::json cutaway_to_json(const Cutaway& cutaway);
+
 struct Scene {
   std::vector<Structure> structures;
   Color background{1.0f, 1.0f, 1.0f, 1.0f};
   std::optional<ClipPlane> clip;  ///< applies to context structures
+  Cutaway cutaway;                ///< applies to context structures
 };
 
 // ------------------------------------------------------------ JSON ----
@@ -175,6 +206,7 @@ struct SceneSpec {
   /// caller passes them on as RenderOptions::lic, as `fabrica render` does).
   LicOptions lic;
   std::optional<ClipPlane> clip;
+  Cutaway cutaway;
 };
 
 const char* to_string(Frame frame);
@@ -215,7 +247,8 @@ std::optional<HiddenLines> parse_hidden_lines(std::string_view s);
 /// taper, fade, hidden, hybrid, smooth, lic, label: "text" | false,
 /// hatching}], annotation {labels, legend, scale_bar, orientation: booleans,
 /// font_size: pixels}, lic {kernel_length, noise_scale, strength}
-/// (docs/lic.md).
+/// (docs/lic.md), clip {point, normal}, cutaway {enabled, margin_px,
+/// fade_px, rim, rim_color} (Cutaway).
 /// Missing style keys take default_style(role). Relative mesh paths are
 /// resolved against `base_dir`. Validation is strict: an unknown key or a
 /// value of the wrong type throws InputError naming `what`, the JSON path
