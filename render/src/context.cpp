@@ -42,8 +42,6 @@ std::optional<Backend> parse_backend(std::string_view name) {
   return std::nullopt;
 }
 
-namespace {
-
 #if defined(__SANITIZE_ADDRESS__)
 #define FABRICA_ASAN 1
 #elif defined(__has_feature)
@@ -52,15 +50,15 @@ namespace {
 #endif
 #endif
 
-#ifdef FABRICA_ASAN
 // Under AddressSanitizer only (build-asan/, scripts/sanitize-test): marks
 // every shared library loaded so far - the GL driver Mesa opened for this
 // context among them - as never to be unloaded. Mesa unloads its driver
 // (swrast_dri.so) when the display is terminated, before LeakSanitizer looks
 // at the heap at exit; the driver's own leftovers would then be reported
-// from an unnamed module, and no suppression could name them.
-// scripts/sanitizers/lsan.supp suppresses them by library name.
-void keep_loaded_libraries() {
+// from an unnamed module, and no suppression could name them. Kept loaded,
+// the driver's memory stays reachable and nothing is reported.
+void keep_gl_driver_loaded() {
+#ifdef FABRICA_ASAN
   std::vector<std::string> names;
   dl_iterate_phdr(
       [](dl_phdr_info* info, std::size_t, void* out) {
@@ -70,15 +68,11 @@ void keep_loaded_libraries() {
       },
       &names);
   for (const auto& name : names) dlopen(name.c_str(), RTLD_NOW | RTLD_NOLOAD | RTLD_NODELETE);
-}
 #endif
-
-}  // namespace
+}
 
 void GlContext::initialise(GlProcLoader loader, void* user) {
-#ifdef FABRICA_ASAN
-  keep_loaded_libraries();
-#endif
+  keep_gl_driver_loaded();
   load_gl_functions(gl_, loader, user, to_string(backend()));
   auto str = [this](GLenum e) {
     const auto* s = reinterpret_cast<const char*>(gl_.GetString(e));
