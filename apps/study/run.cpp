@@ -23,6 +23,12 @@
 #include "plan.hpp"
 #include "stimuli.hpp"
 
+// From fabrica/render/context.hpp, whose GL loader header cannot share a
+// translation unit with <GL/gl.h> (used here by ImGui's backend).
+namespace fabrica::render {
+void keep_gl_driver_loaded();
+}
+
 namespace fabrica::study {
 namespace {
 
@@ -434,6 +440,7 @@ class Window {
                   "cannot create an OpenGL 3.0 window (no display or GL driver)");
     }
     glfwMakeContextCurrent(window_);
+    render::keep_gl_driver_loaded();
     glfwSwapInterval(vsync ? 1 : 0);
     ImGui::CreateContext();
     ImGui::GetIO().IniFilename = nullptr;

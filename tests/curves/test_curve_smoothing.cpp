@@ -8,16 +8,14 @@
 #include <numbers>
 
 #include "curve_test_helpers.hpp"
-#include "fabrica/core/error.hpp"
 #include "fabrica/core/curve_smoothing.hpp"
+#include "fabrica/core/error.hpp"
 #include "fabrica/core/topology.hpp"
 #include "test_support.hpp"
 
 using namespace fabrica;
 
 namespace {
-
-constexpr double kPi = std::numbers::pi;
 
 void expect_non_increasing(const std::vector<double>& history, double relative_slack,
                            const char* what) {
@@ -174,7 +172,7 @@ TEST(CurveSmoothing, CylinderWigglyLoopBecomesAHorizontalCircle) {
     zmax = std::max(zmax, p.z());
   }
   EXPECT_LT(zmax - zmin, 1e-5);
-  const double perimeter = 2.0 * segments * std::sin(kPi / segments);
+  const double perimeter = 2.0 * segments * std::sin(std::numbers::pi / segments);
   EXPECT_NEAR(curve_length(mesh, result.curve), perimeter, 1e-8);
   EXPECT_LT(total_absolute_turning(mesh, topo, result.curve), 1e-5);
   expect_non_increasing(result.length_history, 1e-12, "length");
@@ -258,7 +256,7 @@ TEST(CurveSmoothing, ConvexConeApexIsAvoided) {
   const double slant = std::sqrt(1.0 + h * h);
   const Vec3 a = mesh.positions[1] - mesh.positions[0], b = mesh.positions[2] - mesh.positions[0];
   const double theta = 8.0 * std::atan2(a.cross(b).norm(), a.dot(b));
-  ASSERT_LT(theta, 2.0 * kPi);
+  ASSERT_LT(theta, 2.0 * std::numbers::pi);
   EXPECT_NEAR(curve_length(mesh, result.curve), 2.0 * slant * std::sin(theta / 4.0), 1e-9);
   EXPECT_EQ(result.curve.size(), 5u);  // ends + the three edges on one side
   for (const double t : geodesic_turning_angles(mesh, topo, result.curve))

@@ -10,6 +10,7 @@
 
 #include "fabrica/io/label_volume.hpp"
 #include "fabrica/io/mesh_io.hpp"
+#include "sanitized.hpp"
 #include "test_support.hpp"
 #include "volume_test_util.hpp"
 
@@ -56,7 +57,7 @@ TEST(VolumeData, TotalSegmentatorLabelMap) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf("[ measure  ] TotalSegmentator: %zu labels extracted in %.2f s\n", surfaces.size(),
               seconds);
-  EXPECT_LT(seconds, 20.0);
+  EXPECT_LT(seconds, 20.0 * test::kTimeScale);
   ASSERT_EQ(surfaces.size(), expected.size());
 
   // Names come from the label table in the NIfTI extension.

@@ -143,12 +143,6 @@ std::size_t weld(TriangleMesh& mesh, const detail::ProperTopology& before, doubl
   return static_cast<std::size_t>(std::count(moved.begin(), moved.end(), 1));
 }
 
-bool same_vertex_set(Face a, Face b) {
-  std::sort(a.begin(), a.end());
-  std::sort(b.begin(), b.end());
-  return a == b;
-}
-
 // Removes degenerate and/or duplicate faces, keeping the order of the rest.
 // Returns whether any face was removed.
 bool remove_faces(TriangleMesh& mesh, const detail::ProperTopology& proper, const RepairOptions& o,
@@ -175,7 +169,7 @@ bool remove_faces(TriangleMesh& mesh, const detail::ProperTopology& proper, cons
       if (remove[proper.original_face(f)]) continue;
       for (auto g : topo.edge_faces(topo.face_edge(f, 0))) {
         if (static_cast<std::size_t>(g) >= f) break;
-        if (!remove[proper.original_face(g)] && same_vertex_set(faces[f], faces[g])) {
+        if (!remove[proper.original_face(g)] && detail::same_vertex_set(faces[f], faces[g])) {
           remove[proper.original_face(f)] = 1;
           ++report.removed_duplicate_faces;
           break;

@@ -27,12 +27,6 @@ std::string edge_name(const Topology& topology, std::size_t e) {
   return "the edge between vertices " + std::to_string(ed[0]) + " and " + std::to_string(ed[1]);
 }
 
-bool same_vertex_set(Face a, Face b) {
-  std::sort(a.begin(), a.end());
-  std::sort(b.begin(), b.end());
-  return a == b;
-}
-
 void add_self_intersections(const TriangleMesh& mesh, const detail::ProperTopology& proper,
                             ValidationReport& r) {
   if (r.nonmanifold_edges > 0) {
@@ -170,7 +164,7 @@ ValidationReport validate_mesh(const TriangleMesh& mesh, const ValidateOptions& 
   for (std::size_t f = 0; f < nf; ++f) {
     for (auto g : topo.edge_faces(topo.face_edge(f, 0))) {
       if (static_cast<std::size_t>(g) >= f) break;
-      if (same_vertex_set(faces[f], faces[g])) {
+      if (detail::same_vertex_set(faces[f], faces[g])) {
         if (r.duplicate_faces++ == 0) {
           first_duplicate = proper.original_face(f);
           duplicated_face = proper.original_face(g);

@@ -2,6 +2,7 @@
 // self-intersection translation unit. Not installed, not part of the API.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -24,6 +25,13 @@ std::string plural(std::size_t n, const char* one, const char* many);
 
 /// Area below this fraction of (mean edge length)^2 counts as zero.
 inline constexpr double kDegenerateAreaFraction = 1e-12;
+
+/// Whether two faces use the same three vertex indices (in any order).
+inline bool same_vertex_set(Face a, Face b) {
+  std::sort(a.begin(), a.end());
+  std::sort(b.begin(), b.end());
+  return a == b;
+}
 
 inline bool has_repeated_index(const Face& f) {
   return f[0] == f[1] || f[1] == f[2] || f[2] == f[0];

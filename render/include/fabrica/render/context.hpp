@@ -25,6 +25,13 @@ const char* to_string(Backend backend);
 /// "egl", "osmesa", "glfw" (case-insensitive); nullopt otherwise.
 std::optional<Backend> parse_backend(std::string_view name);
 
+/// In AddressSanitizer builds, keeps every library loaded so far (the GL
+/// driver of the current context among them) loaded until exit, so
+/// LeakSanitizer can name the driver's allocations (docs/reliability.md,
+/// "Sanitizers"); does nothing in other builds. Every context made here calls
+/// it; a program that makes its own GL context (the study) calls it too.
+void keep_gl_driver_loaded();
+
 class GlContext {
  public:
   virtual ~GlContext() = default;
