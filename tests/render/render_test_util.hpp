@@ -8,9 +8,17 @@
 #include "fabrica/core/camera.hpp"
 #include "fabrica/render/image.hpp"
 #include "fabrica/render/render_mesh.hpp"
+#include "fabrica/render/renderer.hpp"
 #include "test_support.hpp"
 
 namespace fabrica::test {
+
+/// One headless renderer for the whole test program (a GL context and its
+/// programs are costly; the tests draw one after another).
+inline render::Renderer& renderer() {
+  static render::Renderer r(render::create_headless_context());
+  return r;
+}
 
 /// Icosphere of radius r at the origin with exact normals and curvature
 /// k1 = k2 = 1/r (e1, e2 any orthonormal tangent pair).

@@ -19,10 +19,7 @@ using fabrica::Vec3;
 
 namespace {
 
-fr::Renderer& renderer() {
-  static fr::Renderer r(fr::create_headless_context());
-  return r;
-}
+using fabrica::test::renderer;
 
 // 200 x 200 orthographic view of a 25 mm square: 8 px per mm; line
 // reference size 200, so the cutaway's pixels are the picture's.

@@ -21,10 +21,7 @@ using fabrica::Vec3;
 
 namespace {
 
-fr::Renderer& renderer() {
-  static fr::Renderer r(fr::create_headless_context());
-  return r;
-}
+using fabrica::test::renderer;
 
 fr::Structure sphere_structure(double radius = 10.0, fr::Role role = fr::Role::focus) {
   fr::Structure s;

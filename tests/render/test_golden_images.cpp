@@ -54,10 +54,7 @@ namespace {
 constexpr int kChannelTolerance = 4;              // per channel, 0..255
 constexpr double kMaxDifferingFraction = 0.0002;  // of the pixels (0.02 %: 13 px at 256 x 256)
 
-fr::Renderer& renderer() {
-  static fr::Renderer r(fr::create_headless_context());
-  return r;
-}
+using fabrica::test::renderer;
 
 bool regenerating() {
   const char* v = std::getenv("FABRICA_REGENERATE_GOLDENS");

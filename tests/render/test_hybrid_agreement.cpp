@@ -32,6 +32,7 @@
 #include "fabrica/lines/extract.hpp"
 #include "fabrica/lines/visibility.hpp"
 #include "fabrica/render/renderer.hpp"
+#include "render_test_util.hpp"
 #include "test_support.hpp"
 
 namespace fr = fabrica::render;
@@ -42,10 +43,7 @@ namespace {
 
 constexpr int kSize = 512;
 
-fr::Renderer& renderer() {
-  static fr::Renderer r(fr::create_headless_context());
-  return r;
-}
+using fabrica::test::renderer;
 
 struct Case {
   const char* name;

@@ -15,6 +15,7 @@
 #include "fabrica/io/mesh_io.hpp"
 #include "fabrica/render/lic.hpp"
 #include "fabrica/render/renderer.hpp"
+#include "render_test_util.hpp"
 #include "test_support.hpp"
 
 namespace fr = fabrica::render;
@@ -23,10 +24,7 @@ using fabrica::Vec3;
 
 namespace {
 
-fr::Renderer& renderer() {
-  static fr::Renderer r(fr::create_headless_context());
-  return r;
-}
+using fabrica::test::renderer;
 
 struct Fixture {
   std::unique_ptr<fabrica::Surface> surface;
