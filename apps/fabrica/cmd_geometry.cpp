@@ -14,7 +14,7 @@
 #include "commands.hpp"
 #include "fabrica/core/atomic_file.hpp"
 #include "fabrica/core/surface.hpp"
-#include "fabrica/io/prepare.hpp"
+#include "fabrica/io/mesh_io.hpp"
 
 namespace fabrica::cli {
 
@@ -41,11 +41,11 @@ void append_number(std::string& out, double v) {
 
 int run_geometry(const GeometryOptions& o) {
   const auto start = std::chrono::steady_clock::now();
-  // The mesh as stored: this command reports the file's own orientation.
-  PrepareOptions prepare;
-  if (!o.space.empty()) prepare.space = parse_space(o.space);
-  prepare.orient = false;
-  PreparedMesh loaded = prepare_mesh(o.mesh, prepare);
+  // The mesh as stored (no welding, no orienting): this command reports the
+  // file's own vertices and orientation.
+  io::ReadOptions read_options;
+  if (!o.space.empty()) read_options.space = parse_space(o.space);
+  io::LoadedMesh loaded = io::read_mesh(o.mesh, read_options);
 
   SurfaceOptions options;
   options.normal_weighting = o.normals == "area"    ? NormalWeighting::area

@@ -54,9 +54,9 @@ struct PrepareOptions {
   /// when reading (prepare_mesh), not by io::prepare_for_lines.
   std::optional<Space> space;
   /// Orient consistently and outward (`--keep-orientation` turns it off).
-  /// prepare_mesh with `orient` off keeps the mesh as read (`fabrica
-  /// geometry` reports the file as stored); io::prepare_for_lines with it
-  /// off only welds exact duplicates.
+  /// With `orient` off, prepare_mesh and io::prepare_for_lines only weld
+  /// exact duplicates (docs/validation.md); `fabrica geometry`, which reports
+  /// the file as stored, reads with io::read_mesh instead.
   bool orient = true;
 };
 
