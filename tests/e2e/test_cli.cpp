@@ -1573,7 +1573,8 @@ TEST(Render, AnnotationFlagsAndTheirErrors) {
   const Outcome r = run_fabrica(args("a"));
   if (r.code == 4) GTEST_SKIP() << "no headless GL: " << r.err;
   ASSERT_EQ(r.code, 0) << describe(r);
-  ASSERT_EQ(run_fabrica(args("b")).code, 0);
+  const Outcome second = run_fabrica(args("b"));
+  ASSERT_EQ(second.code, 0) << describe(second);
   EXPECT_EQ(read_text(dir / "a.png"), read_text(dir / "b.png"));
   EXPECT_EQ(read_text(dir / "a.svg"), read_text(dir / "b.svg"));
   pugi::xml_document doc;
