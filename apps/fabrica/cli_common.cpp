@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <cctype>
 #include <cstdio>
 #include <deque>
@@ -180,6 +181,24 @@ std::shared_ptr<const LoadedSurface> load_prepared_surface(const std::filesystem
     while (cache.entries.size() > cache.capacity()) cache.entries.pop_back();
   }
   return loaded;
+}
+
+namespace {
+std::atomic<bool> keep_drawers{false};
+}  // namespace
+
+void keep_line_drawers(bool keep) {
+  keep_drawers = keep;
+}
+
+LineDrawing LoadedSurface::draw_lines(const Camera& camera, const DrawLinesOptions& options) const {
+  if (!keep_drawers) return fabrica::draw_lines(*surface, camera, options);
+  const std::lock_guard<std::mutex> lock(drawer_mutex_);
+  if (!drawer_)
+    drawer_ = std::make_unique<LineDrawer>(*surface, options);
+  else
+    drawer_->set_options(options);
+  return drawer_->draw(camera);
 }
 
 ChosenCamera choose_camera(const std::string& camera_file, const std::string& view,

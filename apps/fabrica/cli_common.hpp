@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <utility>
@@ -15,6 +16,7 @@
 #include "fabrica/core/surface.hpp"
 #include "fabrica/io/mesh_io.hpp"
 #include "fabrica/io/prepare.hpp"
+#include "fabrica/lines/draw.hpp"
 #include "fabrica/lines/line_set.hpp"
 #if __has_include("fabrica/render/renderer.hpp")
 #include "fabrica/render/context.hpp"
@@ -70,7 +72,24 @@ struct LoadedSurface {
   std::shared_ptr<const Surface> surface;
   io::MeshFileInfo info;
   std::vector<std::string> messages;  ///< PreparedMesh::messages(): what preparation changed
+
+  /// fabrica::draw_lines(*surface, camera, options), or, once
+  /// keep_line_drawers(true) was called (`fabrica batch`), the same drawing
+  /// (the same bits) through a LineDrawer kept with this surface, so that the
+  /// view-independent line precompute is made once for all the views and
+  /// styles of an input instead of once per item. Throws what draw_lines throws.
+  LineDrawing draw_lines(const Camera& camera, const DrawLinesOptions& options) const;
+
+ private:
+  mutable std::mutex drawer_mutex_;
+  mutable std::unique_ptr<LineDrawer> drawer_;
 };
+
+/// Whether LoadedSurface::draw_lines keeps a LineDrawer per loaded surface:
+/// for a process that draws many views of the same meshes (`fabrica batch`),
+/// at the price of the precompute's memory (~half the peak of one drawing)
+/// held as long as the mesh is cached. Off by default (one drawing, least memory).
+void keep_line_drawers(bool keep);
 
 /// fabrica::prepare_mesh(path, options) as a Surface, or the one made by an
 /// earlier call with the same file (same path, size and modification time)

@@ -195,7 +195,7 @@ int run_lines(const LinesArgs& a) {
     options.lines.pel.light_direction = options.lines.laplacian.light_direction =
         parse_vec3(a.light, "--light");
   }
-  const LineDrawing drawing = draw_lines(surface, camera, options);
+  const LineDrawing drawing = loaded->draw_lines(camera, options);
   const LineSet& lines = drawing.lines;
 
   const std::size_t segments = drawing.segment_count();

@@ -632,6 +632,9 @@ int run_batch(const Options& o) {
                       (ec ? " (" + ec.message() + ")" : std::string()));
 
   const int cores = usable_cores();
+  // Every process of a batch draws several items of an input in a row: its
+  // line precompute is kept with the cached mesh (cli_common.hpp).
+  keep_line_drawers(true);
   if (!o.worker.empty()) {  // a worker process: run our chunk, report each item to the parent
     ::prctl(PR_SET_PDEATHSIG, SIGKILL);
     if (::getppid() == 1) return 1;
