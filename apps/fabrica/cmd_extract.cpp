@@ -309,7 +309,7 @@ void add_extract_command(CLI::App& app, Action& action) {
   cmd->add_option("--iso", o->iso,
                   "extract the iso-surface at this value (level sets, intensity images)");
   cmd->add_option("--format", o->format, "mesh format of the outputs")
-      ->check(CLI::IsMember({"stl", "obj", "ply", "off"}))
+      ->transform(CLI::IsMember({"stl", "obj", "ply", "off"}, CLI::ignore_case))
       ->capture_default_str();
   cmd->add_option("--names", o->names,
                   "label table naming labels: lines 'VALUE NAME [R G B]' (Slicer / ITK-SNAP)");

@@ -121,7 +121,7 @@ void add_geometry_command(CLI::App& app, Action& action) {
       ->required();
   cmd->add_option("--normals", o->normals,
                   "vertex-normal weights: max (Max 1999, as trimesh2/rtsc; default), area, angle")
-      ->check(CLI::IsMember({"max", "area", "angle"}));
+      ->transform(CLI::IsMember({"max", "area", "angle"}, CLI::ignore_case));
   cmd->add_option("--smooth", o->smooth,
                   "passes of rtsc-style smoothing of curvature and its derivatives "
                   "(Gaussian of one median edge length; default 0)")

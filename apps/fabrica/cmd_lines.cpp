@@ -283,7 +283,7 @@ void add_lines_command(CLI::App& app, Action& action) {
   cmd->add_flag("--no-visibility", args->no_visibility,
                 "Keep hidden lines (no hidden-line removal)");
   cmd->add_option("--hidden", args->hidden, "Hidden lines: omit (default) or dashed")
-      ->check(CLI::IsMember({"omit", "dashed"}));
+      ->transform(CLI::IsMember({"omit", "dashed"}, CLI::ignore_case));
   cmd->add_option("--min-length", args->min_length_px,
                   "Drop chains shorter than this many pixels (default 3; 0 for .seg)");
   cmd->add_option("--smooth", args->smooth,

@@ -743,6 +743,29 @@ TEST(Geometry, CsvIsCompleteFiniteAndInFileVertexOrder) {
   EXPECT_EQ(misplaced, 0u);
 }
 
+// Choice values are case-insensitive (docs/README.md) and mean what their
+// lower-case spelling means: `--normals AREA` must weight by area, not fall
+// back to the default. An unknown value still exits 2 naming the choices.
+TEST(Geometry, ChoiceValuesInAnyCaseMeanTheSame) {
+  if (!has_command("geometry")) GTEST_SKIP() << "no geometry command in this build";
+  const fs::path dir = work_dir();
+  auto csv = [&](const std::string& normals) {
+    const fs::path out = dir / ("normals-" + normals + ".csv");
+    const Outcome r =
+        run_fabrica({"geometry", aneurysm().string(), "--normals", normals, "-o", out.string()});
+    EXPECT_EQ(r.code, 0) << describe(r);
+    return read_text(out);
+  };
+  const std::string upper = csv("AREA"), lower = csv("area"), max = csv("max");
+  ASSERT_FALSE(lower.empty());
+  EXPECT_EQ(upper, lower);
+  EXPECT_NE(lower, max) << "area weighting gave the default's normals: the test cannot tell";
+  const Outcome bad = run_fabrica(
+      {"geometry", aneurysm().string(), "--normals", "Areal", "-o", (dir / "bad.csv").string()});
+  EXPECT_EQ(bad.code, 2) << describe(bad);
+  EXPECT_NE(bad.err.find("max,area,angle"), std::string::npos) << bad.err;
+}
+
 // ------------------------------------------------------------ extract
 
 TEST(Extract, OneReadableMeshPerLabelIntoANewFolder) {
