@@ -110,7 +110,20 @@ inline bool hidden_in_band(const RasterTriangle& e, const float* image, int W, i
 // Rows::draw<with_faces>(band, setup).
 template <class Rows>
 inline void draw_band(const RasterBand& band) {
+  // The triangles without a bound are drawn: their face's corner indices
+  // are fetched 2 kAhead triangles ahead and their corners kAhead ahead (a
+  // band's triangles are a sparse subset of the faces, in face order: the
+  // loads would otherwise miss the cache).
+  constexpr std::ptrdiff_t kAhead = 8;
+  constexpr float inf = std::numeric_limits<float>::infinity();
   for (const RasterTriangle* e = band.first; e != band.last; ++e) {
+    if (band.last - e > 2 * kAhead) {
+      if (!(e[2 * kAhead].bound > -inf)) __builtin_prefetch(band.faces + e[2 * kAhead].face);
+      if (!(e[kAhead].bound > -inf)) {
+        const Face& t = band.faces[static_cast<std::size_t>(e[kAhead].face)];
+        for (int k = 0; k < 3; ++k) __builtin_prefetch(band.corners + t[k]);
+      }
+    }
     const int ya = std::max<int>(band.y_lo, e->y0), yb = std::min<int>(band.y_hi, e->y1);
     if (hidden_in_band(*e, band.depth, band.width, ya, yb)) continue;
     const Face& t = band.faces[static_cast<std::size_t>(e->face)];
