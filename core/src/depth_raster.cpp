@@ -137,6 +137,10 @@ void draw_band_portable(const RasterBand& band) {
 void draw_band_avx2(const RasterBand& band) {
   draw_band_portable(band);
 }
+std::size_t project_corners_avx2(const Projector&, const Vec3*, RasterCorner*, std::size_t begin,
+                                 std::size_t) {
+  return begin;
+}
 #endif
 
 std::atomic<bool>& depth_raster_avx2_enabled() {
@@ -223,8 +227,13 @@ void render_depth(const TriangleMesh& mesh, const Camera& camera, DepthBuffer& b
   const Projector project(camera);
   const bool perspective = camera.projection == Projection::perspective;
   const double near_eps = 1e-9;
+  const bool avx2 = detail::depth_raster_avx2_enabled().load(std::memory_order_relaxed);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 2048), [&](const auto& r) {
-    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+    std::size_t from = r.begin();
+    if (avx2)
+      from = detail::project_corners_avx2(project, mesh.positions.data(), proj.data.get(), from,
+                                          r.end());
+    for (std::size_t i = from; i != r.end(); ++i) {
       const ProjectedPoint pp = project(mesh.positions[i]);
       Corner& c = proj[i];
       c.x = pp.pixel.x();
@@ -239,7 +248,6 @@ void render_depth(const TriangleMesh& mesh, const Camera& camera, DepthBuffer& b
     }
   });
   const int W = buf.width;
-  const bool avx2 = detail::depth_raster_avx2_enabled().load(std::memory_order_relaxed);
   const std::size_t nb = static_cast<std::size_t>((buf.height + kBand - 1) / kBand);
   const std::size_t chunks = (nf + kChunk - 1) / kChunk;
   // The triangle of face f when it covers a pixel centre: its entry and

@@ -9,6 +9,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 
 #include "depth_raster_internal.hpp"
 
@@ -129,7 +130,94 @@ struct Avx2Rows {
   }
 };
 
+// (x x' + y y') + z z', as Eigen's Vec3 dot, for four vectors.
+inline __m256d raster_dot4(__m256d x, __m256d y, __m256d z, const Vec3& w) {
+  return _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(x, _mm256_set1_pd(w.x())),
+                                     _mm256_mul_pd(y, _mm256_set1_pd(w.y()))),
+                       _mm256_mul_pd(z, _mm256_set1_pd(w.z())));
+}
+
+// |v| < infinity (false for NaN).
+inline __m256d raster_finite4(__m256d v) {
+  const __m256d abs = _mm256_andnot_pd(_mm256_set1_pd(-0.0), v);
+  return _mm256_cmp_pd(abs, _mm256_set1_pd(std::numeric_limits<double>::infinity()), _CMP_LT_OQ);
+}
+
+// centres_around (depth_raster.cpp) for four coordinates: v clamped to
+// [-2, size + 1], f = floor(v), lo = f + (f + 0.5 < v), hi = f - (f + 0.5 > v).
+inline void raster_centres4(__m256d v, int size, __m128i& lo, __m128i& hi) {
+  v = _mm256_min_pd(_mm256_max_pd(v, _mm256_set1_pd(-2.0)),
+                    _mm256_set1_pd(static_cast<double>(size) + 1.0));
+  const __m256d f = _mm256_floor_pd(v);
+  const __m256d mid = _mm256_add_pd(f, _mm256_set1_pd(0.5));
+  const __m128i fi = _mm256_cvttpd_epi32(f);
+  // (a true comparison is -1 in the 32-bit lanes)
+  auto lanes = [](__m256d m) {
+    return _mm256_castsi256_si128(_mm256_permutevar8x32_epi32(
+        _mm256_castpd_si256(m), _mm256_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7)));
+  };
+  lo = _mm_sub_epi32(fi, lanes(_mm256_cmp_pd(mid, v, _CMP_LT_OQ)));
+  hi = _mm_add_epi32(fi, lanes(_mm256_cmp_pd(mid, v, _CMP_GT_OQ)));
+}
+
 }  // namespace
+
+std::size_t project_corners_avx2(const Projector& project, const Vec3* positions,
+                                 RasterCorner* corners, std::size_t begin, std::size_t end) {
+  const bool perspective = project.perspective();
+  const __m256d half = _mm256_set1_pd(0.5), one = _mm256_set1_pd(1.0);
+  const __m256d width = _mm256_set1_pd(static_cast<double>(project.width()));
+  const __m256d height = _mm256_set1_pd(static_cast<double>(project.height()));
+  const Vec3& eye = project.eye();
+  std::size_t i = begin;
+  for (; i + 4 <= end; i += 4) {
+    const double* p = positions[i].data();  // four Vec3, 12 doubles
+    const __m256d dx =
+        _mm256_sub_pd(_mm256_set_pd(p[9], p[6], p[3], p[0]), _mm256_set1_pd(eye.x()));
+    const __m256d dy =
+        _mm256_sub_pd(_mm256_set_pd(p[10], p[7], p[4], p[1]), _mm256_set1_pd(eye.y()));
+    const __m256d dz =
+        _mm256_sub_pd(_mm256_set_pd(p[11], p[8], p[5], p[2]), _mm256_set1_pd(eye.z()));
+    const __m256d depth = raster_dot4(dx, dy, dz, project.forward());
+    __m256d x = raster_dot4(dx, dy, dz, project.right());
+    __m256d y = raster_dot4(dx, dy, dz, project.up());
+    const __m256d h = perspective ? _mm256_mul_pd(depth, _mm256_set1_pd(project.half_height()))
+                                  : _mm256_set1_pd(project.ortho_half_height());
+    x = _mm256_div_pd(_mm256_div_pd(x, h), _mm256_set1_pd(project.aspect()));
+    y = _mm256_div_pd(y, h);
+    const __m256d px = _mm256_mul_pd(_mm256_mul_pd(half, _mm256_add_pd(x, one)), width);
+    const __m256d py = _mm256_mul_pd(_mm256_mul_pd(half, _mm256_sub_pd(one, y)), height);
+    __m256d valid =
+        _mm256_and_pd(_mm256_and_pd(raster_finite4(px), raster_finite4(py)), raster_finite4(depth));
+    if (perspective)
+      valid = _mm256_andnot_pd(_mm256_cmp_pd(depth, _mm256_set1_pd(1e-9), _CMP_LE_OQ), valid);
+    __m128i x_lo, x_hi, y_lo, y_hi;
+    raster_centres4(px, project.width(), x_lo, x_hi);
+    raster_centres4(py, project.height(), y_lo, y_hi);
+    alignas(32) double xs[4], ys[4], zs[4];
+    alignas(16) std::int32_t xl[4], xh[4], yl[4], yh[4];
+    _mm256_store_pd(xs, px);
+    _mm256_store_pd(ys, py);
+    _mm256_store_pd(zs, depth);
+    _mm_store_si128(reinterpret_cast<__m128i*>(xl), x_lo);
+    _mm_store_si128(reinterpret_cast<__m128i*>(xh), x_hi);
+    _mm_store_si128(reinterpret_cast<__m128i*>(yl), y_lo);
+    _mm_store_si128(reinterpret_cast<__m128i*>(yh), y_hi);
+    const int ok = _mm256_movemask_pd(valid);
+    for (int l = 0; l < 4; ++l) {
+      RasterCorner& c = corners[i + static_cast<std::size_t>(l)];
+      c.x = xs[l];
+      c.y = ys[l];
+      c.z = zs[l];
+      c.x_lo = static_cast<std::int16_t>(xl[l]);
+      c.x_hi = static_cast<std::int16_t>(xh[l]);
+      c.y_lo = static_cast<std::int16_t>(yl[l]);
+      c.y_hi = static_cast<std::int16_t>(yh[l]);
+      c.valid = (ok >> l) & 1;
+    }
+  }
+  return i;
+}
 
 void draw_band_avx2(const RasterBand& band) {
   raster_band::draw_band<Avx2Rows>(band);

@@ -15,6 +15,7 @@
 #include <limits>
 
 #include "fabrica/core/mesh.hpp"
+#include "fabrica/core/projector.hpp"
 
 namespace fabrica::detail {
 
@@ -52,6 +53,14 @@ struct RasterBand {
   int width, y_lo, y_hi;
   bool perspective;
 };
+
+// Projects positions [begin, end) into corners with AVX2, four at a time,
+// with the operations of Projector::operator() and render_depth's corner
+// setup (same bits); returns where it stopped (a multiple of four from
+// begin): the caller does the rest. Call only when
+// depth_raster_avx2_enabled().
+std::size_t project_corners_avx2(const Projector& project, const Vec3* positions,
+                                 RasterCorner* corners, std::size_t begin, std::size_t end);
 
 // The band's triangles with the portable row kernel (depth_raster.cpp).
 void draw_band_portable(const RasterBand& band);
