@@ -128,6 +128,19 @@ struct PortableRows {
 
 }  // namespace
 
+void project_corner(const Projector& project, const Vec3& position, RasterCorner& c) {
+  const ProjectedPoint pp = project(position);
+  c.x = pp.pixel.x();
+  c.y = pp.pixel.y();
+  c.z = pp.depth;
+  c.valid = std::isfinite(c.x) && std::isfinite(c.y) && std::isfinite(c.z) &&
+            !(project.perspective() && c.z <= kRasterNearLimit);
+  if (c.valid) {
+    centres_around(c.x, project.width(), c.x_lo, c.x_hi);
+    centres_around(c.y, project.height(), c.y_lo, c.y_hi);
+  }
+}
+
 void draw_band_portable(const RasterBand& band) {
   raster_band::draw_band<PortableRows>(band);
 }
@@ -226,26 +239,14 @@ void render_depth(const TriangleMesh& mesh, const Camera& camera, DepthBuffer& b
   proj.resize(nv);
   const Projector project(camera);
   const bool perspective = camera.projection == Projection::perspective;
-  const double near_eps = 1e-9;
   const bool avx2 = detail::depth_raster_avx2_enabled().load(std::memory_order_relaxed);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 2048), [&](const auto& r) {
     std::size_t from = r.begin();
     if (avx2)
       from = detail::project_corners_avx2(project, mesh.positions.data(), proj.data.get(), from,
                                           r.end());
-    for (std::size_t i = from; i != r.end(); ++i) {
-      const ProjectedPoint pp = project(mesh.positions[i]);
-      Corner& c = proj[i];
-      c.x = pp.pixel.x();
-      c.y = pp.pixel.y();
-      c.z = pp.depth;
-      c.valid = std::isfinite(c.x) && std::isfinite(c.y) && std::isfinite(c.z) &&
-                !(perspective && c.z <= near_eps);
-      if (c.valid) {
-        centres_around(c.x, buf.width, c.x_lo, c.x_hi);
-        centres_around(c.y, buf.height, c.y_lo, c.y_hi);
-      }
-    }
+    for (std::size_t i = from; i != r.end(); ++i)
+      detail::project_corner(project, mesh.positions[i], proj[i]);
   });
   const int W = buf.width;
   const std::size_t nb = static_cast<std::size_t>((buf.height + kBand - 1) / kBand);

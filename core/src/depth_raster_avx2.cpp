@@ -190,7 +190,8 @@ std::size_t project_corners_avx2(const Projector& project, const Vec3* positions
     __m256d valid =
         _mm256_and_pd(_mm256_and_pd(raster_finite4(px), raster_finite4(py)), raster_finite4(depth));
     if (perspective)
-      valid = _mm256_andnot_pd(_mm256_cmp_pd(depth, _mm256_set1_pd(1e-9), _CMP_LE_OQ), valid);
+      valid = _mm256_andnot_pd(_mm256_cmp_pd(depth, _mm256_set1_pd(kRasterNearLimit), _CMP_LE_OQ),
+                               valid);
     __m128i x_lo, x_hi, y_lo, y_hi;
     raster_centres4(px, project.width(), x_lo, x_hi);
     raster_centres4(py, project.height(), y_lo, y_hi);

@@ -54,11 +54,16 @@ struct RasterBand {
   bool perspective;
 };
 
+// Perspective views skip triangles with a corner at a depth at or below
+// this (no near clipping).
+constexpr double kRasterNearLimit = 1e-9;
+
+// A position projected into its corner (depth_raster.cpp).
+void project_corner(const Projector& project, const Vec3& position, RasterCorner& corner);
 // Projects positions [begin, end) into corners with AVX2, four at a time,
-// with the operations of Projector::operator() and render_depth's corner
-// setup (same bits); returns where it stopped (a multiple of four from
-// begin): the caller does the rest. Call only when
-// depth_raster_avx2_enabled().
+// with the operations of project_corner (same bits); returns where it
+// stopped (a multiple of four from begin): the caller does the rest. Call
+// only when depth_raster_avx2_enabled().
 std::size_t project_corners_avx2(const Projector& project, const Vec3* positions,
                                  RasterCorner* corners, std::size_t begin, std::size_t end);
 

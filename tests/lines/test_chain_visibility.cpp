@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "chain_internal.hpp"
+#include "depth_raster_internal.hpp"
 #include "fabrica/core/camera.hpp"
 #include "fabrica/core/depth_raster.hpp"
 #include "fabrica/core/error.hpp"
@@ -268,6 +269,59 @@ TEST(DepthRaster, Avx2AndPortableKernelsGiveTheSameBits) {
   }
   EXPECT_EQ(compared, scenes.size() * std::size(sizes) * 4 * 2);
   EXPECT_GT(covered, 1000000u) << "the scenes cover too little to compare";
+}
+
+// The AVX2 projection of the corners against the portable one, bit for bit
+// (pixel position, depth, validity and, where valid, the pixel centres
+// around the corner): points spread around the view, behind and at the eye,
+// at the near limit, far outside the image, infinite and NaN; perspective
+// and orthographic, square and not.
+TEST(DepthRaster, Avx2AndPortableProjectionGiveTheSameBits) {
+  if (!detail::depth_raster_avx2_enabled()) GTEST_SKIP() << "no AVX2 raster kernel here";
+  std::vector<Vec3> points;
+  std::uint64_t state = 12345;
+  auto uniform = [&] {  // in [-1, 1)
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<double>(state >> 11) / 4503599627370496.0 - 1.0;
+  };
+  for (int i = 0; i < 4000; ++i) {
+    const double s = i % 3 == 0 ? 1.0 : i % 3 == 1 ? 10.0 : 1e6;
+    points.emplace_back(s * uniform(), s * uniform(), s * uniform());
+  }
+  const double inf = std::numeric_limits<double>::infinity(), nan = std::nan("");
+  const Vec3 eye(0.5, 1.0, 6.0);
+  for (const Vec3& p : {eye, Vec3(eye + Vec3(0.0, 0.0, -1e-9)), Vec3(eye + Vec3(1e-3, 0.0, -2e-9)),
+                        Vec3(inf, 0.0, 0.0), Vec3(0.0, -inf, 1.0), Vec3(nan, 0.0, 0.0),
+                        Vec3(0.0, 0.0, nan), Vec3(0.0, 0.0, 0.0), Vec3(1e300, 1e300, -1e300)})
+    points.push_back(p);
+  points.resize(points.size() + 3, Vec3(0.1, 0.2, 0.3));  // not a multiple of four
+  std::size_t valid = 0;
+  for (int view = 0; view < 4; ++view) {
+    SCOPED_TRACE("view " + std::to_string(view));
+    const Camera c = look_at(eye, Vec3(0.0, 0.0, 0.0), view % 2 ? 333 : 1024, view % 2 ? 257 : 1024,
+                             view < 2 ? Projection::perspective : Projection::orthographic, 40.0);
+    const Projector project(c);
+    std::vector<detail::RasterCorner> wide(points.size()), portable(points.size());
+    const std::size_t done =
+        detail::project_corners_avx2(project, points.data(), wide.data(), 0, points.size());
+    EXPECT_EQ(done, points.size() / 4 * 4);
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      detail::project_corner(project, points[i], portable[i]);
+      if (i >= done) continue;
+      const detail::RasterCorner &a = wide[i], &b = portable[i];
+      ASSERT_EQ(a.valid, b.valid) << "point " << i;
+      EXPECT_EQ(std::memcmp(&a.z, &b.z, sizeof a.z), 0) << "point " << i;
+      if (!b.valid) continue;
+      ++valid;
+      EXPECT_EQ(std::memcmp(&a.x, &b.x, sizeof a.x), 0) << "point " << i;
+      EXPECT_EQ(std::memcmp(&a.y, &b.y, sizeof a.y), 0) << "point " << i;
+      EXPECT_EQ(a.x_lo, b.x_lo) << "point " << i;
+      EXPECT_EQ(a.x_hi, b.x_hi) << "point " << i;
+      EXPECT_EQ(a.y_lo, b.y_lo) << "point " << i;
+      EXPECT_EQ(a.y_hi, b.y_hi) << "point " << i;
+    }
+  }
+  EXPECT_GT(valid, 8000u);
 }
 
 TEST(DepthRaster, RejectsImagesTooLargeToIndex) {
