@@ -34,20 +34,29 @@ inline __m128i lane_mask(int bits) {
 struct Avx2Rows {
   template <bool kFaces>
   static void draw(const RasterBand& band, const raster_band::Setup& s) {
+    if (s.x1 - s.x0 >= 8)
+      draw<kFaces, true>(band, s);
+    else
+      draw<kFaces, false>(band, s);
+  }
+
+  template <bool kFaces, bool kWide>
+  static void draw(const RasterBand& band, const raster_band::Setup& s) {
     if (band.perspective) {
       if (s.positive)
-        rows<kFaces, true, true>(band, s);
+        rows<kFaces, kWide, true, true>(band, s);
       else
-        rows<kFaces, true, false>(band, s);
+        rows<kFaces, kWide, true, false>(band, s);
     } else {
       if (s.positive)
-        rows<kFaces, false, true>(band, s);
+        rows<kFaces, kWide, false, true>(band, s);
       else
-        rows<kFaces, false, false>(band, s);
+        rows<kFaces, kWide, false, false>(band, s);
     }
   }
 
-  template <bool kFaces, bool kPerspective, bool kPositive>
+  // kWide: boxes at least nine pixels wide, which skip empty steps.
+  template <bool kFaces, bool kWide, bool kPerspective, bool kPositive>
   static void rows(const RasterBand& band, const raster_band::Setup& s) {
     const int W = band.width;
     const __m256d zero = _mm256_setzero_pd();
@@ -88,7 +97,12 @@ struct Avx2Rows {
                                            _mm256_cmp_pd(m[1], zero, _CMP_NGT_UQ)),
                              _mm256_cmp_pd(m[2], zero, _CMP_NGT_UQ));
         const int bits = _mm256_movemask_pd(in) & box_bits;
-        if (bits == 0) continue;
+        // No branch on the coverage of small boxes (most rows of a
+        // triangle a few pixels across are partly covered, in no
+        // predictable pattern): their uncovered pixels are written back
+        // unchanged. Wide boxes skip their empty steps.
+        if constexpr (kWide)
+          if (bits == 0) continue;
         const __m256d w0 = _mm256_mul_pd(m[0], inv_area), w1 = _mm256_mul_pd(m[1], inv_area),
                       w2 = _mm256_mul_pd(m[2], inv_area);
         __m256d d;
