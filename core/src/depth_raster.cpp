@@ -219,6 +219,9 @@ RasterScratch& RasterScratchSlot::get() {
 //    could write. The buffer keeps the minimum, which does not depend on the
 //    order (positive depths), so skipping changes nothing; on a closed or
 //    nearly closed surface almost all back faces are skipped this way.
+// Where the CPU has AVX2, the corners are projected and the rows drawn by
+// depth_raster_avx2.cpp (four vertices or pixels per step, the same
+// operations in the same order: the same bits).
 void render_depth(const TriangleMesh& mesh, const Camera& camera, DepthBuffer& buf, bool faces) {
   if (camera.width <= 0 || camera.height <= 0 || camera.width > kMaxSide ||
       camera.height > kMaxSide)
