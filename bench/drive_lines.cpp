@@ -17,6 +17,12 @@
 // rtsc_bench's pre_with_adjfaces + view5 (bench/rtsc_side_by_side.sh).
 // With DRIVE_LINES_CALLGRIND=first in the environment, callgrind collects
 // the first-lines region (all first_reps of it) instead of the timed views.
+// With DRIVE_LINES_HIDDEN=1 every timed view also renders the depth buffer
+// that hidden-line removal tests against (render_depth into a buffer kept
+// between views, as LineDrawer's callers do), and the line prints the
+// raster's own median (raster_ms) and a hash of the last view's depth
+// buffer (depth_hash); DRIVE_LINES_RASTER=portable runs the portable raster
+// instead of the AVX2 one (the two give the same bits).
 #include <tbb/global_control.h>
 #include <valgrind/callgrind.h>
 
@@ -26,10 +32,12 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "fabrica/core/depth_raster.hpp"
 #include "fabrica/lines/extract.hpp"
 #include "igea_view.hpp"
 
@@ -77,6 +85,16 @@ int main(int argc, char** argv) {
   std::unique_ptr<Surface> surface_ptr;
   std::vector<SegmentSoup> soups;
   const char* collect = std::getenv("DRIVE_LINES_CALLGRIND");
+  const char* hidden_env = std::getenv("DRIVE_LINES_HIDDEN");
+  const bool hidden = hidden_env && std::string(hidden_env) == "1";
+  const char* raster_env = std::getenv("DRIVE_LINES_RASTER");
+  if (raster_env && std::string(raster_env) == "portable") {
+    detail::depth_raster_avx2_enabled() = false;
+  } else if (raster_env && *raster_env) {
+    std::fprintf(stderr, "drive_lines: DRIVE_LINES_RASTER is 'portable' or unset (got '%s')\n",
+                 raster_env);
+    return 2;
+  }
   const bool collect_first = collect && std::string(collect) == "first";
   for (int r = 0; r < first_reps; ++r) {
     surface_ptr.reset();
@@ -99,14 +117,19 @@ int main(int argc, char** argv) {
   LineExtractor ex(surface, o);
   ex.extract(c, soups);
   ex.extract(c, soups);
-  std::vector<double> ms;
+  DepthBuffer depth;
+  if (hidden) render_depth(surface.mesh(), c, depth);
+  std::vector<double> ms, raster_ms;
   std::size_t segments = 0;
   if (!collect_first) CALLGRIND_START_INSTRUMENTATION;
   for (int v = 0; v < views; ++v) {
     const auto t0 = std::chrono::steady_clock::now();
     ex.extract(c, soups);
     const auto t1 = std::chrono::steady_clock::now();
-    ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+    if (hidden) render_depth(surface.mesh(), c, depth);
+    const auto t2 = std::chrono::steady_clock::now();
+    ms.push_back(ms_between(t0, t2));
+    raster_ms.push_back(ms_between(t1, t2));
   }
   if (!collect_first) CALLGRIND_STOP_INSTRUMENTATION;
   // FNV-1a over every field of every segment, in order, for the timed view
@@ -151,10 +174,25 @@ int main(int argc, char** argv) {
     mix_soups();
   }
   std::sort(ms.begin(), ms.end());
+  std::string raster;
+  if (hidden) {
+    // (FNV-1a over the depth bits of the timed view's buffer)
+    std::uint64_t dh = 1469598103934665603ull;
+    for (const float z : depth.depth) {
+      std::uint32_t b;
+      std::memcpy(&b, &z, sizeof b);
+      for (int k = 0; k < 4; ++k) dh = (dh ^ ((b >> (8 * k)) & 0xffu)) * 1099511628211ull;
+    }
+    std::sort(raster_ms.begin(), raster_ms.end());
+    char text[96];
+    std::snprintf(text, sizeof text, " raster_ms %.2f depth_hash %016llx",
+                  raster_ms[raster_ms.size() / 2], static_cast<unsigned long long>(dh));
+    raster = text;
+  }
   std::printf(
       "views %d threads %d segments %zu hash %016llx median %.2f ms p10 %.2f ms precompute_ms %.2f "
-      "first_view_ms %.2f\n",
+      "first_view_ms %.2f%s\n",
       views, threads, segments, static_cast<unsigned long long>(hash), ms[ms.size() / 2],
-      ms[ms.size() / 10], pre_ms[pre_ms.size() / 2], first_ms[first_ms.size() / 2]);
+      ms[ms.size() / 10], pre_ms[pre_ms.size() / 2], first_ms[first_ms.size() / 2], raster.c_str());
   return 0;
 }

@@ -14,10 +14,4 @@ set_source_files_properties(${_fabrica_geometry_sources} PROPERTIES COMPILE_OPTI
 # The AVX2 lane type of the curvature fits (curvature_fit_kernel.hpp): this
 # file alone is compiled with -mavx2 (no FMA: -mavx2 does not enable it, and
 # -ffp-contract=off), and called only when the CPU has AVX2.
-if(CMAKE_CXX_COMPILER_ID MATCHES "GNU|Clang" AND CMAKE_SYSTEM_PROCESSOR MATCHES "x86_64|AMD64"
-   AND NOT FABRICA_NO_MULTIVERSION)
-  target_sources(fabrica_core PRIVATE ${CMAKE_CURRENT_LIST_DIR}/src/curvature_fit_avx2.cpp)
-  set_source_files_properties(${CMAKE_CURRENT_LIST_DIR}/src/curvature_fit_avx2.cpp
-    PROPERTIES COMPILE_OPTIONS "-mavx2;-ffp-contract=off")
-  target_compile_definitions(fabrica_core PRIVATE FABRICA_CURVATURE_AVX2=1)
-endif()
+fabrica_avx2_source(${CMAKE_CURRENT_LIST_DIR}/src/curvature_fit_avx2.cpp FABRICA_CURVATURE_AVX2)

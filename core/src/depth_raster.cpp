@@ -5,6 +5,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -13,6 +14,7 @@
 #include <string>
 #include <type_traits>
 
+#include "depth_raster_internal.hpp"
 #include "fabrica/core/error.hpp"
 #include "fabrica/core/projector.hpp"
 
@@ -45,16 +47,8 @@ float DepthBuffer::max3x3(double x, double y) const {
 
 namespace {
 
-// Projected corner: pixel position, linear depth, and the pixel centres on
-// either side of it: lo = the first centre at or after the coordinate, hi =
-// the last centre at or before it (per axis; coordinates clamped to just
-// outside the image). A triangle's box covers the centres from the minimum
-// lo to the maximum hi of its corners (the maps are monotonic).
-struct Corner {
-  double x, y, z;
-  std::int16_t x_lo, x_hi, y_lo, y_hi;
-  bool valid;  // finite, and in front of the near limit (perspective)
-};
+using Corner = detail::RasterCorner;
+using Binned = detail::RasterTriangle;
 
 // floor(v) for v well inside the int range (std::floor is a library call
 // without SSE4.1).
@@ -72,16 +66,6 @@ inline void centres_around(double v, int size, std::int16_t& lo, std::int16_t& h
   hi = static_cast<std::int16_t>(f - (f + 0.5 > v ? 1 : 0));
 }
 
-// A triangle in a band's list: its doubled signed area in pixels, its face,
-// a lower bound of any depth it can write (-inf: none known), and the pixel
-// centres of its bounding box (clipped to the image).
-struct Binned {
-  double area;
-  std::int32_t face;
-  float bound;
-  std::int16_t x0, x1, y0, y1;
-};
-
 constexpr int kBand = 32;              // rows per band
 constexpr std::size_t kChunk = 16384;  // faces per binning chunk
 constexpr int kMaxSide = 32000;        // pixel indices (and size + 1) fit in int16
@@ -89,6 +73,97 @@ constexpr int kMaxSide = 32000;        // pixel indices (and size + 1) fit in in
 }  // namespace
 
 namespace detail {
+
+namespace {
+
+// The portable row kernel: per row, up to 64 columns at a time, the
+// coverage of every pixel first (no branches), then the depth of the
+// covered ones.
+struct PortableRows {
+  template <bool kFaces>
+  static void draw(const RasterBand& band, const raster_band::Setup& s) {
+    const int W = band.width;
+    double num[64][3];
+    for (int y = s.y0; y <= s.y1; ++y) {
+      const double py = y + 0.5;
+      double ry[3];
+      for (int k = 0; k < 3; ++k) ry[k] = s.ex[k] * (py - s.ay[k]);
+      float* const row = band.depth + static_cast<std::size_t>(y) * W;
+      for (int xs = s.x0; xs <= s.x1; xs += 64) {
+        const int n = std::min<int>(s.x1 - xs + 1, 64);
+        std::uint64_t mask = 0;
+        for (int i = 0; i < n; ++i) {
+          const double px = (xs + i) + 0.5;
+          double* const m = num[i];
+          m[0] = ry[0] - s.ey[0] * (px - s.ax[0]);
+          m[1] = ry[1] - s.ey[1] * (px - s.ax[1]);
+          m[2] = ry[2] - s.ey[2] * (px - s.ax[2]);
+          const bool in = s.positive ? (!(m[0] < 0.0) & !(m[1] < 0.0) & !(m[2] < 0.0))
+                                     : (!(m[0] > 0.0) & !(m[1] > 0.0) & !(m[2] > 0.0));
+          mask |= static_cast<std::uint64_t>(in) << i;
+        }
+        while (mask != 0) {
+          const int i = std::countr_zero(mask);
+          mask &= mask - 1;
+          const double* const m = num[i];
+          const double w0 = m[0] * s.inv_area, w1 = m[1] * s.inv_area, w2 = m[2] * s.inv_area;
+          const double d = band.perspective ? 1.0 / (w0 / s.z[0] + w1 / s.z[1] + w2 / s.z[2])
+                                            : w0 * s.z[0] + w1 * s.z[1] + w2 * s.z[2];
+          float& dst = row[xs + i];
+          if constexpr (kFaces) {
+            const float z = static_cast<float>(d);
+            std::int32_t& id = band.seen[static_cast<std::size_t>(y) * W + xs + i];
+            if (z < dst || (z == dst && s.face < id)) {
+              dst = z;
+              id = s.face;
+            }
+          } else {
+            dst = std::min(dst, static_cast<float>(d));
+          }
+        }
+      }
+    }
+  }
+};
+
+}  // namespace
+
+void project_corner(const Projector& project, const Vec3& position, RasterCorner& c) {
+  const ProjectedPoint pp = project(position);
+  c.x = pp.pixel.x();
+  c.y = pp.pixel.y();
+  c.z = pp.depth;
+  c.valid = std::isfinite(c.x) && std::isfinite(c.y) && std::isfinite(c.z) &&
+            !(project.perspective() && c.z <= kRasterNearLimit);
+  if (c.valid) {
+    centres_around(c.x, project.width(), c.x_lo, c.x_hi);
+    centres_around(c.y, project.height(), c.y_lo, c.y_hi);
+  }
+}
+
+void draw_band_portable(const RasterBand& band) {
+  raster_band::draw_band<PortableRows>(band);
+}
+
+#if !defined(FABRICA_DEPTH_RASTER_AVX2)
+// Without the AVX2 file: never called (depth_raster_avx2_enabled() is false).
+void draw_band_avx2(const RasterBand& band) {
+  draw_band_portable(band);
+}
+std::size_t project_corners_avx2(const Projector&, const Vec3*, RasterCorner*, std::size_t begin,
+                                 std::size_t) {
+  return begin;
+}
+#endif
+
+std::atomic<bool>& depth_raster_avx2_enabled() {
+#if defined(FABRICA_DEPTH_RASTER_AVX2)
+  static std::atomic<bool> on{__builtin_cpu_supports("avx2") != 0};
+#else
+  static std::atomic<bool> on{false};
+#endif
+  return on;
+}
 
 // render_depth's working memory, kept in the DepthBuffer between calls.
 struct RasterScratch {
@@ -144,6 +219,9 @@ RasterScratch& RasterScratchSlot::get() {
 //    could write. The buffer keeps the minimum, which does not depend on the
 //    order (positive depths), so skipping changes nothing; on a closed or
 //    nearly closed surface almost all back faces are skipped this way.
+// Where the CPU has AVX2, the corners are projected and the rows drawn by
+// depth_raster_avx2.cpp (four vertices or pixels per step, the same
+// operations in the same order: the same bits).
 void render_depth(const TriangleMesh& mesh, const Camera& camera, DepthBuffer& buf, bool faces) {
   if (camera.width <= 0 || camera.height <= 0 || camera.width > kMaxSide ||
       camera.height > kMaxSide)
@@ -164,21 +242,14 @@ void render_depth(const TriangleMesh& mesh, const Camera& camera, DepthBuffer& b
   proj.resize(nv);
   const Projector project(camera);
   const bool perspective = camera.projection == Projection::perspective;
-  const double near_eps = 1e-9;
+  const bool avx2 = detail::depth_raster_avx2_enabled().load(std::memory_order_relaxed);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 2048), [&](const auto& r) {
-    for (std::size_t i = r.begin(); i != r.end(); ++i) {
-      const ProjectedPoint pp = project(mesh.positions[i]);
-      Corner& c = proj[i];
-      c.x = pp.pixel.x();
-      c.y = pp.pixel.y();
-      c.z = pp.depth;
-      c.valid = std::isfinite(c.x) && std::isfinite(c.y) && std::isfinite(c.z) &&
-                !(perspective && c.z <= near_eps);
-      if (c.valid) {
-        centres_around(c.x, buf.width, c.x_lo, c.x_hi);
-        centres_around(c.y, buf.height, c.y_lo, c.y_hi);
-      }
-    }
+    std::size_t from = r.begin();
+    if (avx2)
+      from = detail::project_corners_avx2(project, mesh.positions.data(), proj.data.get(), from,
+                                          r.end());
+    for (std::size_t i = from; i != r.end(); ++i)
+      detail::project_corner(project, mesh.positions[i], proj[i]);
   });
   const int W = buf.width;
   const std::size_t nb = static_cast<std::size_t>((buf.height + kBand - 1) / kBand);
@@ -281,100 +352,26 @@ void render_depth(const TriangleMesh& mesh, const Camera& camera, DepthBuffer& b
     if (faces)
       std::fill(seen + static_cast<std::size_t>(y_lo) * W,
                 seen + static_cast<std::size_t>(y_hi + 1) * W, -1);
-    // with_faces: std::true_type to keep the face seen at each pixel
-    // too (the nearer depth wins, ties to the lower face index).
-    auto draw = [&](const Binned& e, auto with_faces) {
-      const int ya = std::max<int>(y_lo, e.y0), yb = std::min<int>(y_hi, e.y1);
-      if (e.bound > -kInf) {
-        // Hidden when the farthest pixel of the box is at or below the
-        // bound (the buffer never holds NaN). Boxes up to 4 wide (almost
-        // all) take four clamped reads per row and no branches.
-        float far = -kInf;
-        if (e.x1 - e.x0 < 4) {
-          const int c1 = std::min(e.x0 + 1, static_cast<int>(e.x1));
-          const int c2 = std::min(e.x0 + 2, static_cast<int>(e.x1));
-          const int c3 = std::min(e.x0 + 3, static_cast<int>(e.x1));
-          for (int y = ya; y <= yb; ++y) {
-            const float* row = image + static_cast<std::size_t>(y) * W;
-            far = std::max({far, row[e.x0], row[c1], row[c2], row[c3]});
-          }
-        } else {
-          for (int y = ya; y <= yb && far <= e.bound; ++y) {
-            const float* row = image + static_cast<std::size_t>(y) * W;
-            for (int x = e.x0; x <= e.x1; ++x) far = std::max(far, row[x]);
-          }
-        }
-        if (far <= e.bound) return;
-      }
-      const Face& t = mesh.faces[static_cast<std::size_t>(e.face)];
-      const Corner* p[3] = {&proj[t[0]], &proj[t[1]], &proj[t[2]]};
-      const double inv_area = 1.0 / e.area;
-      // Edge k runs from corner k+1 to corner k+2; its barycentric
-      // weight at (px, py) is ((bx - ax)(py - ay) - (by - ay)(px - ax))
-      // / area, evaluated term by term as the original (same bits). The
-      // weight is negative exactly when the numerator's sign differs
-      // from the area's (the product cannot underflow at pixel scale),
-      // so uncovered pixels are rejected before the multiplications.
-      double ax[3], ay[3], ex[3], ey[3];
-      for (int k = 0; k < 3; ++k) {
-        const Corner& ca = *p[(k + 1) % 3];
-        const Corner& cb = *p[(k + 2) % 3];
-        ax[k] = ca.x;
-        ay[k] = ca.y;
-        ex[k] = cb.x - ca.x;
-        ey[k] = cb.y - ca.y;
-      }
-      const double z0 = p[0]->z, z1 = p[1]->z, z2 = p[2]->z;
-      const bool positive = e.area > 0.0;
-      // Per row, up to 64 columns at a time: the coverage of every pixel
-      // first (no branches), then the depth of the covered ones.
-      double num[64][3];
-      for (int y = ya; y <= yb; ++y) {
-        const double py = y + 0.5;
-        double ry[3];
-        for (int k = 0; k < 3; ++k) ry[k] = ex[k] * (py - ay[k]);
-        float* const row = image + static_cast<std::size_t>(y) * W;
-        for (int xs = e.x0; xs <= e.x1; xs += 64) {
-          const int n = std::min<int>(e.x1 - xs + 1, 64);
-          std::uint64_t mask = 0;
-          for (int i = 0; i < n; ++i) {
-            const double px = (xs + i) + 0.5;
-            double* const m = num[i];
-            m[0] = ry[0] - ey[0] * (px - ax[0]);
-            m[1] = ry[1] - ey[1] * (px - ax[1]);
-            m[2] = ry[2] - ey[2] * (px - ax[2]);
-            const bool in = positive ? (!(m[0] < 0.0) & !(m[1] < 0.0) & !(m[2] < 0.0))
-                                     : (!(m[0] > 0.0) & !(m[1] > 0.0) & !(m[2] > 0.0));
-            mask |= static_cast<std::uint64_t>(in) << i;
-          }
-          while (mask != 0) {
-            const int i = std::countr_zero(mask);
-            mask &= mask - 1;
-            const double* const m = num[i];
-            const double w0 = m[0] * inv_area, w1 = m[1] * inv_area, w2 = m[2] * inv_area;
-            const double d =
-                perspective ? 1.0 / (w0 / z0 + w1 / z1 + w2 / z2) : w0 * z0 + w1 * z1 + w2 * z2;
-            float& dst = row[xs + i];
-            if constexpr (decltype(with_faces)::value) {
-              const float z = static_cast<float>(d);
-              std::int32_t& id = seen[static_cast<std::size_t>(y) * W + xs + i];
-              if (z < dst || (z == dst && e.face < id)) {
-                dst = z;
-                id = e.face;
-              }
-            } else {
-              dst = std::min(dst, static_cast<float>(d));
-            }
-          }
-        }
-      }
-    };
-    for (std::size_t g = 0; g < 2; ++g)
-      for (std::uint32_t i = starts[g * nb + band]; i < starts[g * nb + band + 1]; ++i)
-        if (faces)
-          draw(binned[i], std::true_type{});
-        else
-          draw(binned[i], std::false_type{});
+    const std::uint32_t* const at = starts.data() + band;
+    detail::RasterBand job{binned.data.get() + at[0],
+                           binned.data.get() + at[nb],
+                           mesh.faces.data(),
+                           proj.data.get(),
+                           image,
+                           faces ? seen : nullptr,
+                           W,
+                           y_lo,
+                           y_hi,
+                           perspective};
+    // The triangles facing the camera first (group 0), then the others.
+    for (std::size_t g = 0; g < 2; ++g) {
+      job.first = binned.data.get() + at[g * nb];
+      job.last = binned.data.get() + at[g * nb + 1];
+      if (avx2)
+        detail::draw_band_avx2(job);
+      else
+        detail::draw_band_portable(job);
+    }
   });
 }
 

@@ -12,12 +12,17 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <memory>
+#include <string>
 #include <vector>
 
 #include "chain_internal.hpp"
+#include "depth_raster_internal.hpp"
 #include "fabrica/core/camera.hpp"
+#include "fabrica/core/depth_raster.hpp"
 #include "fabrica/core/error.hpp"
 #include "fabrica/core/surface.hpp"
+#include "fabrica/io/mesh_io.hpp"
 #include "fabrica/lines/chain.hpp"
 #include "fabrica/lines/extract.hpp"
 #include "fabrica/lines/visibility.hpp"
@@ -118,69 +123,205 @@ std::size_t finite_pixels(const std::vector<float>& d) {
       std::count_if(d.begin(), d.end(), [](float z) { return std::isfinite(z); }));
 }
 
+// Runs the depth raster with its portable row kernel while alive (the AVX2
+// kernel is the default where the CPU has it).
+class PortableRaster {
+ public:
+  PortableRaster() : had_(detail::depth_raster_avx2_enabled().exchange(false)) {}
+  ~PortableRaster() { detail::depth_raster_avx2_enabled() = had_; }
+  PortableRaster(const PortableRaster&) = delete;
+  PortableRaster& operator=(const PortableRaster&) = delete;
+
+ private:
+  bool had_;
+};
+
 }  // namespace
 
 TEST(DepthRaster, BitIdenticalToBruteForceOnClosedOpenAndClippedScenes) {
-  // Two spheres (closed, back faces hidden), an open cylinder seen from an
-  // angle (back faces visible through the ends), a jittered torus, an
-  // orthographic view, and an eye between the spheres (near-plane skipping).
-  const TriangleMesh spheres = merged(translated(test::make_icosphere(1.0, 4), Vec3(0, 0, 1)),
-                                      translated(test::make_icosphere(1.5, 4), Vec3(0.8, 0.3, -2)));
-  const TriangleMesh cylinder = test::make_cylinder(1.0, 3.0, 20, 48);
-  const TriangleMesh torus = test::make_torus(2.0, 0.6, 64, 32, 0.05);
-  struct Case {
-    const TriangleMesh* mesh;
-    Camera camera;
-  };
-  const std::vector<Case> cases = {
-      {&spheres, look_at(Vec3(0, 0, 9), Vec3(0, 0, 0), 320, 240)},
-      {&cylinder, look_at(Vec3(3, 4, 5), Vec3(0, 0, 0), 257, 300)},
-      {&torus, look_at(Vec3(1, 6, 4), Vec3(0, 0, 0), 400, 400)},
-      {&torus, look_at(Vec3(0, 2, 8), Vec3(0, 0, 0), 200, 150, Projection::orthographic, 30)},
-      {&spheres,
-       look_at(Vec3(0.2, 0.1, -0.5), Vec3(0, 0, 1), 160, 120, Projection::perspective, 100)},
-  };
-  DepthBuffer reused;  // rendered into again and again: working memory reused
-  for (std::size_t i = 0; i < cases.size(); ++i) {
-    const auto& c = cases[i];
-    const std::vector<float> expected = brute_force_depth(*c.mesh, c.camera);
-    ASSERT_GT(finite_pixels(expected), 500u) << "case " << i << " sees too little";
-    const DepthBuffer fresh = render_depth(*c.mesh, c.camera);
-    EXPECT_EQ(fresh.width, c.camera.width);
-    EXPECT_EQ(fresh.height, c.camera.height);
-    EXPECT_EQ(count_differences(fresh.depth, expected), 0u) << "case " << i;
-    render_depth(*c.mesh, c.camera, reused);
-    EXPECT_EQ(count_differences(reused.depth, expected), 0u) << "case " << i << " (reused)";
-    EXPECT_TRUE(reused.face.empty());
-    // With faces (hatching's seeds and occlusion): the same depths, and the
-    // face of the nearest triangle at every pixel. Faces are visited in
-    // index order by the brute force, so `z < depth` keeps the lower index
-    // on ties, as the rasteriser promises.
-    std::vector<std::int32_t> expected_faces;
-    brute_force_depth(*c.mesh, c.camera, &expected_faces);
-    render_depth(*c.mesh, c.camera, reused, /*faces=*/true);
-    EXPECT_EQ(count_differences(reused.depth, expected), 0u) << "case " << i << " (faces)";
-    EXPECT_EQ(reused.face, expected_faces) << "case " << i;
-    std::size_t seen = 0;
-    for (int y = 0; y < c.camera.height; ++y)
-      for (int x = 0; x < c.camera.width; ++x) {
-        const Vec2 centre(x + 0.5, y + 0.5);
-        const std::int32_t f = reused.face_at(centre);
-        EXPECT_EQ(f >= 0, std::isfinite(reused.depth_at(centre)));
-        seen += f >= 0;
+  // Twice: with the default row kernel (AVX2 where the CPU has it), then the
+  // portable one.
+  for (const bool portable : {false, true}) {
+    SCOPED_TRACE(portable ? "portable kernel" : "default kernel");
+    std::unique_ptr<PortableRaster> forced;
+    if (portable) forced = std::make_unique<PortableRaster>();
+    // Two spheres (closed, back faces hidden), an open cylinder seen from an
+    // angle (back faces visible through the ends), a jittered torus, an
+    // orthographic view, and an eye between the spheres (near-plane skipping).
+    const TriangleMesh spheres =
+        merged(translated(test::make_icosphere(1.0, 4), Vec3(0, 0, 1)),
+               translated(test::make_icosphere(1.5, 4), Vec3(0.8, 0.3, -2)));
+    const TriangleMesh cylinder = test::make_cylinder(1.0, 3.0, 20, 48);
+    const TriangleMesh torus = test::make_torus(2.0, 0.6, 64, 32, 0.05);
+    struct Case {
+      const TriangleMesh* mesh;
+      Camera camera;
+    };
+    const std::vector<Case> cases = {
+        {&spheres, look_at(Vec3(0, 0, 9), Vec3(0, 0, 0), 320, 240)},
+        {&cylinder, look_at(Vec3(3, 4, 5), Vec3(0, 0, 0), 257, 300)},
+        {&torus, look_at(Vec3(1, 6, 4), Vec3(0, 0, 0), 400, 400)},
+        {&torus, look_at(Vec3(0, 2, 8), Vec3(0, 0, 0), 200, 150, Projection::orthographic, 30)},
+        {&spheres,
+         look_at(Vec3(0.2, 0.1, -0.5), Vec3(0, 0, 1), 160, 120, Projection::perspective, 100)},
+    };
+    DepthBuffer reused;  // rendered into again and again: working memory reused
+    for (std::size_t i = 0; i < cases.size(); ++i) {
+      const auto& c = cases[i];
+      const std::vector<float> expected = brute_force_depth(*c.mesh, c.camera);
+      ASSERT_GT(finite_pixels(expected), 500u) << "case " << i << " sees too little";
+      const DepthBuffer fresh = render_depth(*c.mesh, c.camera);
+      EXPECT_EQ(fresh.width, c.camera.width);
+      EXPECT_EQ(fresh.height, c.camera.height);
+      EXPECT_EQ(count_differences(fresh.depth, expected), 0u) << "case " << i;
+      render_depth(*c.mesh, c.camera, reused);
+      EXPECT_EQ(count_differences(reused.depth, expected), 0u) << "case " << i << " (reused)";
+      EXPECT_TRUE(reused.face.empty());
+      // With faces (hatching's seeds and occlusion): the same depths, and the
+      // face of the nearest triangle at every pixel. Faces are visited in
+      // index order by the brute force, so `z < depth` keeps the lower index
+      // on ties, as the rasteriser promises.
+      std::vector<std::int32_t> expected_faces;
+      brute_force_depth(*c.mesh, c.camera, &expected_faces);
+      render_depth(*c.mesh, c.camera, reused, /*faces=*/true);
+      EXPECT_EQ(count_differences(reused.depth, expected), 0u) << "case " << i << " (faces)";
+      EXPECT_EQ(reused.face, expected_faces) << "case " << i;
+      std::size_t seen = 0;
+      for (int y = 0; y < c.camera.height; ++y)
+        for (int x = 0; x < c.camera.width; ++x) {
+          const Vec2 centre(x + 0.5, y + 0.5);
+          const std::int32_t f = reused.face_at(centre);
+          EXPECT_EQ(f >= 0, std::isfinite(reused.depth_at(centre)));
+          seen += f >= 0;
+        }
+      EXPECT_EQ(seen, finite_pixels(expected)) << "case " << i;
+      EXPECT_EQ(reused.face_at(Vec2(-0.5, 1.0)), -1);
+      EXPECT_EQ(reused.depth_at(Vec2(c.camera.width + 1.0, 1.0)),
+                std::numeric_limits<float>::infinity());
+      {
+        tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+        const DepthBuffer serial = render_depth(*c.mesh, c.camera);
+        EXPECT_EQ(count_differences(serial.depth, expected), 0u) << "case " << i << " (1 thread)";
+        const DepthBuffer serial_faces = render_depth(*c.mesh, c.camera, /*faces=*/true);
+        EXPECT_EQ(serial_faces.face, expected_faces) << "case " << i << " (1 thread, faces)";
       }
-    EXPECT_EQ(seen, finite_pixels(expected)) << "case " << i;
-    EXPECT_EQ(reused.face_at(Vec2(-0.5, 1.0)), -1);
-    EXPECT_EQ(reused.depth_at(Vec2(c.camera.width + 1.0, 1.0)),
-              std::numeric_limits<float>::infinity());
-    {
-      tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
-      const DepthBuffer serial = render_depth(*c.mesh, c.camera);
-      EXPECT_EQ(count_differences(serial.depth, expected), 0u) << "case " << i << " (1 thread)";
-      const DepthBuffer serial_faces = render_depth(*c.mesh, c.camera, /*faces=*/true);
-      EXPECT_EQ(serial_faces.face, expected_faces) << "case " << i << " (1 thread, faces)";
     }
   }
+}
+
+// The AVX2 row kernel (four pixels per step, masked loads and stores at the
+// right edge of the image) against the portable one, bit for bit, depth and
+// faces: real meshes at odd image sizes (one pixel, one row, one column,
+// widths that are not a multiple of four, a band boundary), perspective and
+// orthographic, the eye inside the mesh (skipped triangles), and triangles
+// far larger than the image.
+TEST(DepthRaster, Avx2AndPortableKernelsGiveTheSameBits) {
+  if (!detail::depth_raster_avx2_enabled()) GTEST_SKIP() << "no AVX2 raster kernel here";
+  struct Scene {
+    std::string name;
+    TriangleMesh mesh;
+  };
+  std::vector<Scene> scenes;
+  for (const char* rel : {"meshes/classic/c3d_cow.obj", "meshes/classic/libigl_camelhead.off"})
+    scenes.push_back({rel, io::read_mesh(test::bundled_data() / rel).mesh});
+  // Two large triangles (a square of side 4 at z = 0) and a few slivers.
+  TriangleMesh quad;
+  quad.positions = {Vec3(-2, -2, 0), Vec3(2, -2, 0),       Vec3(2, 2, 0),         Vec3(-2, 2, 0),
+                    Vec3(0, 0, 0.5), Vec3(1e-3, 1.5, 0.5), Vec3(-1e-3, -1.5, 0.5)};
+  quad.faces = {{0, 1, 2}, {0, 2, 3}, {4, 5, 6}, {6, 5, 4}};
+  scenes.push_back({"quad", quad});
+  const std::pair<int, int> sizes[] = {{1024, 1024}, {333, 257}, {1, 1}, {2, 3},    {5, 7},
+                                       {37, 1},      {1, 41},    {6, 6}, {1021, 33}};
+  std::size_t compared = 0, covered = 0;
+  for (const Scene& scene : scenes) {
+    SCOPED_TRACE(scene.name);
+    const BoundingBox box = bounding_box(scene.mesh.positions);
+    const Vec3 centre = box.center();
+    const double r = box.diagonal();
+    for (const auto& [w, h] : sizes)
+      for (int view = 0; view < 4; ++view) {
+        SCOPED_TRACE(std::to_string(w) + "x" + std::to_string(h) + " view " + std::to_string(view));
+        Camera c;
+        if (view == 0) {
+          c = look_at(centre + Vec3(0.3, 0.4, 1.0).normalized() * 1.5 * r, centre, w, h);
+        } else if (view == 1) {
+          c = look_at(centre + Vec3(-1.0, 0.2, 0.3) * r, centre, w, h, Projection::orthographic,
+                      40.0);
+        } else if (view == 2) {  // the eye at the centre: many triangles skipped
+          c = look_at(centre, centre + Vec3(0.0, 0.0, 1.0), w, h, Projection::perspective, 100.0);
+        } else {  // so near that the triangles are much larger than the image
+          c = look_at(centre + Vec3(0.1, 0.2, 1.0).normalized() * 0.02 * r, centre, w, h,
+                      Projection::perspective, 20.0);
+        }
+        for (const bool faces : {false, true}) {
+          const DepthBuffer wide = render_depth(scene.mesh, c, faces);
+          DepthBuffer portable;
+          {
+            PortableRaster forced;
+            render_depth(scene.mesh, c, portable, faces);
+          }
+          EXPECT_EQ(count_differences(wide.depth, portable.depth), 0u) << "faces " << faces;
+          EXPECT_EQ(wide.face, portable.face);
+          ++compared;
+          covered += finite_pixels(portable.depth);
+        }
+      }
+  }
+  EXPECT_EQ(compared, scenes.size() * std::size(sizes) * 4 * 2);
+  EXPECT_GT(covered, 1000000u) << "the scenes cover too little to compare";
+}
+
+// The AVX2 projection of the corners against the portable one, bit for bit
+// (pixel position, depth, validity and, where valid, the pixel centres
+// around the corner): points spread around the view, behind and at the eye,
+// at the near limit, far outside the image, infinite and NaN; perspective
+// and orthographic, square and not.
+TEST(DepthRaster, Avx2AndPortableProjectionGiveTheSameBits) {
+  if (!detail::depth_raster_avx2_enabled()) GTEST_SKIP() << "no AVX2 raster kernel here";
+  std::vector<Vec3> points;
+  std::uint64_t state = 12345;
+  auto uniform = [&] {  // in [-1, 1)
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<double>(state >> 11) / 4503599627370496.0 - 1.0;
+  };
+  for (int i = 0; i < 4000; ++i) {
+    const double s = i % 3 == 0 ? 1.0 : i % 3 == 1 ? 10.0 : 1e6;
+    points.emplace_back(s * uniform(), s * uniform(), s * uniform());
+  }
+  const double inf = std::numeric_limits<double>::infinity(), nan = std::nan("");
+  const Vec3 eye(0.5, 1.0, 6.0);
+  for (const Vec3& p : {eye, Vec3(eye + Vec3(0.0, 0.0, -1e-9)), Vec3(eye + Vec3(1e-3, 0.0, -2e-9)),
+                        Vec3(inf, 0.0, 0.0), Vec3(0.0, -inf, 1.0), Vec3(nan, 0.0, 0.0),
+                        Vec3(0.0, 0.0, nan), Vec3(0.0, 0.0, 0.0), Vec3(1e300, 1e300, -1e300)})
+    points.push_back(p);
+  points.resize(points.size() + 3, Vec3(0.1, 0.2, 0.3));  // not a multiple of four
+  std::size_t valid = 0;
+  for (int view = 0; view < 4; ++view) {
+    SCOPED_TRACE("view " + std::to_string(view));
+    const Camera c = look_at(eye, Vec3(0.0, 0.0, 0.0), view % 2 ? 333 : 1024, view % 2 ? 257 : 1024,
+                             view < 2 ? Projection::perspective : Projection::orthographic, 40.0);
+    const Projector project(c);
+    std::vector<detail::RasterCorner> wide(points.size()), portable(points.size());
+    const std::size_t done =
+        detail::project_corners_avx2(project, points.data(), wide.data(), 0, points.size());
+    EXPECT_EQ(done, points.size() / 4 * 4);
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      detail::project_corner(project, points[i], portable[i]);
+      if (i >= done) continue;
+      const detail::RasterCorner &a = wide[i], &b = portable[i];
+      ASSERT_EQ(a.valid, b.valid) << "point " << i;
+      EXPECT_EQ(std::memcmp(&a.z, &b.z, sizeof a.z), 0) << "point " << i;
+      if (!b.valid) continue;
+      ++valid;
+      EXPECT_EQ(std::memcmp(&a.x, &b.x, sizeof a.x), 0) << "point " << i;
+      EXPECT_EQ(std::memcmp(&a.y, &b.y, sizeof a.y), 0) << "point " << i;
+      EXPECT_EQ(a.x_lo, b.x_lo) << "point " << i;
+      EXPECT_EQ(a.x_hi, b.x_hi) << "point " << i;
+      EXPECT_EQ(a.y_lo, b.y_lo) << "point " << i;
+      EXPECT_EQ(a.y_hi, b.y_hi) << "point " << i;
+    }
+  }
+  EXPECT_GT(valid, 8000u);
 }
 
 TEST(DepthRaster, RejectsImagesTooLargeToIndex) {

@@ -7,6 +7,7 @@
 // it is bit-identical at any thread count.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -19,6 +20,12 @@
 namespace fabrica {
 
 namespace detail {
+/// Whether render_depth draws with its AVX2 row kernel: whether the build
+/// has it (x86-64 GCC or Clang) and the CPU has AVX2, unless set to false
+/// (tests and bench/drive_lines compare it with the portable kernel this
+/// way; both give the same bits). Set it only while no render_depth runs.
+std::atomic<bool>& depth_raster_avx2_enabled();
+
 struct RasterScratch;
 /// render_depth's working memory (projected corners, binned triangles),
 /// kept between calls on the same DepthBuffer; copies start empty.

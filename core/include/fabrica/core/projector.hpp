@@ -75,6 +75,16 @@ class Projector {
   int width() const { return width_; }
   int height() const { return height_; }
   bool perspective() const { return perspective_; }
+  /// The terms of operator() (for vector versions of it, which must use
+  /// the same operations): the eye, the unit forward, right and up
+  /// vectors, tan(fov / 2), the orthographic half height and the aspect.
+  const Vec3& eye() const { return eye_; }
+  const Vec3& forward() const { return f_; }
+  const Vec3& right() const { return r_; }
+  const Vec3& up() const { return u_; }
+  double half_height() const { return half_h_; }
+  double ortho_half_height() const { return ortho_h_; }
+  double aspect() const { return aspect_; }
 
  private:
   Vec3 eye_, f_, r_, u_;
