@@ -30,6 +30,9 @@ target_sources(fabrica_io PRIVATE ${CMAKE_CURRENT_LIST_DIR}/src/vtk_module_loade
 target_link_libraries(fabrica_io PRIVATE ${CMAKE_DL_LIBS})
 file(RELATIVE_PATH _fabrica_bin_to_module ${CMAKE_INSTALL_FULL_BINDIR}
   ${CMAKE_INSTALL_FULL_LIBDIR}/fabrica)
+# (Compiled alone in unity builds: its definitions stay its own.)
+set_property(SOURCE ${CMAKE_CURRENT_LIST_DIR}/src/vtk_module_loader.cpp PROPERTY
+  SKIP_UNITY_BUILD_INCLUSION ON)
 set_property(SOURCE ${CMAKE_CURRENT_LIST_DIR}/src/vtk_module_loader.cpp APPEND PROPERTY
   COMPILE_DEFINITIONS
     FABRICA_IO_VTK_FILE="$<TARGET_FILE_NAME:fabrica_io_vtk>"

@@ -10,6 +10,7 @@
 #endif
 #include <memory>
 #include <numeric>
+#include <type_traits>
 #include <utility>
 
 #include "fabrica/core/mesh.hpp"
@@ -60,11 +61,14 @@ inline std::int32_t count_below(const std::int32_t* p, std::int32_t n, std::int3
 /// The other vertices of one face already counted for a vertex v: a face
 /// counts once per edge even when it is degenerate (it then lists v, or a
 /// neighbour, twice; its entries in v's list are adjacent). Faces with three
-/// distinct corners skip the check.
+/// distinct corners skip the check, and so does every face (kCheck false)
+/// when the mesh has no degenerate face.
+template <bool kCheck>
 class FaceNeighbors {
  public:
   /// The next entry of v's list: face f with the other corners o.
   void entry(std::int32_t f, const std::array<std::int32_t, 2>& o, std::int32_t v) {
+    if constexpr (!kCheck) return;
     if (f != face_) {
       face_ = f;
       n_ = 0;
@@ -72,7 +76,7 @@ class FaceNeighbors {
     check_ = o[0] == o[1] || o[0] == v || o[1] == v;
   }
   bool first_time(std::int32_t w) {
-    if (!check_) return true;
+    if (!kCheck || !check_) return true;
     for (int i = 0; i < n_; ++i)
       if (seen_[i] == w) return false;
     seen_[n_++] = w;
@@ -95,8 +99,11 @@ Topology::Topology(const TriangleMesh& mesh) {
 
   // Vertex -> faces, by counting sort (faces come out in increasing order).
   std::vector<std::int32_t> counts(nv, 0);
-  for (const Face& f : mesh.faces)
+  bool degenerate = false;
+  for (const Face& f : mesh.faces) {
     for (int k = 0; k < 3; ++k) ++counts[f[k]];
+    degenerate |= (f[0] == f[1]) | (f[1] == f[2]) | (f[0] == f[2]);
+  }
   vertex_face_offsets_ = offsets_from_counts(counts);
   vertex_faces_.resize(vertex_face_offsets_.back());
   vertex_face_corners_.resize(vertex_face_offsets_.back());
@@ -126,55 +133,61 @@ Topology::Topology(const TriangleMesh& mesh) {
   // Per vertex: neighbours, higher neighbours, faces on the edges to them.
   const std::unique_ptr<std::array<std::int32_t, 3>[]> sizes(new std::array<std::int32_t, 3>[nv]);
   boundary_vertex_.resize(nv);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, kGrain), [&](const auto& r) {
-    for (std::size_t v = r.begin(); v < r.end(); ++v) {
-      const auto begin = static_cast<std::size_t>(vertex_face_offsets_[v]);
-      const auto end = static_cast<std::size_t>(vertex_face_offsets_[v + 1]);
-      std::int32_t* const first = candidates.get() + 2 * begin;
-      std::int32_t* const shared = sharing.get() + 2 * begin;
-      const auto vi = static_cast<std::int32_t>(v);
-      std::int32_t n = 0, upper = 0;
-      FaceNeighbors seen;
-      // Insertion into a sorted list without repeats: each neighbour of an
-      // interior vertex comes twice (once per face of its edge), and the
-      // list is a handful long.
-      auto insert = [&](std::int32_t w) {
-        if (w == vi || !seen.first_time(w)) return;
-        std::int32_t j = n;
-        while (j > 0 && first[j - 1] > w) --j;
-        if (j > 0 && first[j - 1] == w) {
-          ++shared[j - 1];
-          return;
+  const auto neighbor_pass = [&](auto check) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, kGrain), [&](const auto& r) {
+      for (std::size_t v = r.begin(); v < r.end(); ++v) {
+        const auto begin = static_cast<std::size_t>(vertex_face_offsets_[v]);
+        const auto end = static_cast<std::size_t>(vertex_face_offsets_[v + 1]);
+        std::int32_t* const first = candidates.get() + 2 * begin;
+        std::int32_t* const shared = sharing.get() + 2 * begin;
+        const auto vi = static_cast<std::int32_t>(v);
+        std::int32_t n = 0, upper = 0;
+        FaceNeighbors<decltype(check)::value> seen;
+        // Insertion into a sorted list without repeats: each neighbour of an
+        // interior vertex comes twice (once per face of its edge), and the
+        // list is a handful long.
+        auto insert = [&](std::int32_t w) {
+          if (w == vi || !seen.first_time(w)) return;
+          std::int32_t j = n;
+          while (j > 0 && first[j - 1] > w) --j;
+          if (j > 0 && first[j - 1] == w) {
+            ++shared[j - 1];
+            return;
+          }
+          for (std::int32_t m = n; m > j; --m) {
+            first[m] = first[m - 1];
+            shared[m] = shared[m - 1];
+          }
+          first[j] = w;
+          shared[j] = 1;
+          ++n;
+          upper += w > vi;
+        };
+        for (std::size_t i = begin; i < end; ++i) {
+          const Face& f = mesh.faces[static_cast<std::size_t>(vertex_faces_[i])];
+          const int c = vertex_face_corners_[i];
+          const std::array<std::int32_t, 2> o{f[c == 2 ? 0 : c + 1], f[c == 0 ? 2 : c - 1]};
+          vertex_face_opposite_[i] = o;
+          seen.entry(vertex_faces_[i], o, vi);
+          insert(o[0]);
+          insert(o[1]);
         }
-        for (std::int32_t m = n; m > j; --m) {
-          first[m] = first[m - 1];
-          shared[m] = shared[m - 1];
+        // A boundary edge has one face (seen from either end).
+        std::int32_t upper_faces = 0;
+        bool boundary = false;
+        for (std::int32_t j = 0; j < n; ++j) {
+          boundary |= shared[j] == 1;
+          if (j >= n - upper) upper_faces += shared[j];
         }
-        first[j] = w;
-        shared[j] = 1;
-        ++n;
-        upper += w > vi;
-      };
-      for (std::size_t i = begin; i < end; ++i) {
-        const Face& f = mesh.faces[static_cast<std::size_t>(vertex_faces_[i])];
-        const int c = vertex_face_corners_[i];
-        const std::array<std::int32_t, 2> o{f[c == 2 ? 0 : c + 1], f[c == 0 ? 2 : c - 1]};
-        vertex_face_opposite_[i] = o;
-        seen.entry(vertex_faces_[i], o, vi);
-        insert(o[0]);
-        insert(o[1]);
+        sizes[v] = {n, upper, upper_faces};
+        boundary_vertex_[v] = boundary ? 1 : 0;
       }
-      // A boundary edge has one face (seen from either end).
-      std::int32_t upper_faces = 0;
-      bool boundary = false;
-      for (std::int32_t j = 0; j < n; ++j) {
-        boundary |= shared[j] == 1;
-        if (j >= n - upper) upper_faces += shared[j];
-      }
-      sizes[v] = {n, upper, upper_faces};
-      boundary_vertex_[v] = boundary ? 1 : 0;
-    }
-  });
+    });
+  };
+  if (degenerate)
+    neighbor_pass(std::true_type{});
+  else
+    neighbor_pass(std::false_type{});
   vertex_neighbor_offsets_.resize(nv + 1);
   vertex_edge_offsets_.resize(nv + 1);
   std::vector<std::int32_t> edge_face_base(nv + 1);
@@ -196,50 +209,56 @@ Topology::Topology(const TriangleMesh& mesh) {
   // the edges it is the lower end of with their faces, and the face edges
   // it is the lower end of (or both ends: a degenerate face's edge, -1):
   // every output is written once, by one vertex.
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, kGrain), [&](const auto& r) {
-    for (std::size_t v = r.begin(); v < r.end(); ++v) {
-      const auto vi = static_cast<std::int32_t>(v);
-      const auto begin = static_cast<std::size_t>(vertex_face_offsets_[v]);
-      const std::int32_t* const nb = candidates.get() + 2 * begin;
-      const auto count = static_cast<std::size_t>(sizes[v][0]);
-      const std::int32_t upper = sizes[v][1];
-      const std::size_t lower = count - static_cast<std::size_t>(upper);
-      std::copy(nb, nb + count, vertex_neighbors_.data() + vertex_neighbor_offsets_[v]);
-      const std::int32_t first_edge = vertex_edge_offsets_[v];
-      // The face count of each higher neighbour's slot becomes the write
-      // cursor into that edge's faces.
-      std::int32_t* const cursor = sharing.get() + 2 * begin + lower;
-      std::int32_t at = edge_face_base[v];
-      for (std::int32_t i = 0; i < upper; ++i) {
-        const auto e = static_cast<std::size_t>(first_edge + i);
-        edges_[e] = {vi, nb[lower + static_cast<std::size_t>(i)]};
-        edge_face_offsets_[e] = at;
-        at += std::exchange(cursor[i], at);
-      }
-      FaceNeighbors seen;
-      auto edge_to = [&](std::int32_t w, std::array<std::int32_t, 3>& fe, int k, std::int32_t f) {
-        if (w == vi) {
-          fe[k] = -1;
-        } else if (w > vi) {
-          const std::int32_t rank = count_below(nb + lower, upper, w);
-          fe[k] = first_edge + rank;
-          if (seen.first_time(w)) edge_faces_[static_cast<std::size_t>(cursor[rank]++)] = f;
+  const auto edge_pass = [&](auto check) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, kGrain), [&](const auto& r) {
+      for (std::size_t v = r.begin(); v < r.end(); ++v) {
+        const auto vi = static_cast<std::int32_t>(v);
+        const auto begin = static_cast<std::size_t>(vertex_face_offsets_[v]);
+        const std::int32_t* const nb = candidates.get() + 2 * begin;
+        const auto count = static_cast<std::size_t>(sizes[v][0]);
+        const std::int32_t upper = sizes[v][1];
+        const std::size_t lower = count - static_cast<std::size_t>(upper);
+        std::copy(nb, nb + count, vertex_neighbors_.data() + vertex_neighbor_offsets_[v]);
+        const std::int32_t first_edge = vertex_edge_offsets_[v];
+        // The face count of each higher neighbour's slot becomes the write
+        // cursor into that edge's faces.
+        std::int32_t* const cursor = sharing.get() + 2 * begin + lower;
+        std::int32_t at = edge_face_base[v];
+        for (std::int32_t i = 0; i < upper; ++i) {
+          const auto e = static_cast<std::size_t>(first_edge + i);
+          edges_[e] = {vi, nb[lower + static_cast<std::size_t>(i)]};
+          edge_face_offsets_[e] = at;
+          at += std::exchange(cursor[i], at);
         }
-      };
-      const auto end = static_cast<std::size_t>(vertex_face_offsets_[v + 1]);
-      for (std::size_t j = begin; j < end; ++j) {
-        const std::int32_t f = vertex_faces_[j];
-        const auto& o = vertex_face_opposite_[j];
-        seen.entry(f, o, vi);
-        const int c = vertex_face_corners_[j];
-        // The edges opposite the two other corners k touch v; their other
-        // end is the corner that is neither c nor k.
-        auto& fe = face_edges_[static_cast<std::size_t>(f)];
-        edge_to(o[1], fe, c == 2 ? 0 : c + 1, f);
-        edge_to(o[0], fe, c == 0 ? 2 : c - 1, f);
+        FaceNeighbors<decltype(check)::value> seen;
+        auto edge_to = [&](std::int32_t w, std::array<std::int32_t, 3>& fe, int k, std::int32_t f) {
+          if (w == vi) {
+            fe[k] = -1;
+          } else if (w > vi) {
+            const std::int32_t rank = count_below(nb + lower, upper, w);
+            fe[k] = first_edge + rank;
+            if (seen.first_time(w)) edge_faces_[static_cast<std::size_t>(cursor[rank]++)] = f;
+          }
+        };
+        const auto end = static_cast<std::size_t>(vertex_face_offsets_[v + 1]);
+        for (std::size_t j = begin; j < end; ++j) {
+          const std::int32_t f = vertex_faces_[j];
+          const auto& o = vertex_face_opposite_[j];
+          seen.entry(f, o, vi);
+          const int c = vertex_face_corners_[j];
+          // The edges opposite the two other corners k touch v; their other
+          // end is the corner that is neither c nor k.
+          auto& fe = face_edges_[static_cast<std::size_t>(f)];
+          edge_to(o[1], fe, c == 2 ? 0 : c + 1, f);
+          edge_to(o[0], fe, c == 0 ? 2 : c - 1, f);
+        }
       }
-    }
-  });
+    });
+  };
+  if (degenerate)
+    edge_pass(std::true_type{});
+  else
+    edge_pass(std::false_type{});
 }
 
 std::int32_t Topology::face_neighbor(std::size_t f, int k) const {
