@@ -689,6 +689,24 @@ TEST(VtkModule, WithoutItOtherFormatsWorkAndVtpIsExitCode4) {
   EXPECT_NE(r.err.find(vtp.string()), std::string::npos) << describe(r);
 }
 
+// An installed layout (bin/fabrica, lib/fabrica/libfabrica_io_vtk.so)
+// anywhere: the module beside the executable's bin folder is the one loaded.
+TEST(VtkModule, FoundBesideTheExecutablesBinFolder) {
+  const fs::path dir = work_dir();
+  const fs::path exe = dir / "bin" / "fabrica";
+  const fs::path module =
+      (exe.parent_path() / FABRICA_E2E_BIN_TO_MODULE / "libfabrica_io_vtk.so").lexically_normal();
+  fs::create_directories(exe.parent_path());
+  fs::create_directories(module.parent_path());
+  fs::copy_file(FABRICA_EXE, exe);
+  fs::copy_file(FABRICA_E2E_VTK_MODULE, module);
+  const ScopedEnv debug("LD_DEBUG", "files");
+  const fs::path vtp = test::bundled_data() / "meshes/anatomy/vessels/vmtk_aorta-surface.vtp";
+  const Outcome r = run_program(exe.string(), {"info", vtp.string()}, std::chrono::seconds(60));
+  EXPECT_EQ(r.code, 0) << describe(r);
+  EXPECT_NE(r.err.find("file=" + module.string() + " "), std::string::npos) << describe(r);
+}
+
 TEST(VtkModule, WithItVtpIsRead) {
   const fs::path vtp = test::bundled_data() / "meshes/anatomy/vessels/vmtk_aorta-surface.vtp";
   const Outcome r = run_fabrica({"info", vtp.string()});
