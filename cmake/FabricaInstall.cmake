@@ -8,18 +8,6 @@ include(CMakePackageConfigHelpers)
 set(FABRICA_INSTALL_CMAKEDIR "${CMAKE_INSTALL_LIBDIR}/cmake/fabrica"
     CACHE STRING "Where fabricaConfig.cmake is installed, relative to the prefix")
 
-# The VTK modules fabrica_io links (the installed package finds them again).
-set(FABRICA_IO_VTK_COMPONENTS "")
-if(TARGET fabrica_io)
-  get_target_property(_fabrica_io_libs fabrica_io LINK_LIBRARIES)
-  foreach(lib IN LISTS _fabrica_io_libs)
-    if(lib MATCHES "^VTK::(.+)$")
-      list(APPEND FABRICA_IO_VTK_COMPONENTS ${CMAKE_MATCH_1})
-    endif()
-  endforeach()
-  list(REMOVE_DUPLICATES FABRICA_IO_VTK_COMPONENTS)
-endif()
-
 # component -> target; the component list is the libraries this build has.
 set(FABRICA_COMPONENTS "")
 foreach(component core io lines hatching render)
@@ -66,6 +54,16 @@ endforeach()
 
 if(NOT FABRICA_INSTALL)
   return()
+endif()
+
+# fabrica_io's VTK parts (core/io/vtk_module.cmake), loaded at run time from
+# <libdir>/fabrica by the program and by applications linking fabrica::io:
+# in both components.
+if(TARGET fabrica_io_vtk)
+  foreach(component fabrica_runtime fabrica_development)
+    install(TARGETS fabrica_io_vtk LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}/fabrica
+      COMPONENT ${component})
+  endforeach()
 endif()
 
 # The static libraries link fabrica::warnings privately (it carries compile

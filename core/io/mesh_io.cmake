@@ -1,6 +1,7 @@
 # Mesh file reading and writing (OBJ, PLY, STL, OFF, legacy VTK, GIfTI, MNI
-# .obj, FreeSurfer parsed here; VTP read through VTK, which stays private to
-# fabrica_io, when FABRICA_HAVE_VTK). GIfTI needs pugixml and zlib.
+# .obj, FreeSurfer parsed here; VTP read through VTK, in the module
+# libfabrica_io_vtk.so (vtk_module.cmake), when FABRICA_HAVE_VTK). GIfTI
+# needs pugixml and zlib.
 target_sources(fabrica_io PRIVATE
   ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io.cpp
   ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_obj.cpp
@@ -14,8 +15,3 @@ target_sources(fabrica_io PRIVATE
   ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_freesurfer.cpp
 )
 target_link_libraries(fabrica_io PRIVATE ZLIB::ZLIB pugixml::pugixml)
-if(FABRICA_HAVE_VTK)
-  target_sources(fabrica_io PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/src/mesh_io_vtk.cpp)
-  target_link_libraries(fabrica_io PRIVATE VTK::IOXML VTK::CommonDataModel VTK::CommonCore)
-  vtk_module_autoinit(TARGETS fabrica_io MODULES VTK::IOXML VTK::CommonDataModel VTK::CommonCore)
-endif()

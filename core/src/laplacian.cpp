@@ -54,7 +54,6 @@ Eigen::SparseMatrix<double> cotan_laplacian_matrix(const Surface& surface) {
   // summed in that same order.
   for (Eigen::Index v = 0; v < nv; ++v) {
     const auto nb = topo.vertex_neighbors(static_cast<std::size_t>(v));
-    const auto edges = topo.vertex_edges(static_cast<std::size_t>(v));
     double diag = 0.0;
     bool diag_done = false;
     for (std::size_t i = 0; i < nb.size(); ++i) {
@@ -62,8 +61,10 @@ Eigen::SparseMatrix<double> cotan_laplacian_matrix(const Surface& surface) {
         L.insert(v, v) = 0.0;
         diag_done = true;
       }
-      L.insert(nb[i], v) = w[edges[i]];
-      diag -= w[edges[i]];
+      const double wi =
+          w[static_cast<std::size_t>(topo.vertex_edge(static_cast<std::size_t>(v), i))];
+      L.insert(nb[i], v) = wi;
+      diag -= wi;
     }
     if (!diag_done) L.insert(v, v) = 0.0;
     L.coeffRef(v, v) = diag;
@@ -95,9 +96,9 @@ std::vector<double> CotanLaplacian::apply_weak(std::span<const double> x) const 
   detail::parallel_chunks(nv, 4096, [&](std::size_t begin, std::size_t end) {
     for (std::size_t v = begin; v < end; ++v) {
       const auto nb = topo.vertex_neighbors(v);
-      const auto edges = topo.vertex_edges(v);
       double s = 0.0;
-      for (std::size_t i = 0; i < nb.size(); ++i) s += weights_[edges[i]] * (x[nb[i]] - x[v]);
+      for (std::size_t i = 0; i < nb.size(); ++i)
+        s += weights_[static_cast<std::size_t>(topo.vertex_edge(v, i))] * (x[nb[i]] - x[v]);
       y[v] = s;
     }
   });

@@ -209,13 +209,7 @@ class CurveGeometry {
   }
 
   /// The edge joining vertices a and b, or -1.
-  std::int32_t find_edge(std::int32_t a, std::int32_t b) const {
-    const auto nb = topology_.vertex_neighbors(static_cast<std::size_t>(a));
-    const auto it = std::lower_bound(nb.begin(), nb.end(), b);
-    if (it == nb.end() || *it != b) return -1;
-    return topology_.vertex_edges(
-        static_cast<std::size_t>(a))[static_cast<std::size_t>(it - nb.begin())];
-  }
+  std::int32_t find_edge(std::int32_t a, std::int32_t b) const { return topology_.find_edge(a, b); }
 
   /// The unfolded fan of v, built on first use and cached.
   const Fan& fan(std::int32_t v) const {

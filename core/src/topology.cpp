@@ -10,6 +10,8 @@
 #endif
 #include <memory>
 #include <numeric>
+#include <type_traits>
+#include <utility>
 
 #include "fabrica/core/mesh.hpp"
 
@@ -56,6 +58,38 @@ inline std::int32_t count_below(const std::int32_t* p, std::int32_t n, std::int3
   return rank;
 }
 
+/// The other vertices of one face already counted for a vertex v: a face
+/// counts once per edge even when it is degenerate (it then lists v, or a
+/// neighbour, twice; its entries in v's list are adjacent). Faces with three
+/// distinct corners skip the check, and so does every face (kCheck false)
+/// when the mesh has no degenerate face.
+template <bool kCheck>
+class FaceNeighbors {
+ public:
+  /// The next entry of v's list: face f with the other corners o.
+  void entry(std::int32_t f, const std::array<std::int32_t, 2>& o, std::int32_t v) {
+    if constexpr (!kCheck) return;
+    if (f != face_) {
+      face_ = f;
+      n_ = 0;
+    }
+    check_ = o[0] == o[1] || o[0] == v || o[1] == v;
+  }
+  bool first_time(std::int32_t w) {
+    if (!kCheck || !check_) return true;
+    for (int i = 0; i < n_; ++i)
+      if (seen_[i] == w) return false;
+    seen_[n_++] = w;
+    return true;
+  }
+
+ private:
+  std::int32_t face_ = -1;
+  int n_ = 0;
+  bool check_ = false;
+  std::array<std::int32_t, 2> seen_{};
+};
+
 }  // namespace
 
 // docs/algorithms.md §1, "Adjacency".
@@ -65,8 +99,11 @@ Topology::Topology(const TriangleMesh& mesh) {
 
   // Vertex -> faces, by counting sort (faces come out in increasing order).
   std::vector<std::int32_t> counts(nv, 0);
-  for (const Face& f : mesh.faces)
+  bool degenerate = false;
+  for (const Face& f : mesh.faces) {
     for (int k = 0; k < 3; ++k) ++counts[f[k]];
+    degenerate |= (f[0] == f[1]) | (f[1] == f[2]) | (f[0] == f[2]);
+  }
   vertex_face_offsets_ = offsets_from_counts(counts);
   vertex_faces_.resize(vertex_face_offsets_.back());
   vertex_face_corners_.resize(vertex_face_offsets_.back());
@@ -84,127 +121,144 @@ Topology::Topology(const TriangleMesh& mesh) {
   // Vertex -> the two other corners of each incident face (read once here,
   // streamed afterwards), and sorted unique neighbours, each vertex's list
   // in a scratch segment of two slots per incident face (left
-  // uninitialised: the parallel pass touches it first).
+  // uninitialised: the parallel pass touches it first), with, slot by slot,
+  // how many faces share the edge to that neighbour.
   vertex_face_opposite_.resize(vertex_faces_.size());
+  const std::size_t slots = 2 * vertex_faces_.size();
   // (+ kRankPad: the rank count below reads eight entries at a time; what it
   // reads past a list is masked out.)
-  const std::unique_ptr<std::int32_t[]> candidates(
-      new std::int32_t[2 * vertex_faces_.size() + kRankPad]);
-  std::fill_n(candidates.get() + 2 * vertex_faces_.size(), kRankPad, 0);
-  std::vector<std::int32_t> neighbor_counts(nv), upper_counts(nv);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, kGrain), [&](const auto& r) {
-    for (std::size_t v = r.begin(); v < r.end(); ++v) {
-      const auto begin = static_cast<std::size_t>(vertex_face_offsets_[v]);
-      const auto end = static_cast<std::size_t>(vertex_face_offsets_[v + 1]);
-      std::int32_t* const first = candidates.get() + 2 * begin;
-      const auto vi = static_cast<std::int32_t>(v);
-      std::int32_t n = 0, upper = 0;
-      // Insertion into a sorted list without repeats: each neighbour of an
-      // interior vertex comes twice, and the list is a handful long.
-      auto insert = [&](std::int32_t w) {
-        if (w == vi) return;
-        std::int32_t j = n;
-        while (j > 0 && first[j - 1] > w) --j;
-        if (j > 0 && first[j - 1] == w) return;
-        for (std::int32_t m = n; m > j; --m) first[m] = first[m - 1];
-        first[j] = w;
-        ++n;
-        upper += w > vi;
-      };
-      for (std::size_t i = begin; i < end; ++i) {
-        const Face& f = mesh.faces[static_cast<std::size_t>(vertex_faces_[i])];
-        const int c = vertex_face_corners_[i];
-        const std::array<std::int32_t, 2> o{f[c == 2 ? 0 : c + 1], f[c == 0 ? 2 : c - 1]};
-        vertex_face_opposite_[i] = o;
-        insert(o[0]);
-        insert(o[1]);
+  const std::unique_ptr<std::int32_t[]> candidates(new std::int32_t[slots + kRankPad]);
+  std::fill_n(candidates.get() + slots, kRankPad, 0);
+  const std::unique_ptr<std::int32_t[]> sharing(new std::int32_t[slots]);
+  // Per vertex: neighbours, higher neighbours, faces on the edges to them.
+  const std::unique_ptr<std::array<std::int32_t, 3>[]> sizes(new std::array<std::int32_t, 3>[nv]);
+  boundary_vertex_.resize(nv);
+  const auto neighbor_pass = [&](auto check) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, kGrain), [&](const auto& r) {
+      for (std::size_t v = r.begin(); v < r.end(); ++v) {
+        const auto begin = static_cast<std::size_t>(vertex_face_offsets_[v]);
+        const auto end = static_cast<std::size_t>(vertex_face_offsets_[v + 1]);
+        std::int32_t* const first = candidates.get() + 2 * begin;
+        std::int32_t* const shared = sharing.get() + 2 * begin;
+        const auto vi = static_cast<std::int32_t>(v);
+        std::int32_t n = 0, upper = 0;
+        FaceNeighbors<decltype(check)::value> seen;
+        // Insertion into a sorted list without repeats: each neighbour of an
+        // interior vertex comes twice (once per face of its edge), and the
+        // list is a handful long.
+        auto insert = [&](std::int32_t w) {
+          if (w == vi || !seen.first_time(w)) return;
+          std::int32_t j = n;
+          while (j > 0 && first[j - 1] > w) --j;
+          if (j > 0 && first[j - 1] == w) {
+            ++shared[j - 1];
+            return;
+          }
+          for (std::int32_t m = n; m > j; --m) {
+            first[m] = first[m - 1];
+            shared[m] = shared[m - 1];
+          }
+          first[j] = w;
+          shared[j] = 1;
+          ++n;
+          upper += w > vi;
+        };
+        for (std::size_t i = begin; i < end; ++i) {
+          const Face& f = mesh.faces[static_cast<std::size_t>(vertex_faces_[i])];
+          const int c = vertex_face_corners_[i];
+          const std::array<std::int32_t, 2> o{f[c == 2 ? 0 : c + 1], f[c == 0 ? 2 : c - 1]};
+          vertex_face_opposite_[i] = o;
+          seen.entry(vertex_faces_[i], o, vi);
+          insert(o[0]);
+          insert(o[1]);
+        }
+        // A boundary edge has one face (seen from either end).
+        std::int32_t upper_faces = 0;
+        bool boundary = false;
+        for (std::int32_t j = 0; j < n; ++j) {
+          boundary |= shared[j] == 1;
+          if (j >= n - upper) upper_faces += shared[j];
+        }
+        sizes[v] = {n, upper, upper_faces};
+        boundary_vertex_[v] = boundary ? 1 : 0;
       }
-      neighbor_counts[v] = n;
-      upper_counts[v] = upper;
-    }
-  });
-  vertex_neighbor_offsets_ = offsets_from_counts(neighbor_counts);
-  const std::vector<std::int32_t> edge_offsets = offsets_from_counts(upper_counts);
-  vertex_neighbors_.resize(vertex_neighbor_offsets_.back());
-  vertex_edges_.resize(vertex_neighbor_offsets_.back());
-  edges_.resize(edge_offsets.back());
-  face_edges_.resize(nf);
-  // Edge e = (a, b), a < b, is numbered edge_offsets[a] + the rank of b among
-  // a's upper neighbours: the lower vertex numbers its edges without a search.
-  // Each vertex writes its own lists, the edge ids of its lower neighbours
-  // (one search in the lower neighbour's sorted list, still in `candidates`),
-  // and the face edges it is the lower end of (or both ends: a degenerate
-  // face's edge, -1), so every output is written once, by one vertex.
-  auto sorted_neighbors = [&](std::size_t v) {
-    return candidates.get() + 2 * static_cast<std::size_t>(vertex_face_offsets_[v]);
+    });
   };
-  // Rank of b among a's upper neighbours (a handful: a branch-free count).
-  auto upper_rank = [&](std::size_t a, std::int32_t b) {
-    const std::int32_t* const last = sorted_neighbors(a) + neighbor_counts[a];
-    return count_below(last - upper_counts[a], upper_counts[a], b);
-  };
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, kGrain), [&](const auto& r) {
-    for (std::size_t v = r.begin(); v < r.end(); ++v) {
-      const auto vi = static_cast<std::int32_t>(v);
-      const std::int32_t* const nb = sorted_neighbors(v);
-      const auto count = static_cast<std::size_t>(neighbor_counts[v]);
-      const auto out = static_cast<std::size_t>(vertex_neighbor_offsets_[v]);
-      std::copy(nb, nb + count, vertex_neighbors_.data() + out);
-      const std::size_t lower = count - static_cast<std::size_t>(upper_counts[v]);
-      for (std::size_t i = 0; i < lower; ++i)
-        vertex_edges_[out + i] = edge_offsets[static_cast<std::size_t>(nb[i])] +
-                                 upper_rank(static_cast<std::size_t>(nb[i]), vi);
-      const std::int32_t first_edge = edge_offsets[v];
-      for (std::size_t i = lower; i < count; ++i) {
-        const auto e = first_edge + static_cast<std::int32_t>(i - lower);
-        vertex_edges_[out + i] = e;
-        edges_[static_cast<std::size_t>(e)] = {vi, nb[i]};
-      }
-      const auto fs = vertex_faces(v);
-      const auto cs = vertex_face_corners(v);
-      const auto os = vertex_face_opposite(v);
-      for (std::size_t j = 0; j < fs.size(); ++j) {
-        const auto f = static_cast<std::size_t>(fs[j]);
-        const int c = cs[j];
-        // The edges opposite the two other corners k touch v; their other
-        // end is the corner that is neither c nor k.
-        const int k1 = c == 2 ? 0 : c + 1, k2 = c == 0 ? 2 : c - 1;
-        const auto w1 = os[j][1], w2 = os[j][0];
-        auto& fe = face_edges_[f];
-        if (w1 == vi)
-          fe[k1] = -1;
-        else if (w1 > vi)
-          fe[k1] = first_edge + upper_rank(v, w1);
-        if (w2 == vi)
-          fe[k2] = -1;
-        else if (w2 > vi)
-          fe[k2] = first_edge + upper_rank(v, w2);
-      }
-    }
-  });
-  std::vector<std::int32_t> edge_counts(edges_.size(), 0);
-  for (const auto& fe : face_edges_)
-    for (int k = 0; k < 3; ++k)
-      if (fe[k] >= 0 && (k == 0 || fe[k] != fe[0]) && (k < 2 || fe[k] != fe[1]))
-        ++edge_counts[fe[k]];
-  edge_face_offsets_ = offsets_from_counts(edge_counts);
-  edge_faces_.resize(edge_face_offsets_.back());
-  {
-    std::vector<std::int32_t> cursor(edge_face_offsets_.begin(), edge_face_offsets_.end() - 1);
-    for (std::size_t f = 0; f < nf; ++f) {
-      const auto& fe = face_edges_[f];
-      for (int k = 0; k < 3; ++k)
-        if (fe[k] >= 0 && (k == 0 || fe[k] != fe[0]) && (k < 2 || fe[k] != fe[1]))
-          edge_faces_[cursor[fe[k]]++] = static_cast<std::int32_t>(f);
-    }
+  if (degenerate)
+    neighbor_pass(std::true_type{});
+  else
+    neighbor_pass(std::false_type{});
+  vertex_neighbor_offsets_.resize(nv + 1);
+  vertex_edge_offsets_.resize(nv + 1);
+  std::vector<std::int32_t> edge_face_base(nv + 1);
+  vertex_neighbor_offsets_[0] = vertex_edge_offsets_[0] = edge_face_base[0] = 0;
+  for (std::size_t v = 0; v < nv; ++v) {
+    vertex_neighbor_offsets_[v + 1] = vertex_neighbor_offsets_[v] + sizes[v][0];
+    vertex_edge_offsets_[v + 1] = vertex_edge_offsets_[v] + sizes[v][1];
+    edge_face_base[v + 1] = edge_face_base[v] + sizes[v][2];
   }
-
-  boundary_vertex_.assign(nv, 0);
-  for (std::size_t e = 0; e < edges_.size(); ++e)
-    if (edge_counts[e] == 1) {
-      boundary_vertex_[edges_[e][0]] = 1;
-      boundary_vertex_[edges_[e][1]] = 1;
-    }
+  vertex_neighbors_.resize(vertex_neighbor_offsets_.back());
+  edges_.resize(vertex_edge_offsets_.back());
+  edge_face_offsets_.resize(edges_.size() + 1);
+  edge_face_offsets_.back() = edge_face_base.back();
+  edge_faces_.resize(edge_face_base.back());
+  face_edges_.resize(nf);
+  // Edge e = (a, b), a < b, is numbered vertex_edge_offsets_[a] + the rank
+  // of b among a's higher neighbours, and its faces are those of a that hold
+  // b (in a's increasing face order). So each vertex writes its own lists,
+  // the edges it is the lower end of with their faces, and the face edges
+  // it is the lower end of (or both ends: a degenerate face's edge, -1):
+  // every output is written once, by one vertex.
+  const auto edge_pass = [&](auto check) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, kGrain), [&](const auto& r) {
+      for (std::size_t v = r.begin(); v < r.end(); ++v) {
+        const auto vi = static_cast<std::int32_t>(v);
+        const auto begin = static_cast<std::size_t>(vertex_face_offsets_[v]);
+        const std::int32_t* const nb = candidates.get() + 2 * begin;
+        const auto count = static_cast<std::size_t>(sizes[v][0]);
+        const std::int32_t upper = sizes[v][1];
+        const std::size_t lower = count - static_cast<std::size_t>(upper);
+        std::copy(nb, nb + count, vertex_neighbors_.data() + vertex_neighbor_offsets_[v]);
+        const std::int32_t first_edge = vertex_edge_offsets_[v];
+        // The face count of each higher neighbour's slot becomes the write
+        // cursor into that edge's faces.
+        std::int32_t* const cursor = sharing.get() + 2 * begin + lower;
+        std::int32_t at = edge_face_base[v];
+        for (std::int32_t i = 0; i < upper; ++i) {
+          const auto e = static_cast<std::size_t>(first_edge + i);
+          edges_[e] = {vi, nb[lower + static_cast<std::size_t>(i)]};
+          edge_face_offsets_[e] = at;
+          at += std::exchange(cursor[i], at);
+        }
+        FaceNeighbors<decltype(check)::value> seen;
+        auto edge_to = [&](std::int32_t w, std::array<std::int32_t, 3>& fe, int k, std::int32_t f) {
+          if (w == vi) {
+            fe[k] = -1;
+          } else if (w > vi) {
+            const std::int32_t rank = count_below(nb + lower, upper, w);
+            fe[k] = first_edge + rank;
+            if (seen.first_time(w)) edge_faces_[static_cast<std::size_t>(cursor[rank]++)] = f;
+          }
+        };
+        const auto end = static_cast<std::size_t>(vertex_face_offsets_[v + 1]);
+        for (std::size_t j = begin; j < end; ++j) {
+          const std::int32_t f = vertex_faces_[j];
+          const auto& o = vertex_face_opposite_[j];
+          seen.entry(f, o, vi);
+          const int c = vertex_face_corners_[j];
+          // The edges opposite the two other corners k touch v; their other
+          // end is the corner that is neither c nor k.
+          auto& fe = face_edges_[static_cast<std::size_t>(f)];
+          edge_to(o[1], fe, c == 2 ? 0 : c + 1, f);
+          edge_to(o[0], fe, c == 0 ? 2 : c - 1, f);
+        }
+      }
+    });
+  };
+  if (degenerate)
+    edge_pass(std::true_type{});
+  else
+    edge_pass(std::false_type{});
 }
 
 std::int32_t Topology::face_neighbor(std::size_t f, int k) const {

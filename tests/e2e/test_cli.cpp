@@ -21,12 +21,15 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <pugixml.hpp>
 #include <regex>
 #include <set>
@@ -632,6 +635,86 @@ TEST(Outputs, InterruptedWriteLeavesNoTemporary) {
 }
 
 // ------------------------------------------------------------ info
+
+// ============================================================ the VTK module
+// fabrica_io loads its VTK parts (.vtp, extraction, smoothing) from
+// libfabrica_io_vtk.so on first use (core/io/vtk_module.cmake).
+#ifdef FABRICA_E2E_HAVE_VTK_MODULE
+
+/// Sets an environment variable (inherited by run_fabrica) for one scope.
+class ScopedEnv {
+ public:
+  ScopedEnv(const char* name, const std::string& value) : name_(name) {
+    if (const char* old = std::getenv(name)) old_ = old;
+    ::setenv(name, value.c_str(), 1);
+  }
+  ~ScopedEnv() {
+    if (old_)
+      ::setenv(name_, old_->c_str(), 1);
+    else
+      ::unsetenv(name_);
+  }
+  ScopedEnv(const ScopedEnv&) = delete;
+  ScopedEnv& operator=(const ScopedEnv&) = delete;
+
+ private:
+  const char* name_;
+  std::optional<std::string> old_;
+};
+
+TEST(VtkModule, TheProgramDoesNotLinkVtk) {
+  FILE* pipe = ::popen(("ldd '" + std::string(FABRICA_EXE) + "' 2>/dev/null").c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  std::string libs;
+  std::array<char, 512> buf{};
+  while (std::fgets(buf.data(), static_cast<int>(buf.size()), pipe) != nullptr) libs += buf.data();
+  ::pclose(pipe);
+  if (libs.find("libc.so") == std::string::npos) GTEST_SKIP() << "no usable ldd";
+  EXPECT_EQ(libs.find("libvtk"), std::string::npos) << libs;
+}
+
+TEST(VtkModule, WithoutItOtherFormatsWorkAndVtpIsExitCode4) {
+  const fs::path dir = work_dir();
+  const ScopedEnv missing("FABRICA_IO_VTK_MODULE", (dir / "libfabrica_io_vtk.so").string());
+  const Outcome off = run_fabrica({"info", aneurysm().string(), "-o", (dir / "a.ply").string()});
+  ASSERT_EQ(off.code, 0) << describe(off);
+  const Outcome ply = run_fabrica(mesh_command_args("lines", dir / "a.ply", dir / "a.svg"));
+  EXPECT_EQ(ply.code, 0) << describe(ply);
+  EXPECT_TRUE(fs::exists(dir / "a.svg"));
+  const fs::path vtp = test::bundled_data() / "meshes/anatomy/vessels/vmtk_aorta-surface.vtp";
+  const Outcome r = run_fabrica({"info", vtp.string()});
+  EXPECT_EQ(r.code, 4) << describe(r);
+  EXPECT_TRUE(one_line(r.err)) << describe(r);
+  EXPECT_NE(r.err.find("libfabrica_io_vtk.so was not found"), std::string::npos) << describe(r);
+  EXPECT_NE(r.err.find(vtp.string()), std::string::npos) << describe(r);
+}
+
+// An installed layout (bin/fabrica, lib/fabrica/libfabrica_io_vtk.so)
+// anywhere: the module beside the executable's bin folder is the one loaded.
+TEST(VtkModule, FoundBesideTheExecutablesBinFolder) {
+  const fs::path dir = work_dir();
+  const fs::path exe = dir / "bin" / "fabrica";
+  const fs::path module =
+      (exe.parent_path() / FABRICA_E2E_BIN_TO_MODULE / "libfabrica_io_vtk.so").lexically_normal();
+  fs::create_directories(exe.parent_path());
+  fs::create_directories(module.parent_path());
+  fs::copy_file(FABRICA_EXE, exe);
+  fs::copy_file(FABRICA_E2E_VTK_MODULE, module);
+  const ScopedEnv debug("LD_DEBUG", "files");
+  const fs::path vtp = test::bundled_data() / "meshes/anatomy/vessels/vmtk_aorta-surface.vtp";
+  const Outcome r = run_program(exe.string(), {"info", vtp.string()}, std::chrono::seconds(60));
+  EXPECT_EQ(r.code, 0) << describe(r);
+  EXPECT_NE(r.err.find("file=" + module.string() + " "), std::string::npos) << describe(r);
+}
+
+TEST(VtkModule, WithItVtpIsRead) {
+  const fs::path vtp = test::bundled_data() / "meshes/anatomy/vessels/vmtk_aorta-surface.vtp";
+  const Outcome r = run_fabrica({"info", vtp.string()});
+  EXPECT_EQ(r.code, 0) << describe(r);
+  EXPECT_NE(r.out.find("format          vtp"), std::string::npos) << describe(r);
+}
+
+#endif
 
 TEST(Info, JsonReportsTheAneurysm) {
   if (!has_command("info")) GTEST_SKIP() << "no info command in this build";

@@ -30,6 +30,7 @@
 #include "fabrica/core/error.hpp"
 #include "fabrica/io/label_volume.hpp"
 #include "label_volume_stats.hpp"
+#include "vtk_module.hpp"
 
 namespace fabrica::io {
 namespace {
@@ -299,7 +300,7 @@ void check_options(const ExtractOptions& options) {
 
 }  // namespace
 
-void smooth_surface(TriangleMesh& mesh, int iterations, double passband) {
+void detail::smooth_surface_with_vtk(TriangleMesh& mesh, int iterations, double passband) {
   ExtractOptions check;
   check.smoothing_iterations = iterations;
   check.smoothing_passband = passband;
@@ -330,8 +331,8 @@ void smooth_surface(TriangleMesh& mesh, int iterations, double passband) {
   }
 }
 
-std::vector<ExtractedSurface> extract_surfaces(const LabelVolume& volume,
-                                               const ExtractOptions& options) {
+std::vector<ExtractedSurface> detail::extract_surfaces_with_vtk(const LabelVolume& volume,
+                                                                const ExtractOptions& options) {
   check_options(options);
   const std::string what = "volume '" + volume.path + "'";
   const std::size_t voxels = volume.geometry.voxel_count();

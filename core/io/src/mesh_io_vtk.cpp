@@ -33,6 +33,7 @@
 #include "fabrica/core/input_file.hpp"
 #include "inflate.hpp"
 #include "mesh_io_internal.hpp"
+#include "vtk_module.hpp"
 
 namespace fabrica::io::detail {
 
@@ -697,8 +698,8 @@ void check_vtp_declarations(std::string_view data, const std::string& name) {
   VtpChecker(data, name).run();
 }
 
-void read_vtp(const std::filesystem::path& path, const std::string& name,
-              const ReadOptions& options, LoadedMesh& out) {
+void read_vtp_with_vtk(const std::filesystem::path& path, const std::string& name,
+                       const ReadOptions& options, LoadedMesh& out) {
   check_vtp_declarations(read_input_file(path, name), name);
   MeshFileInfo& info = out.info;
   info.format = "vtp";

@@ -222,8 +222,9 @@ ValidationReport validate_mesh(const TriangleMesh& mesh, const ValidateOptions& 
     const auto vf = topo.vertex_faces(v);
     detail::vertex_fans(topo, v, fan_of_entry);
     boundary_at_v.clear();
-    for (auto e : topo.vertex_edges(v)) {
-      const auto ef = topo.edge_faces(e);
+    for (std::size_t i = 0; i < topo.vertex_neighbors(v).size(); ++i) {
+      const std::int32_t e = topo.vertex_edge(v, i);
+      const auto ef = topo.edge_faces(static_cast<std::size_t>(e));
       if (ef.size() != 1) continue;
       const auto it = std::lower_bound(vf.begin(), vf.end(), ef[0]);
       boundary_at_v.emplace_back(fan_of_entry[it - vf.begin()], e);

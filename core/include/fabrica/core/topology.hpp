@@ -85,10 +85,39 @@ class Topology {
     return {vertex_neighbors_.data() + vertex_neighbor_offsets_[v],
             vertex_neighbors_.data() + vertex_neighbor_offsets_[v + 1]};
   }
-  /// Edge index of each entry of vertex_neighbors(v), same order.
-  std::span<const std::int32_t> vertex_edges(std::size_t v) const {
-    return {vertex_edges_.data() + vertex_neighbor_offsets_[v],
-            vertex_edges_.data() + vertex_neighbor_offsets_[v + 1]};
+  /// Edge index of entry i of vertex_neighbors(v). The edges to v's higher
+  /// neighbours are numbered consecutively from v's first edge; the edge to
+  /// a lower neighbour a is found among a's higher neighbours.
+  std::int32_t vertex_edge(std::size_t v, std::size_t i) const {
+    const auto begin = static_cast<std::size_t>(vertex_neighbor_offsets_[v]);
+    const auto upper =
+        static_cast<std::size_t>(vertex_edge_offsets_[v + 1] - vertex_edge_offsets_[v]);
+    const std::size_t lower =
+        static_cast<std::size_t>(vertex_neighbor_offsets_[v + 1]) - begin - upper;
+    if (i >= lower) return vertex_edge_offsets_[v] + static_cast<std::int32_t>(i - lower);
+    const auto a = static_cast<std::size_t>(vertex_neighbors_[begin + i]);
+    return vertex_edge_offsets_[a] + upper_rank(a, static_cast<std::int32_t>(v));
+  }
+  /// The edge joining vertices a and b, or -1 when there is none (or a == b).
+  std::int32_t find_edge(std::int32_t a, std::int32_t b) const {
+    if (a == b) return -1;
+    const auto lo = static_cast<std::size_t>(a < b ? a : b);
+    const std::int32_t hi = a < b ? b : a;
+    const std::int32_t r = upper_rank(lo, hi);
+    const auto up = upper_neighbors(lo);
+    if (static_cast<std::size_t>(r) == up.size() || up[static_cast<std::size_t>(r)] != hi)
+      return -1;
+    return vertex_edge_offsets_[lo] + r;
+  }
+  /// The edges whose lower vertex is v: vertex_edge_begin(v) + i joins v and
+  /// the i-th of v's neighbours above v.
+  std::int32_t vertex_edge_begin(std::size_t v) const { return vertex_edge_offsets_[v]; }
+  /// v's neighbours above v (the tail of vertex_neighbors(v)), increasing.
+  std::span<const std::int32_t> upper_neighbors(std::size_t v) const {
+    const auto end = static_cast<std::size_t>(vertex_neighbor_offsets_[v + 1]);
+    const auto upper =
+        static_cast<std::size_t>(vertex_edge_offsets_[v + 1] - vertex_edge_offsets_[v]);
+    return {vertex_neighbors_.data() + (end - upper), vertex_neighbors_.data() + end};
   }
 
   /// Undirected edge e as (lower vertex, higher vertex). Edges are numbered in
@@ -116,18 +145,27 @@ class Topology {
   bool is_isolated_vertex(std::size_t v) const { return vertex_faces(v).empty(); }
 
  private:
+  /// How many of v's higher neighbours are below b (a handful: a plain count).
+  std::int32_t upper_rank(std::size_t v, std::int32_t b) const {
+    std::int32_t r = 0;
+    for (const std::int32_t w : upper_neighbors(v)) r += w < b;
+    return r;
+  }
+
   // Arrays that the constructor fills completely are not zeroed first.
   std::vector<std::int32_t> vertex_face_offsets_;
   detail::FilledVector<std::int32_t> vertex_faces_;
   detail::FilledVector<std::uint8_t> vertex_face_corners_;
   detail::FilledVector<std::array<std::int32_t, 2>> vertex_face_opposite_;
   std::vector<std::int32_t> vertex_neighbor_offsets_;
-  detail::FilledVector<std::int32_t> vertex_neighbors_, vertex_edges_;
+  detail::FilledVector<std::int32_t> vertex_neighbors_;
+  // First edge of each vertex (edges numbered by lower vertex), size nv + 1.
+  std::vector<std::int32_t> vertex_edge_offsets_;
   detail::FilledVector<std::array<std::int32_t, 2>> edges_;
-  std::vector<std::int32_t> edge_face_offsets_;
+  detail::FilledVector<std::int32_t> edge_face_offsets_;
   detail::FilledVector<std::int32_t> edge_faces_;
   detail::FilledVector<std::array<std::int32_t, 3>> face_edges_;
-  std::vector<std::uint8_t> boundary_vertex_;
+  detail::FilledVector<std::uint8_t> boundary_vertex_;
 };
 
 }  // namespace fabrica
