@@ -1,5 +1,6 @@
 #include "fabrica/lines/precompute.hpp"
 
+#include <tbb/parallel_invoke.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -14,6 +15,19 @@
 #include "zero_crossing_internal.hpp"
 
 namespace fabrica {
+
+namespace {
+
+// std::call_once with `fn` run isolated: a thread that waits inside for its
+// parallel loops takes no outer task, which could ask for the same part
+// again while its once flag (or lock) is held: the parts are built lazily
+// from tasks that run concurrently (LineExtractor::extract).
+template <class Fn>
+void call_once_isolated(std::once_flag& flag, Fn&& fn) {
+  std::call_once(flag, [&] { tbb::this_task_arena::isolate(fn); });
+}
+
+}  // namespace
 
 struct LinePrecompute::Cache {
   std::once_flag k1_once, ridge_once, demarcating_once, gradient_once, laplacian_once, ring_once;
@@ -39,7 +53,7 @@ LinePrecompute::LinePrecompute(const Surface& surface)
 LinePrecompute::~LinePrecompute() = default;
 
 const std::vector<double>& LinePrecompute::abs_k1() const {
-  std::call_once(cache_->k1_once, [&] {
+  call_once_isolated(cache_->k1_once, [&] {
     const auto& curv = surface_->curvature();
     cache_->abs_k1.resize(curv.k1.size());
     for (std::size_t i = 0; i < curv.k1.size(); ++i) cache_->abs_k1[i] = std::abs(curv.k1[i]);
@@ -48,7 +62,7 @@ const std::vector<double>& LinePrecompute::abs_k1() const {
 }
 
 const LinePrecompute::CornerRing& LinePrecompute::corner_ring() const {
-  std::call_once(cache_->ring_once, [&] {
+  call_once_isolated(cache_->ring_once, [&] {
     // A copy of Topology::vertex_face_opposite with its offsets.
     const Topology& topo = surface_->topology();
     const std::size_t nv = surface_->vertex_count();
@@ -317,9 +331,10 @@ inline Vec3 rotate_tangent(const Vec3& x, const Vec3& from, const Vec3& to) {
 }  // namespace
 
 const std::vector<LineSegment>& LinePrecompute::raw_ridges() const {
-  std::call_once(cache_->ridge_once, [&] {
-    compute_ridges(*surface_, abs_k1(), true, cache_->ridges);
-    compute_ridges(*surface_, abs_k1(), false, cache_->valleys);
+  call_once_isolated(cache_->ridge_once, [&] {
+    const auto& k1 = abs_k1();
+    tbb::parallel_invoke([&] { compute_ridges(*surface_, k1, true, cache_->ridges); },
+                         [&] { compute_ridges(*surface_, k1, false, cache_->valleys); });
   });
   return cache_->ridges;
 }
@@ -345,7 +360,7 @@ std::vector<LinePrecompute::RawKey> raw_keys(const Surface& s,
 }  // namespace
 
 const std::vector<LinePrecompute::RawKey>& LinePrecompute::raw_ridge_keys() const {
-  std::call_once(cache_->ridge_keys_once, [&] {
+  call_once_isolated(cache_->ridge_keys_once, [&] {
     cache_->ridge_keys = raw_keys(*surface_, raw_ridges());
     cache_->valley_keys = raw_keys(*surface_, raw_valleys());
   });
@@ -358,8 +373,8 @@ const std::vector<LinePrecompute::RawKey>& LinePrecompute::raw_valley_keys() con
 }
 
 const std::vector<LinePrecompute::RawKey>& LinePrecompute::raw_demarcating_keys() const {
-  std::call_once(cache_->demarcating_keys_once,
-                 [&] { cache_->demarcating_keys = raw_keys(*surface_, raw_demarcating()); });
+  call_once_isolated(cache_->demarcating_keys_once,
+                     [&] { cache_->demarcating_keys = raw_keys(*surface_, raw_demarcating()); });
   return cache_->demarcating_keys;
 }
 
@@ -409,7 +424,7 @@ std::shared_ptr<const LinePrecompute::RawAbove> LinePrecompute::raw_above(LineFa
 }
 
 const std::vector<LineSegment>& LinePrecompute::raw_demarcating() const {
-  std::call_once(cache_->demarcating_once, [&] {
+  call_once_isolated(cache_->demarcating_once, [&] {
     // Direction of maximal normal-curvature variation g = argmax C(u,u,u)
     // (Kolomenkin et al. 2008), by sampling 72 angles with parabolic
     // refinement; the scalar is the normal curvature along g.
@@ -469,7 +484,7 @@ const std::vector<LineSegment>& LinePrecompute::raw_demarcating() const {
 }
 
 const GradientOperator& LinePrecompute::gradient_operator() const {
-  std::call_once(cache_->gradient_once, [&] {
+  call_once_isolated(cache_->gradient_once, [&] {
     const Surface& s = *surface_;
     const Topology& topo = s.topology();
     const auto& pos = s.positions();
@@ -524,7 +539,7 @@ const GradientOperator& LinePrecompute::gradient_operator() const {
 }
 
 const std::vector<Vec3>& LinePrecompute::normal_laplacian() const {
-  std::call_once(cache_->laplacian_once, [&] {
+  call_once_isolated(cache_->laplacian_once, [&] {
     // (ΔN)_i = 1/A_i Σ_j w_ij (n_j - n_i), w_ij = (cot α + cot β)/2 (§1, §7).
     const Surface& s = *surface_;
     const Topology& topo = s.topology();
