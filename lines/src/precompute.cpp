@@ -135,30 +135,39 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
     const auto& pos = surface_->positions();
     const auto& curv = surface_->curvature();
     TangentRing& t = cache_->tangent_ring;
-    // Fan order first: the rank of each fan face and, for a fan with valid
-    // curvature, the offsets (d·e1, d·e2) of its ring in fan order, into
-    // `fx`/`fy` at the vertex's corner offset (one gather of the ring's
-    // positions; the layout pass only copies them). Left uninitialised:
-    // the layout pass reads them only for fans, whose entries this pass
-    // wrote.
+    // A fan also needs finite offsets (d·e1, d·e2) where the curvature is
+    // valid. They are when every position is finite and below 1e30 in
+    // magnitude and e1, e2 are finite with components at most 2 (|d·e| <
+    // 3 · 2e30 · 2, far below FLT_MAX; a non-finite e gives a non-finite
+    // product): then the fan pass needs no gather of the ring's positions,
+    // and the layout pass computes the offsets once, in place. Otherwise
+    // they are computed to check (a Surface rejects coordinates beyond
+    // 1e15, so only a frame that is not unit gets there).
+    bool positions_bounded = true;
+    for (const Vec3& p : pos)
+      positions_bounded &= std::abs(p[0]) < 1e30 && std::abs(p[1]) < 1e30 && std::abs(p[2]) < 1e30;
+    auto unit_frame = [&](std::size_t i) {
+      const Vec3 &e1 = curv.e1[i], &e2 = curv.e2[i];
+      return positions_bounded && std::abs(e1[0]) <= 2.0 && std::abs(e1[1]) <= 2.0 &&
+             std::abs(e1[2]) <= 2.0 && std::abs(e2[0]) <= 2.0 && std::abs(e2[1]) <= 2.0 &&
+             std::abs(e2[2]) <= 2.0;
+    };
+    // Fan order first: the rank of each fan face, into `order` at the
+    // vertex's corner offset (left uninitialised: the layout pass reads it
+    // only for fans, whose entries this pass wrote).
     const std::unique_ptr<std::uint8_t[]> order(new std::uint8_t[corners]);
-    const std::unique_ptr<float[]> fx(new float[corners]), fy(new float[corners]);
     t.fan.resize(nv);
     detail::parallel_range(nv, [&](std::size_t i) {
       const auto o = topo.vertex_face_opposite(i);
       const auto k = static_cast<std::int32_t>(o.size());
-      const std::size_t c = corner_at(i);
-      std::uint8_t* const rank = order.get() + c;
+      std::uint8_t* const rank = order.get() + corner_at(i);
       bool fan = fan_order(o.data(), k, rank);
-      if (fan && curv.valid[i]) {
+      if (fan && curv.valid[i] && !unit_frame(i)) {
         const Vec3 p = pos[i], e1 = curv.e1[i], e2 = curv.e2[i];
-        float* const x = fx.get() + c;
-        float* const y = fy.get() + c;
         for (std::int32_t j = 0; j < k && fan; ++j) {
           const Vec3 d = pos[static_cast<std::size_t>(o[rank[j]][0])] - p;
-          x[j] = static_cast<float>(d.dot(e1));
-          y[j] = static_cast<float>(d.dot(e2));
-          fan = std::isfinite(x[j]) && std::isfinite(y[j]);
+          fan = std::isfinite(static_cast<float>(d.dot(e1))) &&
+                std::isfinite(static_cast<float>(d.dot(e2)));
         }
       }
       t.fan[i] = fan;
@@ -182,6 +191,22 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
     std::fill(t.rank.begin() + total, t.rank.end(), 0);
     std::fill(t.x.begin() + total, t.x.end(), 0.0f);
     std::fill(t.y.begin() + total, t.y.end(), 0.0f);
+    // Ring entries [0, m) of vertex i: offsets (d·e1, d·e2) of vertex[j],
+    // d = p_vertex[j] - p_i, as float; zeros where the curvature is invalid.
+    auto offsets = [&](std::size_t i, std::size_t m, const std::int32_t* vertex, float* x,
+                       float* y) {
+      if (!curv.valid[i]) {
+        std::fill(x, x + m, 0.0f);
+        std::fill(y, y + m, 0.0f);
+        return;
+      }
+      const Vec3 p = pos[i], e1 = curv.e1[i], e2 = curv.e2[i];
+      for (std::size_t j = 0; j < m; ++j) {
+        const Vec3 d = pos[static_cast<std::size_t>(vertex[j])] - p;
+        x[j] = static_cast<float>(d.dot(e1));
+        y[j] = static_cast<float>(d.dot(e2));
+      }
+    };
     detail::parallel_range(nv, [&](std::size_t i) {
       const auto o = topo.vertex_face_opposite(i);
       const auto k = static_cast<std::int32_t>(o.size());
@@ -198,16 +223,10 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
         t.rank[n + static_cast<std::size_t>(k)] = 0;
         for (std::int32_t j = 0; j < k; ++j) vertex[j] = o[rank[j]][0];
         vertex[k] = o[rank[k - 1]][1];
-        if (!curv.valid[i]) {
-          std::fill(x, x + m, 0.0f);
-          std::fill(y, y + m, 0.0f);
-          return;
-        }
-        const std::size_t c = corner_at(i);
-        std::copy(fx.get() + c, fx.get() + c + k, x);
-        std::copy(fy.get() + c, fy.get() + c + k, y);
-        x[k] = fx[c];
-        y[k] = fy[c];
+        // (the last entry is n_0's offset again)
+        offsets(i, static_cast<std::size_t>(k), vertex, x, y);
+        x[k] = x[0];
+        y[k] = y[0];
         return;
       }
       std::fill(t.rank.data() + n, t.rank.data() + n + m, std::uint8_t{0});
@@ -215,17 +234,7 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
         vertex[2 * j] = o[j][0];
         vertex[2 * j + 1] = o[j][1];
       }
-      if (!curv.valid[i]) {
-        std::fill(x, x + m, 0.0f);
-        std::fill(y, y + m, 0.0f);
-        return;
-      }
-      const Vec3 p = pos[i], e1 = curv.e1[i], e2 = curv.e2[i];
-      for (std::size_t j = 0; j < m; ++j) {
-        const Vec3 d = pos[static_cast<std::size_t>(vertex[j])] - p;
-        x[j] = static_cast<float>(d.dot(e1));
-        y[j] = static_cast<float>(d.dot(e2));
-      }
+      offsets(i, m, vertex, x, y);
     });
   });
   cache_->tangent_ring_ready = true;
