@@ -9,6 +9,10 @@
 #include <memory>
 #include <mutex>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "fabrica/core/error.hpp"
 #include "fabrica/lines/zero_crossing.hpp"
 #include "parallel.hpp"
@@ -92,17 +96,35 @@ bool fan_order(const std::array<std::int32_t, 2>* o, std::int32_t k, std::uint8_
   if (k < 1 || k > 63) return false;
   std::uint8_t next[64];
   unsigned bad = 0;
-  for (std::int32_t f = 0; f < k; ++f) {
-    const std::int32_t want = o[f][1];
-    std::int32_t at = 0, count = 0;
-    for (std::int32_t g = 0; g < k; ++g) {
-      const std::int32_t m = o[g][0] == want;
-      at += m * g;
-      count += m;
+#if defined(__SSE2__)
+  if (k <= 8) {
+    // The first opposite corners in two 4-lane registers (-1 past k: no
+    // vertex), one compare per face.
+    alignas(16) std::int32_t first[8] = {-1, -1, -1, -1, -1, -1, -1, -1};
+    for (std::int32_t g = 0; g < k; ++g) first[g] = o[g][0];
+    const __m128i lo = _mm_load_si128(reinterpret_cast<const __m128i*>(first));
+    const __m128i hi = _mm_load_si128(reinterpret_cast<const __m128i*>(first + 4));
+    for (std::int32_t f = 0; f < k; ++f) {
+      const __m128i want = _mm_set1_epi32(o[f][1]);
+      const auto m =
+          static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(lo, want))) |
+                                _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(hi, want))) << 4);
+      bad |= unsigned(m == 0 || (m & (m - 1)) != 0);  // no face, or two
+      next[f] = static_cast<std::uint8_t>(__builtin_ctz(m | 0x100u));
     }
-    bad |= unsigned(count != 1);  // no face, or a corner that opens two
-    next[f] = static_cast<std::uint8_t>(at);
-  }
+  } else
+#endif
+    for (std::int32_t f = 0; f < k; ++f) {
+      const std::int32_t want = o[f][1];
+      std::int32_t at = 0, count = 0;
+      for (std::int32_t g = 0; g < k; ++g) {
+        const std::int32_t m = o[g][0] == want;
+        at += m * g;
+        count += m;
+      }
+      bad |= unsigned(count != 1);  // no face, or a corner that opens two
+      next[f] = static_cast<std::uint8_t>(at);
+    }
   if (bad) return false;
   std::uint64_t used = 0;
   std::int32_t f = 0;
