@@ -22,39 +22,16 @@
 #include "fabrica/io/repair.hpp"
 #include "fabrica/lines/extract.hpp"
 #include "fabrica/lines/precompute.hpp"
+#include "lines_test_meshes.hpp"
 #include "test_support.hpp"
 
 using namespace fabrica;
 
 namespace {
 
-// The bundled mesh `rel`, prepared for lines. With `degenerate`, five
-// vertices at one point joined by two zero-area faces come first: vertices
-// with invalid curvature, and vertex 2 with two faces that are no closed fan.
+using test::camera_towards;
 Surface load_mesh(const char* rel, bool degenerate) {
-  auto loaded = io::read_mesh(test::bundled_data() / rel);
-  io::prepare_for_lines(loaded.mesh);
-  TriangleMesh mesh = std::move(loaded.mesh);
-  if (degenerate) {
-    TriangleMesh m;
-    m.positions.assign(5, mesh.positions[0]);
-    m.positions.insert(m.positions.end(), mesh.positions.begin(), mesh.positions.end());
-    m.faces = {{0, 1, 2}, {2, 3, 4}};
-    for (Face f : mesh.faces) m.faces.push_back({f[0] + 5, f[1] + 5, f[2] + 5});
-    mesh = std::move(m);
-  }
-  return Surface(std::move(mesh));
-}
-
-Camera view_of(const Surface& surface, const Vec3& direction) {
-  const BoundingBox box = bounding_box(surface.positions());
-  Camera c;
-  c.center = box.center();
-  c.eye = c.center + direction.normalized() * 2.5 * box.diagonal();
-  c.up = Vec3::UnitY();
-  c.fov_deg = 30.0;
-  c.width = c.height = 512;
-  return c;
+  return test::load_for_lines(rel, degenerate);
 }
 
 template <class A, class B>
@@ -163,14 +140,21 @@ ReferenceRing reference_ring(const Surface& s) {
   return r;
 }
 
+// Every array of two tangent rings (LinePrecompute's or the reference) byte
+// for byte.
+template <class A, class B>
+void expect_same_ring(const A& a, const B& b) {
+  EXPECT_TRUE(same_bytes(a.offset, b.offset));
+  EXPECT_TRUE(same_bytes(a.fan, b.fan));
+  EXPECT_TRUE(same_bytes(a.vertex, b.vertex));
+  EXPECT_TRUE(same_bytes(a.rank, b.rank));
+  EXPECT_TRUE(same_bytes(a.x, b.x));
+  EXPECT_TRUE(same_bytes(a.y, b.y));
+}
+
 void expect_tangent_ring_matches(const Surface& s, const LinePrecompute::TangentRing& t) {
   const ReferenceRing r = reference_ring(s);
-  EXPECT_TRUE(same_bytes(t.offset, r.offset));
-  EXPECT_TRUE(same_bytes(t.fan, r.fan));
-  EXPECT_TRUE(same_bytes(t.vertex, r.vertex));
-  EXPECT_TRUE(same_bytes(t.rank, r.rank));
-  EXPECT_TRUE(same_bytes(t.x, r.x));
-  EXPECT_TRUE(same_bytes(t.y, r.y));
+  expect_same_ring(t, r);
   // Where they differ, the first vertex says more than a byte count.
   for (std::size_t i = 0; i + 1 < r.offset.size() && i + 1 < t.offset.size(); ++i) {
     if (t.fan[i] != r.fan[i] || t.offset[i + 1] != r.offset[i + 1]) {
@@ -303,13 +287,7 @@ TEST(LinePrecompute, SameBitsAtAnyThreadCount) {
     (void)one.raw_ridges();
     (void)one.raw_demarcating();
   });
-  const auto &a = many.tangent_ring(), &b = one.tangent_ring();
-  EXPECT_TRUE(same_bytes(a.offset, b.offset));
-  EXPECT_TRUE(same_bytes(a.fan, b.fan));
-  EXPECT_TRUE(same_bytes(a.vertex, b.vertex));
-  EXPECT_TRUE(same_bytes(a.rank, b.rank));
-  EXPECT_TRUE(same_bytes(a.x, b.x));
-  EXPECT_TRUE(same_bytes(a.y, b.y));
+  expect_same_ring(many.tangent_ring(), one.tangent_ring());
   EXPECT_TRUE(same_bytes(many.vertex_blocks().valid, one.vertex_blocks().valid));
   EXPECT_EQ(std::memcmp(many.vertex_blocks().block.data(), one.vertex_blocks().block.data(),
                         one.vertex_blocks().block.size() * sizeof(LinePrecompute::VertexBlock)),
@@ -327,7 +305,7 @@ TEST(LinePrecompute, FirstViewEqualsALaterViewAtAnyThreadCount) {
   LineOptions o;
   o.families = reference_families();
   o.families.push_back(LineFamily::demarcating);
-  const Camera c = view_of(surface, Vec3(0.3, 0.2, 1.0));
+  const Camera c = camera_towards(surface, Vec3(0.3, 0.2, 1.0));
   LineExtractor warm(surface, o);
   (void)warm.extract(c);
   const std::vector<SegmentSoup> later = warm.extract(c);
