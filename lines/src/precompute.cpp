@@ -333,14 +333,14 @@ void compute_ridges(const Surface& surface, const std::vector<double>& abs_k1, b
   const auto& curv = surface.curvature();
   const auto& dcurv = surface.curvature_derivatives();
   const std::size_t nv = surface.vertex_count();
-  std::vector<double> delta(nv);
-  std::vector<std::uint8_t> mask(nv);
+  detail::FilledVector<double> delta(nv);
+  detail::FilledVector<std::uint8_t> mask(nv);
   const double sign = ridge ? 1.0 : -1.0;
-  for (std::size_t i = 0; i < nv; ++i) {
+  detail::parallel_range(nv, [&](std::size_t i) {
     const bool ok = curv.valid[i] && dcurv.valid[i];
     delta[i] = ok ? sign * dcurv.a[i] : 0.0;
     mask[i] = ok && (ridge ? curv.k1[i] > 0.0 : curv.k1[i] < 0.0);
-  }
+  });
   VectorCrossingOptions o;
   o.vertex_mask = mask;
   o.test = ExtremumTest::edge;
@@ -381,10 +381,10 @@ std::vector<LinePrecompute::RawKey> raw_keys(const Surface& s,
                                              const std::vector<LineSegment>& raw) {
   std::vector<LinePrecompute::RawKey> keys(raw.size());
   const auto& faces = s.faces();
-  for (std::size_t i = 0; i < raw.size(); ++i) {
+  detail::parallel_range(raw.size(), [&](std::size_t i) {
     const Face& f = faces[static_cast<std::size_t>(raw[i].face)];
     keys[i] = {{f[0], f[1], f[2]}, raw[i].end[0].strength, raw[i].end[1].strength};
-  }
+  });
   return keys;
 }
 
