@@ -2,6 +2,7 @@
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
+#include <tbb/task_group.h>
 
 #include <algorithm>
 #include <atomic>
@@ -96,15 +97,42 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
   detail::set_light_support(req, has(LineFamily::pel) ? &options_.pel : nullptr,
                             has(LineFamily::laplacian) ? &options_.laplacian : nullptr,
                             feature_size_);
-  // D_t1 q1 (the apparent ridges' second field pass) is computed in the
-  // apparent-ridge task below, concurrently with the other families.
-  detail::update_view_fields(fields_, *surface_, camera, req, precompute_.get(), true);
+  // The view-independent line precompute that this view's families need
+  // and that the view fields do not (the raw ridges, valleys and
+  // demarcating curves above their thresholds, the tangent ring of the
+  // D_t1 q1 pass) starts at once, beside the view fields; on a later view
+  // it is cached and the tasks return at once. Each part is deterministic
+  // and computed once (LinePrecompute's once flags and locks), so the
+  // result does not depend on which thread gets there first.
+  tbb::task_group view_independent;
+  const double fs = feature_size_;
+  if (has(LineFamily::ridge) || has(LineFamily::valley))
+    view_independent.run([&] {
+      if (has(LineFamily::ridge))
+        (void)precompute_->raw_above(LineFamily::ridge, options_.ridge.threshold / fs);
+      if (has(LineFamily::valley))
+        (void)precompute_->raw_above(LineFamily::valley, options_.valley.threshold / fs);
+    });
+  if (has(LineFamily::demarcating))
+    view_independent.run([&] {
+      (void)precompute_->raw_above(LineFamily::demarcating,
+                                   options_.demarcating.threshold / (fs * fs));
+    });
+  if (has(LineFamily::apparent)) view_independent.run([&] { (void)precompute_->tangent_ring(); });
+  try {
+    // D_t1 q1 (the apparent ridges' second field pass) is computed in the
+    // apparent-ridge task below, concurrently with the other families.
+    detail::update_view_fields(fields_, *surface_, camera, req, precompute_.get(), true);
+  } catch (...) {
+    view_independent.wait();
+    throw;
+  }
+  view_independent.wait();
   // The vertex and light passes are done with the vertex blocks; the
   // D_t1 q1 pass (the apparent-ridge task) is the only reader of the
   // tangent ring, freed when it is through (one-shot only).
   if (one_shot_) precompute_->release_vertex_blocks();
 
-  const double fs = feature_size_;
   // The families are independent given the fields: run them concurrently
   // (each is itself a deterministic parallel loop), one output slot each,
   // so small families and the tails of large ones share the threads.

@@ -1,10 +1,17 @@
 #include "fabrica/lines/precompute.hpp"
 
+#include <tbb/parallel_invoke.h>
+#include <tbb/task_arena.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <memory>
 #include <mutex>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "fabrica/core/error.hpp"
 #include "fabrica/lines/zero_crossing.hpp"
@@ -12,6 +19,19 @@
 #include "zero_crossing_internal.hpp"
 
 namespace fabrica {
+
+namespace {
+
+// std::call_once with `fn` run isolated: a thread that waits inside for its
+// parallel loops takes no outer task, which could ask for the same part
+// again while its once flag (or lock) is held: the parts are built lazily
+// from tasks that run concurrently (LineExtractor::extract).
+template <class Fn>
+void call_once_isolated(std::once_flag& flag, Fn&& fn) {
+  std::call_once(flag, [&] { tbb::this_task_arena::isolate(fn); });
+}
+
+}  // namespace
 
 struct LinePrecompute::Cache {
   std::once_flag k1_once, ridge_once, demarcating_once, gradient_once, laplacian_once, ring_once;
@@ -37,7 +57,7 @@ LinePrecompute::LinePrecompute(const Surface& surface)
 LinePrecompute::~LinePrecompute() = default;
 
 const std::vector<double>& LinePrecompute::abs_k1() const {
-  std::call_once(cache_->k1_once, [&] {
+  call_once_isolated(cache_->k1_once, [&] {
     const auto& curv = surface_->curvature();
     cache_->abs_k1.resize(curv.k1.size());
     for (std::size_t i = 0; i < curv.k1.size(); ++i) cache_->abs_k1[i] = std::abs(curv.k1[i]);
@@ -46,7 +66,7 @@ const std::vector<double>& LinePrecompute::abs_k1() const {
 }
 
 const LinePrecompute::CornerRing& LinePrecompute::corner_ring() const {
-  std::call_once(cache_->ring_once, [&] {
+  call_once_isolated(cache_->ring_once, [&] {
     // A copy of Topology::vertex_face_opposite with its offsets.
     const Topology& topo = surface_->topology();
     const std::size_t nv = surface_->vertex_count();
@@ -64,120 +84,181 @@ const LinePrecompute::CornerRing& LinePrecompute::corner_ring() const {
   return cache_->ring;
 }
 
+namespace {
+
+// Fan order of the faces of one vertex (LinePrecompute::TangentRing): the
+// k faces' opposite corners o[0..k) form a closed fan when following each
+// face's second opposite corner to the one face whose first opposite corner
+// it is visits every face once and comes back to face 0. Writes the faces in
+// that order into rank[0..k). Branch-free successor search (the matching
+// face's position is random: a branch per comparison mispredicts).
+bool fan_order(const std::array<std::int32_t, 2>* o, std::int32_t k, std::uint8_t* rank) {
+  if (k < 1 || k > 63) return false;
+  std::uint8_t next[64];
+  unsigned bad = 0;
+#if defined(__SSE2__)
+  if (k <= 8) {
+    // The first opposite corners in two 4-lane registers (-1 past k: no
+    // vertex), one compare per face.
+    alignas(16) std::int32_t first[8] = {-1, -1, -1, -1, -1, -1, -1, -1};
+    for (std::int32_t g = 0; g < k; ++g) first[g] = o[g][0];
+    const __m128i lo = _mm_load_si128(reinterpret_cast<const __m128i*>(first));
+    const __m128i hi = _mm_load_si128(reinterpret_cast<const __m128i*>(first + 4));
+    for (std::int32_t f = 0; f < k; ++f) {
+      const __m128i want = _mm_set1_epi32(o[f][1]);
+      const auto m =
+          static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(lo, want))) |
+                                _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(hi, want))) << 4);
+      bad |= unsigned(m == 0 || (m & (m - 1)) != 0);  // no face, or two
+      next[f] = static_cast<std::uint8_t>(__builtin_ctz(m | 0x100u));
+    }
+  } else
+#endif
+    for (std::int32_t f = 0; f < k; ++f) {
+      const std::int32_t want = o[f][1];
+      std::int32_t at = 0, count = 0;
+      for (std::int32_t g = 0; g < k; ++g) {
+        const std::int32_t m = o[g][0] == want;
+        at += m * g;
+        count += m;
+      }
+      bad |= unsigned(count != 1);  // no face, or a corner that opens two
+      next[f] = static_cast<std::uint8_t>(at);
+    }
+  if (bad) return false;
+  std::uint64_t used = 0;
+  std::int32_t f = 0;
+  for (std::int32_t j = 0; j < k; ++j) {
+    if (used >> f & 1) return false;
+    used |= std::uint64_t{1} << f;
+    rank[j] = static_cast<std::uint8_t>(f);
+    f = next[f];
+  }
+  return f == 0;  // the chain closes after k faces
+}
+
+}  // namespace
+
 const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
   std::lock_guard lock(cache_->tangent_ring_mutex);
   if (cache_->tangent_ring_ready) return cache_->tangent_ring;
-  [&] {
-    // Topology::vertex_face_opposite, CSR like vertex_faces (corner_ring()
-    // without the copy).
+  // Isolated: a thread waiting inside takes no outer task that could ask
+  // for the ring again (the mutex is held).
+  tbb::this_task_arena::isolate([&] {
+    // Topology::vertex_face_opposite read in place (CSR like vertex_faces:
+    // the corner offset of vertex i is its vertex_faces(i) position).
     const Topology& topo = surface_->topology();
-    struct {
-      std::vector<std::int32_t> offset;
-      const std::array<std::int32_t, 2>* opposite;
-    } r;
-    r.offset.resize(surface_->vertex_count() + 1);
-    r.offset[0] = 0;
-    for (std::size_t i = 0; i + 1 < r.offset.size(); ++i)
-      r.offset[i + 1] = r.offset[i] + static_cast<std::int32_t>(topo.vertex_faces(i).size());
-    r.opposite = r.offset.back() > 0 ? topo.vertex_face_opposite(0).data() : nullptr;
+    const std::size_t nv = surface_->vertex_count();
+    const std::int32_t* const face_base = nv ? topo.vertex_faces(0).data() : nullptr;
+    auto corner_at = [&](std::size_t i) {
+      return static_cast<std::size_t>(topo.vertex_faces(i).data() - face_base);
+    };
+    const std::size_t corners = nv ? corner_at(nv - 1) + topo.vertex_faces(nv - 1).size() : 0;
     const auto& pos = surface_->positions();
     const auto& curv = surface_->curvature();
-    const std::size_t nv = surface_->vertex_count();
     TangentRing& t = cache_->tangent_ring;
-    // Offset of neighbour v of vertex i along e1 (axis 0) or e2 (axis 1).
-    auto offset = [&](std::size_t i, std::int32_t v, int axis) {
-      const Vec3 d = pos[static_cast<std::size_t>(v)] - pos[i];
-      return static_cast<float>(d.dot(axis ? curv.e2[i] : curv.e1[i]));
+    // A fan also needs finite offsets (d·e1, d·e2) where the curvature is
+    // valid. They are when every position is finite and below 1e30 in
+    // magnitude and e1, e2 are finite with components at most 2 (|d·e| <
+    // 3 · 2e30 · 2, far below FLT_MAX; a non-finite e gives a non-finite
+    // product): then the fan pass needs no gather of the ring's positions,
+    // and the layout pass computes the offsets once, in place. Otherwise
+    // they are computed to check (a Surface rejects coordinates beyond
+    // 1e15, so only a frame that is not unit gets there).
+    bool positions_bounded = true;
+    for (const Vec3& p : pos)
+      positions_bounded &= std::abs(p[0]) < 1e30 && std::abs(p[1]) < 1e30 && std::abs(p[2]) < 1e30;
+    auto unit_frame = [&](std::size_t i) {
+      const Vec3 &e1 = curv.e1[i], &e2 = curv.e2[i];
+      return positions_bounded && std::abs(e1[0]) <= 2.0 && std::abs(e1[1]) <= 2.0 &&
+             std::abs(e1[2]) <= 2.0 && std::abs(e2[0]) <= 2.0 && std::abs(e2[1]) <= 2.0 &&
+             std::abs(e2[2]) <= 2.0;
     };
-    // Fan order first: rank of each fan face (the chain that follows each
-    // face's second opposite corner to the face whose first one it is), and
-    // for a fan the offsets of its ring, in fan order, into `fx`/`fy` (one
-    // gather of the ring's positions; the second pass only copies them).
-    const auto corners = static_cast<std::size_t>(r.offset.back());
-    // Left uninitialised (the parallel fan pass touches them first): the
-    // layout pass reads them only for fans, whose entries that pass wrote.
+    // Fan order first: the rank of each fan face, into `order` at the
+    // vertex's corner offset (left uninitialised: the layout pass reads it
+    // only for fans, whose entries this pass wrote).
     const std::unique_ptr<std::uint8_t[]> order(new std::uint8_t[corners]);
-    const std::unique_ptr<float[]> fx(new float[corners]), fy(new float[corners]);
-    t.fan.assign(nv, 0);
+    t.fan.resize(nv);
     detail::parallel_range(nv, [&](std::size_t i) {
-      const auto* o = r.opposite + r.offset[i];
-      const std::int32_t k = r.offset[i + 1] - r.offset[i];
-      if (k < 1 || k > 63) return;
-      std::uint8_t* const rank = order.get() + r.offset[i];
-      std::uint64_t used = 0;
-      std::int32_t f = 0;
-      for (std::int32_t j = 0; j < k; ++j) {
-        if (used >> f & 1) return;
-        used |= std::uint64_t{1} << f;
-        rank[j] = static_cast<std::uint8_t>(f);
-        const std::int32_t want = o[f][1];
-        std::int32_t next = -1;
-        for (std::int32_t g = 0; g < k; ++g) {
-          if (o[g][0] != want) continue;
-          if (next >= 0) return;  // not a fan: a corner opens two faces
-          next = g;
-        }
-        if (next < 0) return;
-        f = next;
-      }
-      if (f != 0) return;  // the chain does not close after k faces
-      if (curv.valid[i]) {
-        float* const x = fx.get() + r.offset[i];
-        float* const y = fy.get() + r.offset[i];
-        for (std::int32_t j = 0; j < k; ++j) {
-          const std::int32_t v = o[rank[j]][0];
-          x[j] = offset(i, v, 0);
-          y[j] = offset(i, v, 1);
-          if (!std::isfinite(x[j]) || !std::isfinite(y[j])) return;
+      const auto o = topo.vertex_face_opposite(i);
+      const auto k = static_cast<std::int32_t>(o.size());
+      std::uint8_t* const rank = order.get() + corner_at(i);
+      bool fan = fan_order(o.data(), k, rank);
+      if (fan && curv.valid[i] && !unit_frame(i)) {
+        const Vec3 p = pos[i], e1 = curv.e1[i], e2 = curv.e2[i];
+        for (std::int32_t j = 0; j < k && fan; ++j) {
+          const Vec3 d = pos[static_cast<std::size_t>(o[rank[j]][0])] - p;
+          fan = std::isfinite(static_cast<float>(d.dot(e1))) &&
+                std::isfinite(static_cast<float>(d.dot(e2)));
         }
       }
-      t.fan[i] = 1;
+      t.fan[i] = fan;
     });
     t.offset.resize(nv + 1);
     t.offset[0] = 0;
-    for (std::size_t i = 0; i < nv; ++i)
-      t.offset[i + 1] = t.offset[i] + (t.fan[i] ? r.offset[i + 1] - r.offset[i] + 1
-                                                : 2 * (r.offset[i + 1] - r.offset[i]));
+    for (std::size_t i = 0; i < nv; ++i) {
+      const auto k = static_cast<std::int32_t>(topo.vertex_faces(i).size());
+      t.offset[i + 1] = t.offset[i] + (t.fan[i] ? k + 1 : 2 * k);
+    }
     const auto total = static_cast<std::size_t>(t.offset[nv]);
-    // kPad entries after the last ring (vertex 0, offsets 0): fixed-width
-    // reads past a short ring stay inside the arrays.
-    t.vertex.assign(total + TangentRing::kPad, 0);
-    t.rank.assign(total + TangentRing::kPad, 0);
-    t.x.assign(total + TangentRing::kPad, 0.0f);
-    t.y.assign(total + TangentRing::kPad, 0.0f);
+    // Every entry is written below (no zeroing pass first): kPad entries
+    // after the last ring (vertex 0, zeros), so fixed-width reads past a
+    // short ring stay inside the arrays; zeros for the offsets of a vertex
+    // without valid curvature and for the rank outside fans.
+    t.vertex.resize(total + TangentRing::kPad);
+    t.rank.resize(total + TangentRing::kPad);
+    t.x.resize(total + TangentRing::kPad);
+    t.y.resize(total + TangentRing::kPad);
+    std::fill(t.vertex.begin() + total, t.vertex.end(), 0);
+    std::fill(t.rank.begin() + total, t.rank.end(), 0);
+    std::fill(t.x.begin() + total, t.x.end(), 0.0f);
+    std::fill(t.y.begin() + total, t.y.end(), 0.0f);
+    // Ring entries [0, m) of vertex i: offsets (d·e1, d·e2) of vertex[j],
+    // d = p_vertex[j] - p_i, as float; zeros where the curvature is invalid.
+    auto offsets = [&](std::size_t i, std::size_t m, const std::int32_t* vertex, float* x,
+                       float* y) {
+      if (!curv.valid[i]) {
+        std::fill(x, x + m, 0.0f);
+        std::fill(y, y + m, 0.0f);
+        return;
+      }
+      const Vec3 p = pos[i], e1 = curv.e1[i], e2 = curv.e2[i];
+      for (std::size_t j = 0; j < m; ++j) {
+        const Vec3 d = pos[static_cast<std::size_t>(vertex[j])] - p;
+        x[j] = static_cast<float>(d.dot(e1));
+        y[j] = static_cast<float>(d.dot(e2));
+      }
+    };
     detail::parallel_range(nv, [&](std::size_t i) {
-      const bool ok = curv.valid[i] != 0;
-      const auto* o = r.opposite + r.offset[i];
-      const std::int32_t k = r.offset[i + 1] - r.offset[i];
+      const auto o = topo.vertex_face_opposite(i);
+      const auto k = static_cast<std::int32_t>(o.size());
       const auto n = static_cast<std::size_t>(t.offset[i]);
-      const auto c = static_cast<std::size_t>(r.offset[i]);
+      const auto m = static_cast<std::size_t>(t.offset[i + 1]) - n;  // entries
+      std::int32_t* const vertex = t.vertex.data() + n;
+      float* const x = t.x.data() + n;
+      float* const y = t.y.data() + n;
       if (t.fan[i]) {
         // n_0 .. n_{k-1} in fan order, then n_0 again (the last face's
         // second opposite corner).
-        for (std::int32_t j = 0; j < k; ++j) {
-          const std::uint8_t f = order[c + static_cast<std::size_t>(j)];
-          t.rank[n + static_cast<std::size_t>(j)] = f;
-          t.vertex[n + static_cast<std::size_t>(j)] = o[f][0];
-        }
-        t.vertex[n + static_cast<std::size_t>(k)] =
-            o[order[c + static_cast<std::size_t>(k - 1)]][1];
-        if (!ok) return;
-        std::copy(fx.get() + c, fx.get() + c + k, t.x.data() + n);
-        std::copy(fy.get() + c, fy.get() + c + k, t.y.data() + n);
-        t.x[n + static_cast<std::size_t>(k)] = fx[c];
-        t.y[n + static_cast<std::size_t>(k)] = fy[c];
+        const std::uint8_t* const rank = order.get() + corner_at(i);
+        std::copy(rank, rank + k, t.rank.data() + n);
+        t.rank[n + static_cast<std::size_t>(k)] = 0;
+        for (std::int32_t j = 0; j < k; ++j) vertex[j] = o[rank[j]][0];
+        vertex[k] = o[rank[k - 1]][1];
+        // (the last entry is n_0's offset again)
+        offsets(i, static_cast<std::size_t>(k), vertex, x, y);
+        x[k] = x[0];
+        y[k] = y[0];
         return;
       }
-      for (std::int32_t j = 0; j < 2 * k; ++j) {
-        const std::int32_t v = o[j / 2][j % 2];
-        const auto s = n + static_cast<std::size_t>(j);
-        t.vertex[s] = v;
-        if (!ok) continue;
-        t.x[s] = offset(i, v, 0);
-        t.y[s] = offset(i, v, 1);
+      std::fill(t.rank.data() + n, t.rank.data() + n + m, std::uint8_t{0});
+      for (std::int32_t j = 0; j < k; ++j) {
+        vertex[2 * j] = o[j][0];
+        vertex[2 * j + 1] = o[j][1];
       }
+      offsets(i, m, vertex, x, y);
     });
-  }();
+  });
   cache_->tangent_ring_ready = true;
   return cache_->tangent_ring;
 }
@@ -185,7 +266,7 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
 const LinePrecompute::VertexBlocks& LinePrecompute::vertex_blocks() const {
   std::lock_guard lock(cache_->blocks_mutex);
   if (cache_->blocks_ready) return cache_->blocks;
-  [&] {
+  tbb::this_task_arena::isolate([&] {
     const auto& pos = surface_->positions();
     const auto& nrm = surface_->vertex_normals();
     const auto& curv = surface_->curvature();
@@ -193,15 +274,23 @@ const LinePrecompute::VertexBlocks& LinePrecompute::vertex_blocks() const {
     const std::size_t nv = surface_->vertex_count();
     const std::size_t nb = (nv + 3) / 4;
     VertexBlocks& vb = cache_->blocks;
-    vb.block.assign(nb, VertexBlock{});
-    vb.valid.assign(nb, 0);
+    // Every block is written whole below (no zeroing pass first); the lanes
+    // past the last vertex are zeros.
+    vb.block.resize(nb);
+    vb.valid.resize(nb);
     detail::parallel_range(
         nb,
         [&](std::size_t b) {
           VertexBlock& blk = vb.block[b];
           unsigned valid = 0;
-          for (std::size_t l = 0; l < 4 && 4 * b + l < nv; ++l) {
+          for (std::size_t l = 0; l < 4; ++l) {
             const std::size_t i = 4 * b + l;
+            if (i >= nv) {
+              for (int k = 0; k < 3; ++k)
+                blk.p[k][l] = blk.n[k][l] = blk.e1[k][l] = blk.e2[k][l] = 0.0;
+              blk.k1[l] = blk.k2[l] = blk.a[l] = blk.b[l] = blk.c[l] = blk.d[l] = 0.0;
+              continue;
+            }
             for (int k = 0; k < 3; ++k) {
               blk.p[k][l] = pos[i][k];
               blk.n[k][l] = nrm[i][k];
@@ -220,7 +309,7 @@ const LinePrecompute::VertexBlocks& LinePrecompute::vertex_blocks() const {
           vb.valid[b] = static_cast<std::uint8_t>(valid);
         },
         512);
-  }();
+  });
   cache_->blocks_ready = true;
   return cache_->blocks;
 }
@@ -244,14 +333,14 @@ void compute_ridges(const Surface& surface, const std::vector<double>& abs_k1, b
   const auto& curv = surface.curvature();
   const auto& dcurv = surface.curvature_derivatives();
   const std::size_t nv = surface.vertex_count();
-  std::vector<double> delta(nv);
-  std::vector<std::uint8_t> mask(nv);
+  detail::FilledVector<double> delta(nv);
+  detail::FilledVector<std::uint8_t> mask(nv);
   const double sign = ridge ? 1.0 : -1.0;
-  for (std::size_t i = 0; i < nv; ++i) {
+  detail::parallel_range(nv, [&](std::size_t i) {
     const bool ok = curv.valid[i] && dcurv.valid[i];
     delta[i] = ok ? sign * dcurv.a[i] : 0.0;
     mask[i] = ok && (ridge ? curv.k1[i] > 0.0 : curv.k1[i] < 0.0);
-  }
+  });
   VectorCrossingOptions o;
   o.vertex_mask = mask;
   o.test = ExtremumTest::edge;
@@ -273,9 +362,10 @@ inline Vec3 rotate_tangent(const Vec3& x, const Vec3& from, const Vec3& to) {
 }  // namespace
 
 const std::vector<LineSegment>& LinePrecompute::raw_ridges() const {
-  std::call_once(cache_->ridge_once, [&] {
-    compute_ridges(*surface_, abs_k1(), true, cache_->ridges);
-    compute_ridges(*surface_, abs_k1(), false, cache_->valleys);
+  call_once_isolated(cache_->ridge_once, [&] {
+    const auto& k1 = abs_k1();
+    tbb::parallel_invoke([&] { compute_ridges(*surface_, k1, true, cache_->ridges); },
+                         [&] { compute_ridges(*surface_, k1, false, cache_->valleys); });
   });
   return cache_->ridges;
 }
@@ -291,17 +381,17 @@ std::vector<LinePrecompute::RawKey> raw_keys(const Surface& s,
                                              const std::vector<LineSegment>& raw) {
   std::vector<LinePrecompute::RawKey> keys(raw.size());
   const auto& faces = s.faces();
-  for (std::size_t i = 0; i < raw.size(); ++i) {
+  detail::parallel_range(raw.size(), [&](std::size_t i) {
     const Face& f = faces[static_cast<std::size_t>(raw[i].face)];
     keys[i] = {{f[0], f[1], f[2]}, raw[i].end[0].strength, raw[i].end[1].strength};
-  }
+  });
   return keys;
 }
 
 }  // namespace
 
 const std::vector<LinePrecompute::RawKey>& LinePrecompute::raw_ridge_keys() const {
-  std::call_once(cache_->ridge_keys_once, [&] {
+  call_once_isolated(cache_->ridge_keys_once, [&] {
     cache_->ridge_keys = raw_keys(*surface_, raw_ridges());
     cache_->valley_keys = raw_keys(*surface_, raw_valleys());
   });
@@ -314,8 +404,8 @@ const std::vector<LinePrecompute::RawKey>& LinePrecompute::raw_valley_keys() con
 }
 
 const std::vector<LinePrecompute::RawKey>& LinePrecompute::raw_demarcating_keys() const {
-  std::call_once(cache_->demarcating_keys_once,
-                 [&] { cache_->demarcating_keys = raw_keys(*surface_, raw_demarcating()); });
+  call_once_isolated(cache_->demarcating_keys_once,
+                     [&] { cache_->demarcating_keys = raw_keys(*surface_, raw_demarcating()); });
   return cache_->demarcating_keys;
 }
 
@@ -365,7 +455,7 @@ std::shared_ptr<const LinePrecompute::RawAbove> LinePrecompute::raw_above(LineFa
 }
 
 const std::vector<LineSegment>& LinePrecompute::raw_demarcating() const {
-  std::call_once(cache_->demarcating_once, [&] {
+  call_once_isolated(cache_->demarcating_once, [&] {
     // Direction of maximal normal-curvature variation g = argmax C(u,u,u)
     // (Kolomenkin et al. 2008), by sampling 72 angles with parabolic
     // refinement; the scalar is the normal curvature along g.
@@ -425,7 +515,7 @@ const std::vector<LineSegment>& LinePrecompute::raw_demarcating() const {
 }
 
 const GradientOperator& LinePrecompute::gradient_operator() const {
-  std::call_once(cache_->gradient_once, [&] {
+  call_once_isolated(cache_->gradient_once, [&] {
     const Surface& s = *surface_;
     const Topology& topo = s.topology();
     const auto& pos = s.positions();
@@ -480,7 +570,7 @@ const GradientOperator& LinePrecompute::gradient_operator() const {
 }
 
 const std::vector<Vec3>& LinePrecompute::normal_laplacian() const {
-  std::call_once(cache_->laplacian_once, [&] {
+  call_once_isolated(cache_->laplacian_once, [&] {
     // (ΔN)_i = 1/A_i Σ_j w_ij (n_j - n_i), w_ij = (cot α + cot β)/2 (§1, §7).
     const Surface& s = *surface_;
     const Topology& topo = s.topology();

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "fabrica/core/surface.hpp"
+#include "fabrica/core/topology.hpp"  // detail::FilledVector
 #include "fabrica/lines/segments.hpp"
 
 namespace fabrica {
@@ -103,13 +104,15 @@ class LinePrecompute {
   /// (i1, i2) of each face in corner_ring() order (rank unused). vertex,
   /// rank, x and y have kPad more entries after the last ring (vertex 0,
   /// zeros), so fixed-width reads of a short ring stay inside them.
+  /// (detail::FilledVector: built without a zeroing pass before the
+  /// parallel passes that write every entry.)
   struct TangentRing {
     static constexpr std::size_t kPad = 16;
-    std::vector<std::int32_t> offset;
-    std::vector<std::uint8_t> fan;
-    std::vector<std::int32_t> vertex;
-    std::vector<float> x, y;
-    std::vector<std::uint8_t> rank;
+    detail::FilledVector<std::int32_t> offset;
+    detail::FilledVector<std::uint8_t> fan;
+    detail::FilledVector<std::int32_t> vertex;
+    detail::FilledVector<float> x, y;
+    detail::FilledVector<std::uint8_t> rank;
   };
   const TangentRing& tangent_ring() const;
   /// The per-vertex inputs of the per-view vertex pass (view_fields.cpp:
@@ -122,10 +125,10 @@ class LinePrecompute {
     double k1[4], k2[4], a[4], b[4], c[4], d[4];
   };
   struct VertexBlocks {
-    std::vector<VertexBlock> block;  ///< ceil(vertex count / 4)
+    detail::FilledVector<VertexBlock> block;  ///< ceil(vertex count / 4)
     /// Per block: bit l set when vertex 4 b + l has valid curvature, bit
     /// 4 + l when it has valid curvature derivatives.
-    std::vector<std::uint8_t> valid;
+    detail::FilledVector<std::uint8_t> valid;
   };
   const VertexBlocks& vertex_blocks() const;
   /// Free vertex_blocks() / tangent_ring() (~144 and ~90 bytes per vertex)
