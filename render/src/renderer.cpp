@@ -323,6 +323,8 @@ struct Renderer::Impl {
                 fs({"shading.glsl", "cutaway.glsl", "mesh_oit.frag"}, {"NO_CUT"})};
     else if (key == "depth")
       stages = {vs({"mesh.vert"}), fs({"cutaway.glsl", "depth.frag"})};
+    else if (key == "depth_uncut")
+      stages = {vs({"mesh.vert"}), fs({"cutaway.glsl", "depth.frag"}, {"NO_CUT"})};
     else if (key == "oit_composite")
       stages = {vs({"fullscreen.vert"}), fs({"oit_composite.frag"})};
     else if (key == "lines")
@@ -1178,12 +1180,12 @@ struct Renderer::Impl {
                       GL_DEPTH_BUFFER_BIT, GL_NEAREST);
     g.BindFramebuffer(GL_FRAMEBUFFER, depthb_fbo);
     set_state_opaque();
-    const ShaderProgram& p = program("depth");
-    p.use();
-    set_common(p, F.M, t);
+    ProgramSwitch programs(*this, F, t);
     for (std::size_t i = 0; i < F.scene.structures.size(); ++i) {
-      if (opaque(F.scene.structures[i])) continue;
-      set_clip(p, clipped(F, F.scene.structures[i]), cut(F, F.scene.structures[i]));
+      const Structure& s = F.scene.structures[i];
+      if (opaque(s)) continue;
+      const ShaderProgram& p = programs.use(cut(F, s) ? "depth" : "depth_uncut");
+      set_clip(p, clipped(F, s), cut(F, s));
       draw_mesh(*F.gpu[i]);
     }
     g.Disable(GL_CLIP_DISTANCE0);
