@@ -60,8 +60,10 @@ void LinesWorker::run() {
       try {
         const LineSource& source = item.lod ? *item.lod : *item.source;
         if (item.lod) result->lod.push_back(item.id);
-        result->lines[item.id] =
+        LineSet& lines = result->lines[item.id] =
             structure_lines(*source.drawer, item.style, item.thresholds, job->camera);
+        if (job->merge_px > 0.0)
+          result->merged += merge_collinear(lines, job->camera, job->merge_px, job->merge_strength);
         if (item.hatching)
           result->hatching[item.id] =
               structure_hatching(*item.source->surface, job->camera, item.hatching_width);

@@ -48,6 +48,11 @@ struct LinesJob {
     double hatching_width = 1.0;
   };
   std::vector<Item> items;
+  /// While the camera moves: the lines' near-collinear vertices merged in
+  /// this job's picture (merge_collinear) within `merge_px` pixels and
+  /// `merge_strength` of strength; 0 = the lines as extracted.
+  double merge_px = 0.0;
+  double merge_strength = 0.0;
 };
 
 struct LinesResult {
@@ -55,9 +60,10 @@ struct LinesResult {
   Camera camera;
   std::map<int, LineSet> lines;                   ///< by structure id
   std::map<int, render::PolylineLayer> hatching;  ///< by structure id, where asked for
-  std::vector<int> lod;  ///< ids whose lines come from the level of detail (Item::lod)
-  double ms = 0.0;       ///< wall time of the extraction
-  std::string error;     ///< empty unless a structure's lines failed
+  std::vector<int> lod;    ///< ids whose lines come from the level of detail (Item::lod)
+  std::size_t merged = 0;  ///< vertices removed by merge_collinear (LinesJob::merge_px)
+  double ms = 0.0;         ///< wall time of the extraction
+  std::string error;       ///< empty unless a structure's lines failed
 };
 
 class LinesWorker {

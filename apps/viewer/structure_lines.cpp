@@ -1,9 +1,105 @@
 #include "structure_lines.hpp"
 
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include "fabrica/core/projector.hpp"
 #include "fabrica/hatching/hatching.hpp"
 #include "fabrica/render/draw.hpp"
 
 namespace fabrica::viewer {
+
+namespace {
+
+/// How far chain vertex `k` is off the drawn segment from `a` to `b`, as a
+/// multiple of the tolerances (> 1: it must stay): its pixel distance to the
+/// segment over `tolerance_px`, or its strength's distance to the one
+/// interpolated at its foot over `strength_tolerance`, whichever is larger.
+double merge_error(const Vec2& a, const Vec2& b, float sa, float sb, const Vec2& p, float s,
+                   double tolerance_px, double strength_tolerance) {
+  const Vec2 ab = b - a;
+  const double len2 = ab.squaredNorm();
+  const double t = len2 > 0.0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+  const double distance = (a + t * ab - p).norm();
+  const double strength = std::fabs(static_cast<double>(s) - (sa + t * (sb - sa)));
+  return std::max(distance / tolerance_px, strength / strength_tolerance);
+}
+
+}  // namespace
+
+std::size_t merge_collinear(LineSet& lines, const Camera& camera, double tolerance_px,
+                            double strength_tolerance) {
+  if (!(tolerance_px > 0.0) || !(strength_tolerance > 0.0)) return 0;
+  const Projector project(camera);
+  std::size_t removed = 0;
+  std::vector<Vec2> pixel;
+  std::vector<char> front, keep;
+  std::vector<std::pair<std::size_t, std::size_t>> spans;
+  for (Polyline& pl : lines.polylines) {
+    const std::size_t n = pl.vertices.size();
+    if (n < 3) continue;
+    // The chain: the vertices, and the first again for a loop (its closing edge).
+    const std::size_t m = pl.closed ? n + 1 : n;
+    auto vertex = [&](std::size_t i) -> const LineVertex& { return pl.vertices[i % n]; };
+    pixel.resize(n);
+    front.assign(n, 0);
+    for (std::size_t i = 0; i < n; ++i) {
+      const ProjectedPoint q = project(pl.vertices[i].position);
+      pixel[i] = q.pixel;
+      front[i] = q.depth > 0.0 && std::isfinite(q.pixel.x()) && std::isfinite(q.pixel.y());
+    }
+    // Ends, and every vertex not in front of the eye with its neighbours,
+    // stay; each run between two kept vertices is simplified on its own
+    // (Douglas-Peucker: keep the worst vertex while one is off by more than
+    // the tolerances).
+    keep.assign(m, 0);
+    keep[0] = keep[m - 1] = 1;
+    for (std::size_t i = 0; i < m; ++i)
+      if (!front[i % n]) {
+        keep[i] = 1;
+        if (i > 0) keep[i - 1] = 1;
+        if (i + 1 < m) keep[i + 1] = 1;
+      }
+    spans.clear();
+    for (std::size_t a = 0, b = 1; b < m; ++b)
+      if (keep[b]) {
+        if (b > a + 1) spans.emplace_back(a, b);
+        a = b;
+      }
+    while (!spans.empty()) {
+      const auto [a, b] = spans.back();
+      spans.pop_back();
+      const LineVertex &va = vertex(a), &vb = vertex(b);
+      double worst = 1.0;
+      std::size_t at = 0;
+      for (std::size_t k = a + 1; k < b; ++k) {
+        const double e =
+            merge_error(pixel[a % n], pixel[b % n], va.strength, vb.strength, pixel[k % n],
+                        vertex(k).strength, tolerance_px, strength_tolerance);
+        if (e > worst) {
+          worst = e;
+          at = k;
+        }
+      }
+      if (at == 0) continue;  // every vertex between a and b goes
+      keep[at] = 1;
+      if (at > a + 1) spans.emplace_back(a, at);
+      if (b > at + 1) spans.emplace_back(at, b);
+    }
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < n; ++i) kept += keep[i] ? 1 : 0;
+    if (kept == n || (pl.closed && kept < 3)) continue;
+    std::vector<LineVertex> vertices;
+    vertices.reserve(kept);
+    for (std::size_t i = 0; i < n; ++i)
+      if (keep[i]) vertices.push_back(pl.vertices[i]);
+    removed += n - kept;
+    pl.vertices = std::move(vertices);
+    pl.edge_faces.clear();
+  }
+  return removed;
+}
 
 LineSet structure_lines(LineDrawer& drawer, const render::StructureStyle& style,
                         const LineOptions& thresholds, const Camera& camera) {

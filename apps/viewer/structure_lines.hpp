@@ -19,6 +19,18 @@ namespace fabrica::viewer {
 LineSet structure_lines(LineDrawer& drawer, const render::StructureStyle& style,
                         const LineOptions& thresholds, const Camera& camera);
 
+/// Fewer vertices for drawing while the camera moves: every polyline keeps
+/// its first and last vertex and those needed so that its picture under
+/// `camera` stays within `tolerance_px` pixels of the original (a vertex is
+/// dropped where it lies within that distance of the segment joining the
+/// vertices kept around it, and its strength within `strength_tolerance` of
+/// the value interpolated there). Polylines are never joined; vertices not
+/// in front of the eye are kept with their neighbours. Closed polylines stay
+/// closed with at least 3 vertices. `edge_faces` is cleared where vertices
+/// go. Returns the number of vertices removed.
+std::size_t merge_collinear(LineSet& lines, const Camera& camera, double tolerance_px,
+                            double strength_tolerance);
+
 /// Shading strokes of one structure for one camera (fabrica::hatching,
 /// "Suggestive Hatching"), as a layer drawn under its lines; as
 /// `fabrica hatch`, strokes are `width` reference pixels wide, untapered.

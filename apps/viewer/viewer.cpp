@@ -28,6 +28,12 @@ double ms_since(Clock::time_point t) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
 }
 
+/// While the camera moves the lines are drawn with their near-collinear
+/// vertices merged (merge_collinear): within half a pixel of the lines as
+/// extracted, strengths within 0.1; the still picture has every vertex.
+constexpr double kMovingMergePx = 0.5;
+constexpr double kMovingMergeStrength = 0.1;
+
 Viewer* g_viewer = nullptr;  // for the GLFW drop callback
 
 void on_drop(GLFWwindow*, int count, const char** paths) {
@@ -414,6 +420,10 @@ std::uint64_t Viewer::post_lines(const Camera& camera, bool force, bool lod) {
                         !s.style.hybrid_apparent_ridges;
     job.items.push_back({s.id, s.lines, coarse ? s.lines_lod : nullptr, s.style, s.thresholds,
                          s.hatching, s.hatching_width});
+  }
+  if (lod) {  // while the camera moves: fewer line quads, the same picture to half a pixel
+    job.merge_px = kMovingMergePx;
+    job.merge_strength = kMovingMergeStrength;
   }
   lines_worker_.post(std::move(job));
   lines_dirty_ = false;

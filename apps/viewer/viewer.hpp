@@ -164,9 +164,10 @@ class Viewer {
   /// Fraction of the window's resolution drawn while the camera moves
   /// (1 = full; the still picture is always full resolution).
   float& moving_scale() { return moving_scale_; }
-  /// Ghosted structures drawn with their level of detail (a coarse copy of
-  /// the mesh, and lines from it) while the camera moves; the still picture
-  /// and every export use the full meshes.
+  /// While the camera moves: ghosted structures drawn with their level of
+  /// detail (a coarse copy of the mesh, and lines from it), and every
+  /// structure's lines with near-collinear vertices merged (within half a
+  /// pixel); the still picture and every export use the full meshes and lines.
   bool& simplify_while_moving() { return simplify_while_moving_; }
 
  private:
@@ -176,7 +177,8 @@ class Viewer {
   Space scene_space() const;
   void adopt_loaded();
   /// Posts a lines job for `camera` when anything changed; returns its
-  /// version. `lod`: ghosted structures' lines from their level of detail.
+  /// version. `lod`: ghosted structures' lines from their level of detail,
+  /// and all lines merged (LinesJob::merge_px), for a moving camera.
   std::uint64_t post_lines(const Camera& camera, bool force, bool lod = false);
   /// `fading`: opacities on their way after a role change (the window only;
   /// exports always draw the styles as they are).

@@ -314,10 +314,17 @@ struct Renderer::Impl {
     std::vector<ShaderStage> stages;
     if (key == "mesh")
       stages = {vs({"mesh.vert"}), fs({"shading.glsl", "cutaway.glsl", "mesh.frag"})};
+    else if (key == "mesh_uncut")
+      stages = {vs({"mesh.vert"}), fs({"shading.glsl", "cutaway.glsl", "mesh.frag"}, {"NO_CUT"})};
     else if (key == "mesh_oit")
       stages = {vs({"mesh.vert"}), fs({"shading.glsl", "cutaway.glsl", "mesh_oit.frag"})};
+    else if (key == "mesh_oit_uncut")
+      stages = {vs({"mesh.vert"}),
+                fs({"shading.glsl", "cutaway.glsl", "mesh_oit.frag"}, {"NO_CUT"})};
     else if (key == "depth")
       stages = {vs({"mesh.vert"}), fs({"cutaway.glsl", "depth.frag"})};
+    else if (key == "depth_uncut")
+      stages = {vs({"mesh.vert"}), fs({"cutaway.glsl", "depth.frag"}, {"NO_CUT"})};
     else if (key == "oit_composite")
       stages = {vs({"fullscreen.vert"}), fs({"oit_composite.frag"})};
     else if (key == "lines")
@@ -961,6 +968,28 @@ struct Renderer::Impl {
     g.DepthFunc(GL_LESS);
     g.Disable(GL_DEPTH_TEST);
   }
+  // The program a pass draws a structure with, switched (and given the
+  // frame's common uniforms) only when it changes from one draw to the next.
+  class ProgramSwitch {
+   public:
+    ProgramSwitch(Impl& impl, const FrameState& F, const Tile& t) : impl_(impl), F_(F), t_(t) {}
+    const ShaderProgram& use(const char* key) {
+      const ShaderProgram& p = impl_.program(key);
+      if (&p != current_) {
+        current_ = &p;
+        p.use();
+        impl_.set_common(p, F_.M, t_);
+      }
+      return p;
+    }
+
+   private:
+    Impl& impl_;
+    const FrameState& F_;
+    const Tile& t_;
+    const ShaderProgram* current_ = nullptr;
+  };
+
   // ------------------------------------------------- Renderer::render passes
   // One frame of a scene: what the passes share, prepared once by
   // prepare_frame; then per tile one function per pass (render()).
@@ -976,14 +1005,13 @@ struct Renderer::Impl {
     set_state_opaque();  // depth writes on, or Clear leaves the depth alone
     g.ClearDepth(1.0);
     g.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-    const ShaderProgram& p = program("mesh");
-    p.use();
-    set_common(p, F.M, t);
+    ProgramSwitch programs(*this, F, t);
     for (std::size_t i = 0; i < scene.structures.size(); ++i) {
       const Structure& s = scene.structures[i];
       if (!opaque(s)) continue;
       const bool fill = s.style.shading != Shading::none;
       g.ColorMask(fill, fill, fill, fill);
+      const ShaderProgram& p = programs.use(cut(F, s) ? "mesh" : "mesh_uncut");
       set_shading(p, s.style, 1.0f);
       set_clip(p, clipped(F, s), cut(F, s));
       set_cull(cullable(F, s));
@@ -1035,12 +1063,15 @@ struct Renderer::Impl {
     g.DepthMask(GL_FALSE);
     g.Enable(GL_BLEND);
     g.BlendFunc(GL_ONE, GL_ONE);
-    const ShaderProgram& p = program("mesh_oit");
-    p.use();
-    set_common(p, F.M, t);
+    ProgramSwitch programs(*this, F, t);
     for (std::size_t i = 0; i < F.scene.structures.size(); ++i) {
       const Structure& s = F.scene.structures[i];
       if (!in_transparency_pass(F, s)) continue;
+      // Uncut, only ghosted structures (0 < opacity < 0.999) come here.
+      const ShaderProgram& p = programs.use(cut(F, s) ? "mesh_oit" : "mesh_oit_uncut");
+      if (!cut(F, s))
+        p.set("u_reveal",
+              -std::log(1.0f - std::clamp(static_cast<float>(s.style.opacity), 0.0f, 0.999f)));
       set_shading(p, s.style, static_cast<float>(s.style.opacity));
       set_clip(p, clipped(F, s), cut(F, s));
       scissor(F.cut_fade_only || opaque(s));
@@ -1149,12 +1180,12 @@ struct Renderer::Impl {
                       GL_DEPTH_BUFFER_BIT, GL_NEAREST);
     g.BindFramebuffer(GL_FRAMEBUFFER, depthb_fbo);
     set_state_opaque();
-    const ShaderProgram& p = program("depth");
-    p.use();
-    set_common(p, F.M, t);
+    ProgramSwitch programs(*this, F, t);
     for (std::size_t i = 0; i < F.scene.structures.size(); ++i) {
-      if (opaque(F.scene.structures[i])) continue;
-      set_clip(p, clipped(F, F.scene.structures[i]), cut(F, F.scene.structures[i]));
+      const Structure& s = F.scene.structures[i];
+      if (opaque(s)) continue;
+      const ShaderProgram& p = programs.use(cut(F, s) ? "depth" : "depth_uncut");
+      set_clip(p, clipped(F, s), cut(F, s));
       draw_mesh(*F.gpu[i]);
     }
     g.Disable(GL_CLIP_DISTANCE0);

@@ -1,0 +1,221 @@
+// The viewer's line merging while the camera moves (merge_collinear in
+// apps/viewer/structure_lines.cpp): the merged polylines are drawn within
+// the tolerance of the extracted ones, keep their ends, and are never joined.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "fabrica/core/camera.hpp"
+#include "fabrica/core/projector.hpp"
+#include "structure_lines.hpp"
+
+using namespace fabrica;
+using fabrica::viewer::merge_collinear;
+
+namespace {
+
+Camera test_camera() {
+  Camera c;
+  c.eye = Vec3(0.0, 0.0, 10.0);
+  c.center = Vec3::Zero();
+  c.width = 1280;
+  c.height = 800;
+  return c;
+}
+
+/// The point of the plane z = 0 seen at `pixel`.
+Vec3 at_pixel(const Camera& c, double x, double y) {
+  Vec3 origin, direction;
+  Projector(c).ray(Vec2(x, y), origin, direction);
+  return origin + direction * (-origin.z() / direction.z());
+}
+
+Polyline polyline_through(const Camera& c, const std::vector<Vec2>& pixels,
+                          const std::vector<float>& strengths = {}) {
+  Polyline pl;
+  for (std::size_t i = 0; i < pixels.size(); ++i) {
+    LineVertex v;
+    v.position = at_pixel(c, pixels[i].x(), pixels[i].y());
+    v.strength = strengths.empty() ? 1.0f : strengths[i];
+    pl.vertices.push_back(v);
+  }
+  for (std::size_t i = 0; i + 1 < pixels.size(); ++i) pl.edge_faces.push_back(int(i));
+  return pl;
+}
+
+std::vector<Vec2> pixels_of(const Camera& c, const Polyline& pl) {
+  const Projector project(c);
+  std::vector<Vec2> out;
+  for (const LineVertex& v : pl.vertices) out.push_back(project(v.position).pixel);
+  if (pl.closed && !out.empty()) out.push_back(out.front());
+  return out;
+}
+
+double to_segment(const Vec2& p, const Vec2& a, const Vec2& b) {
+  const Vec2 ab = b - a;
+  const double l2 = ab.squaredNorm();
+  const double t = l2 > 0.0 ? std::clamp((p - a).dot(ab) / l2, 0.0, 1.0) : 0.0;
+  return (a + t * ab - p).norm();
+}
+
+double to_chain(const Vec2& p, const std::vector<Vec2>& chain) {
+  double d = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i + 1 < chain.size(); ++i)
+    d = std::min(d, to_segment(p, chain[i], chain[i + 1]));
+  return d;
+}
+
+/// Largest distance between the two drawn chains, both ways, sampling every
+/// segment at 20 points.
+double hausdorff(const std::vector<Vec2>& a, const std::vector<Vec2>& b) {
+  double worst = 0.0;
+  for (const auto* pair : {&a, &b}) {
+    const auto& from = *pair;
+    const auto& to = pair == &a ? b : a;
+    for (std::size_t i = 0; i + 1 < from.size(); ++i)
+      for (int k = 0; k <= 20; ++k)
+        worst = std::max(worst, to_chain(from[i] + (from[i + 1] - from[i]) * (k / 20.0), to));
+  }
+  return worst;
+}
+
+}  // namespace
+
+TEST(ViewerLines, MergedPolylineStaysWithinHalfAPixelAndKeepsItsEnds) {
+  const Camera c = test_camera();
+  // A wiggly curve: a sine of 60 px amplitude sampled every ~2 px, with
+  // a sub-pixel zigzag on top (what the merge removes).
+  std::vector<Vec2> pixels;
+  for (int i = 0; i <= 400; ++i)
+    pixels.emplace_back(200.0 + 2.0 * i, 400.0 + 60.0 * std::sin(i * 0.02) + (i % 2 ? 0.2 : -0.2));
+  LineSet lines;
+  lines.polylines.push_back(polyline_through(c, pixels));
+  const Polyline original = lines.polylines.front();
+  const std::size_t removed = merge_collinear(lines, c, 0.5, 0.1);
+  ASSERT_EQ(lines.polylines.size(), 1u);
+  const Polyline& merged = lines.polylines.front();
+  EXPECT_EQ(removed, original.vertices.size() - merged.vertices.size());
+  EXPECT_LT(merged.vertices.size(), original.vertices.size() / 4);  // it does merge
+  EXPECT_GT(merged.vertices.size(), 2u);                            // the sine stays a curve
+  EXPECT_EQ(merged.vertices.front().position, original.vertices.front().position);
+  EXPECT_EQ(merged.vertices.back().position, original.vertices.back().position);
+  EXPECT_TRUE(merged.edge_faces.empty());
+  // Every kept vertex is one of the original's, in order.
+  std::size_t j = 0;
+  for (const LineVertex& v : merged.vertices) {
+    while (j < original.vertices.size() && original.vertices[j].position != v.position) ++j;
+    ASSERT_LT(j, original.vertices.size());
+  }
+  EXPECT_LE(hausdorff(pixels_of(c, original), pixels_of(c, merged)), 0.5 + 1e-9);
+  // A tighter tolerance keeps more, and still holds.
+  LineSet tight;
+  tight.polylines.push_back(original);
+  merge_collinear(tight, c, 0.25, 0.1);
+  EXPECT_GT(tight.polylines.front().vertices.size(), merged.vertices.size());
+  EXPECT_LE(hausdorff(pixels_of(c, original), pixels_of(c, tight.polylines.front())), 0.25 + 1e-9);
+}
+
+TEST(ViewerLines, MergeKeepsCornersStrengthChangesAndGaps) {
+  const Camera c = test_camera();
+  // An L: the corner stays, the straight legs lose their inner vertices.
+  std::vector<Vec2> l;
+  for (int i = 0; i <= 10; ++i) l.emplace_back(100.0 + 10.0 * i, 100.0);
+  for (int i = 1; i <= 10; ++i) l.emplace_back(200.0, 100.0 + 10.0 * i);
+  // Two straight polylines end to end with a gap of 5 px between them: not joined.
+  std::vector<Vec2> a, b;
+  for (int i = 0; i <= 10; ++i) a.emplace_back(300.0 + 10.0 * i, 500.0);
+  for (int i = 0; i <= 10; ++i) b.emplace_back(405.0 + 10.0 * i, 500.0);
+  // A straight line whose strength jumps from 1 to 0.2 in the middle.
+  std::vector<Vec2> s;
+  std::vector<float> strengths;
+  for (int i = 0; i <= 10; ++i) {
+    s.emplace_back(600.0 + 10.0 * i, 300.0);
+    strengths.push_back(i < 5 ? 1.0f : 0.2f);
+  }
+  LineSet lines;
+  lines.polylines.push_back(polyline_through(c, l));
+  lines.polylines.push_back(polyline_through(c, a));
+  lines.polylines.push_back(polyline_through(c, b));
+  lines.polylines.push_back(polyline_through(c, s, strengths));
+  merge_collinear(lines, c, 0.5, 0.1);
+  ASSERT_EQ(lines.polylines.size(), 4u);
+  const auto corner = pixels_of(c, lines.polylines[0]);
+  ASSERT_EQ(corner.size(), 3u);
+  EXPECT_LT((corner[1] - Vec2(200.0, 100.0)).norm(), 1e-6);
+  for (int k : {1, 2}) {
+    const auto p = pixels_of(c, lines.polylines[k]);
+    ASSERT_EQ(p.size(), 2u);  // each its own segment: the 5 px between them stay empty
+    EXPECT_LT((p.front() - (k == 1 ? a.front() : b.front())).norm(), 1e-6);
+    EXPECT_LT((p.back() - (k == 1 ? a.back() : b.back())).norm(), 1e-6);
+  }
+  // The strength step keeps the vertices on both sides of it.
+  const Polyline& st = lines.polylines[3];
+  EXPECT_EQ(st.vertices.size(), 4u);
+  // Without the strength test (a huge tolerance) the line is one segment.
+  LineSet loose;
+  loose.polylines.push_back(polyline_through(c, s, strengths));
+  merge_collinear(loose, c, 0.5, 10.0);
+  EXPECT_EQ(loose.polylines.front().vertices.size(), 2u);
+}
+
+TEST(ViewerLines, MergeKeepsLoopsClosedAndPointsBehindTheEye) {
+  const Camera c = test_camera();
+  // A circle of 100 px radius in 360 vertices: a closed polygon of far fewer.
+  std::vector<Vec2> circle;
+  for (int i = 0; i < 360; ++i)
+    circle.emplace_back(640.0 + 100.0 * std::cos(i * M_PI / 180.0),
+                        400.0 + 100.0 * std::sin(i * M_PI / 180.0));
+  LineSet lines;
+  Polyline loop = polyline_through(c, circle);
+  loop.closed = true;
+  lines.polylines.push_back(loop);
+  // A tiny loop inside half a pixel: left as it is (a loop needs 3 vertices).
+  std::vector<Vec2> dot;
+  for (int i = 0; i < 8; ++i)
+    dot.emplace_back(100.0 + 0.1 * std::cos(i * M_PI / 4.0),
+                     100.0 + 0.1 * std::sin(i * M_PI / 4.0));
+  Polyline tiny = polyline_through(c, dot);
+  tiny.closed = true;
+  lines.polylines.push_back(tiny);
+  // A straight line in space that passes behind the eye: the vertices behind
+  // it and their neighbours stay.
+  Polyline through;
+  for (int i = 0; i <= 20; ++i) {
+    LineVertex v;
+    v.position = Vec3(0.5, 0.0, -5.0 + 1.0 * i);  // z from -5 to 15, the eye at z = 10
+    through.vertices.push_back(v);
+  }
+  lines.polylines.push_back(through);
+  merge_collinear(lines, c, 0.5, 0.1);
+  const Polyline& merged = lines.polylines[0];
+  EXPECT_TRUE(merged.closed);
+  EXPECT_GE(merged.vertices.size(), 3u);
+  EXPECT_LT(merged.vertices.size(), 100u);
+  EXPECT_LE(hausdorff(pixels_of(c, loop), pixels_of(c, merged)), 0.5 + 1e-9);
+  EXPECT_EQ(lines.polylines[1].vertices.size(), dot.size());
+  const Projector project(c);
+  const Polyline& t = lines.polylines[2];
+  const int count = static_cast<int>(through.vertices.size());
+  int checked = 0;
+  for (int i = 0; i < count; ++i) {
+    bool near_behind = false;
+    for (int k = std::max(0, i - 1); k <= std::min(count - 1, i + 1); ++k)
+      near_behind = near_behind || project(through.vertices[k].position).depth <= 0.0;
+    if (!near_behind) continue;
+    ++checked;
+    EXPECT_TRUE(std::any_of(
+        t.vertices.begin(), t.vertices.end(),
+        [&](const LineVertex& v) { return v.position == through.vertices[i].position; }))
+        << "vertex " << i;
+  }
+  EXPECT_GT(checked, 0);
+  EXPECT_LT(t.vertices.size(), through.vertices.size());  // the part in front merges
+  // No tolerance: nothing changes.
+  LineSet same;
+  same.polylines.push_back(loop);
+  EXPECT_EQ(merge_collinear(same, c, 0.0, 0.1), 0u);
+  EXPECT_EQ(same.polylines.front().vertices.size(), loop.vertices.size());
+}
