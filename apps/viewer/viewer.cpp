@@ -550,8 +550,11 @@ void Viewer::frame() {
         // Drawn on the GPU into the window's picture (no read back): the
         // window shows the background colour even for transparent exports.
         ensure_picture(camera_.width, camera_.height);
-        renderer_->render_to_framebuffer(build_scene(lines.get(), true), c, render_options(false),
-                                         picture_fbo_, picture_w_, picture_h_);
+        // Simplified while moving: the ghosts' transparency at half resolution too.
+        render::RenderOptions ro = render_options(false);
+        ro.ghosts_half_resolution = moving && simplify_while_moving_;
+        renderer_->render_to_framebuffer(build_scene(lines.get(), true), c, ro, picture_fbo_,
+                                         picture_w_, picture_h_);
         has_picture_ = true;
       } catch (const Error& e) {
         report_error(e.what());

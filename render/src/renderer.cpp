@@ -181,6 +181,7 @@ struct FrameState {
   bool cut = false;            // a cutaway with focus and context (pass_cutaway)
   PixelRect cut_region;        // the focus's pixels widened by the cutaway's reach
   bool cut_fade_only = false;  // the transparency pass draws only the cut's fade
+  bool ghost_half = false;     // the transparency pass at half resolution (pass_transparent)
 };
 
 void check_size(const Camera& camera) {
@@ -241,6 +242,11 @@ struct Renderer::Impl {
   GLuint main_fbo = 0, main_color = 0, depth_a = 0;
   GLuint overlay_fbo = 0;  // main_color without depth: overlays may sample depth A
   GLuint oit_fbo = 0, accum = 0, reveal = 0;
+  // The transparency pass at half resolution (RenderOptions::
+  // ghosts_half_resolution): its own accumulation targets (filtered
+  // linearly by the composite) and a copy of depth A, half_w x half_h.
+  GLuint half_fbo = 0, half_accum = 0, half_reveal = 0, half_depth = 0;
+  int half_w = 0, half_h = 0;
   GLuint depthb_fbo = 0, depth_b = 0;
   // Hybrid apparent ridges: stage 1 draws (q, t1) into ar_color with the
   // depth-stencil ar_depth (stencil 1 where a hybrid mesh is visible); stage 2
@@ -327,6 +333,8 @@ struct Renderer::Impl {
       stages = {vs({"mesh.vert"}), fs({"cutaway.glsl", "depth.frag"}, {"NO_CUT"})};
     else if (key == "oit_composite")
       stages = {vs({"fullscreen.vert"}), fs({"oit_composite.frag"})};
+    else if (key == "oit_composite_half")
+      stages = {vs({"fullscreen.vert"}), fs({"oit_composite.frag"}, {"HALF_RESOLUTION"})};
     else if (key == "lines")
       stages = {vs({"lines.vert"}), fs({"cutaway.glsl", "lines.frag"})};
     else if (key == "ar1")
@@ -477,16 +485,19 @@ struct Renderer::Impl {
 
   void release_targets() {
     const GlFunctions& g = gl();
-    GLuint fbos[] = {main_fbo, overlay_fbo, oit_fbo, depthb_fbo,
-                     ar_fbo,   ar_out_fbo,  lic_fbo, lic_out_fbo};
-    g.DeleteFramebuffers(8, fbos);
-    GLuint textures[] = {main_color, depth_a, accum, reveal, depth_b, ar_color, lic_color};
-    g.DeleteTextures(7, textures);
+    GLuint fbos[] = {main_fbo,   overlay_fbo, oit_fbo,     depthb_fbo, ar_fbo,
+                     ar_out_fbo, lic_fbo,     lic_out_fbo, half_fbo};
+    g.DeleteFramebuffers(9, fbos);
+    GLuint textures[] = {main_color, depth_a,   accum,      reveal,      depth_b,
+                         ar_color,   lic_color, half_accum, half_reveal, half_depth};
+    g.DeleteTextures(10, textures);
     GLuint renderbuffers[] = {ar_depth, lic_depth};
     g.DeleteRenderbuffers(2, renderbuffers);
     main_fbo = overlay_fbo = oit_fbo = depthb_fbo = ar_fbo = ar_out_fbo = 0;
     main_color = depth_a = accum = reveal = depth_b = ar_color = ar_depth = 0;
     lic_fbo = lic_out_fbo = lic_color = lic_depth = 0;
+    half_fbo = half_accum = half_reveal = half_depth = 0;
+    half_w = half_h = 0;
     release_cutaway();
     target_w = target_h = 0;
   }
@@ -524,6 +535,33 @@ struct Renderer::Impl {
     const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
     g.DrawBuffers(2, bufs);
     check_fbo("transparency framebuffer");
+  }
+
+  // Half-resolution transparency targets for render targets of target_w x
+  // target_h: every half pixel covers 2x2 pixels (the last row and column
+  // may cover one).
+  void ensure_oit_half() {
+    if (half_fbo != 0) return;
+    const GlFunctions& g = gl();
+    half_w = (target_w + 1) / 2;
+    half_h = (target_h + 1) / 2;
+    half_accum = make_texture(GL_RGBA16F, GL_RGBA, GL_FLOAT, half_w, half_h);
+    half_reveal = make_texture(GL_R16F, GL_RED, GL_FLOAT, half_w, half_h);
+    for (GLuint t : {half_accum, half_reveal}) {
+      g.BindTexture(GL_TEXTURE_2D, t);
+      g.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+      g.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    }
+    half_depth =
+        make_texture(GL_DEPTH_COMPONENT24, GL_DEPTH_COMPONENT, GL_UNSIGNED_INT, half_w, half_h);
+    g.GenFramebuffers(1, &half_fbo);
+    g.BindFramebuffer(GL_FRAMEBUFFER, half_fbo);
+    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, half_accum, 0);
+    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, half_reveal, 0);
+    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, half_depth, 0);
+    const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+    g.DrawBuffers(2, bufs);
+    check_fbo("half-resolution transparency framebuffer");
   }
 
   void ensure_depth_b() {
@@ -1043,12 +1081,30 @@ struct Renderer::Impl {
     const PixelRect r = tile_region(t, F.ghost_region);
     if (is_empty(r)) return;
     const GlFunctions& g = gl();
-    ensure_oit();
-    g.BindFramebuffer(GL_FRAMEBUFFER, oit_fbo);
+    // At half resolution: depth A copied down (nearest: one of each 2x2
+    // pixels' depths), the accumulation drawn into half_w x half_h over the
+    // same clip space, the scissor widened by a half pixel around r so
+    // that the composite's bilinear taps read only cleared pixels.
+    const bool half = F.ghost_half;
+    PixelRect area = r;
+    if (half) {
+      ensure_oit_half();
+      g.BindFramebuffer(GL_READ_FRAMEBUFFER, main_fbo);
+      g.BindFramebuffer(GL_DRAW_FRAMEBUFFER, half_fbo);
+      g.BlitFramebuffer(0, 0, t.render_w, t.render_h, 0, 0, (t.render_w + 1) / 2,
+                        (t.render_h + 1) / 2, GL_DEPTH_BUFFER_BIT, GL_NEAREST);
+      g.BindFramebuffer(GL_FRAMEBUFFER, half_fbo);
+      g.Viewport(0, 0, (t.render_w + 1) / 2, (t.render_h + 1) / 2);
+      area = {std::max(0, r.x0 / 2 - 1), std::max(0, r.y0 / 2 - 1),
+              std::min(half_w, (r.x1 + 1) / 2 + 1), std::min(half_h, (r.y1 + 1) / 2 + 1)};
+    } else {
+      ensure_oit();
+      g.BindFramebuffer(GL_FRAMEBUFFER, oit_fbo);
+    }
     // Scissored to where what it draws can be (ghosted structures, the fade
     // of cut opaque context), and to the cut's reach where only that is drawn.
     auto scissor = [&](bool cut_only) {
-      PixelRect q = r;
+      PixelRect q = area;
       if (cut_only)
         q = {std::max(q.x0, cut_rect.x0), std::max(q.y0, cut_rect.y0), std::min(q.x1, cut_rect.x1),
              std::min(q.y1, cut_rect.y1)};
@@ -1077,16 +1133,20 @@ struct Renderer::Impl {
       scissor(F.cut_fade_only || opaque(s));
       draw_mesh(*F.gpu[i]);
     }
-    scissor(F.cut_fade_only);
     g.Disable(GL_CLIP_DISTANCE0);
     g.BindFramebuffer(GL_FRAMEBUFFER, overlay_fbo);
+    if (half) {
+      g.Viewport(0, 0, t.render_w, t.render_h);
+      area = r;
+    }
+    scissor(F.cut_fade_only);
     set_state_overlay();
-    const ShaderProgram& c = program("oit_composite");
+    const ShaderProgram& c = program(half ? "oit_composite_half" : "oit_composite");
     c.use();
     g.ActiveTexture(GL_TEXTURE0);
-    g.BindTexture(GL_TEXTURE_2D, accum);
+    g.BindTexture(GL_TEXTURE_2D, half ? half_accum : accum);
     g.ActiveTexture(GL_TEXTURE1);
-    g.BindTexture(GL_TEXTURE_2D, reveal);
+    g.BindTexture(GL_TEXTURE_2D, half ? half_reveal : reveal);
     c.set("u_accum", 0);
     c.set("u_reveal", 1);
     draw_fullscreen();
@@ -1550,6 +1610,8 @@ void Renderer::draw(const Scene& scene, const Camera& camera, const RenderOption
               static_cast<float>(-n.dot(scene.clip->point))};
   }
   F.bg_alpha = options.transparent_background ? 0.0f : scene.background.a;
+  // Half-resolution ghosts: one tile, no cutaway (its fade is per pixel).
+  F.ghost_half = options.ghosts_half_resolution && tiles.size() == 1 && !F.cut;
   const GlFunctions& g = I.gl();
   for (const Tile& t : tiles) {
     I.pass_cutaway(F, t);

@@ -51,6 +51,12 @@ struct RenderOptions {
   HybridOptions hybrid;
   /// Surface LIC of the structures whose style has `lic` (docs/lic.md).
   LicOptions lic;
+  /// Draw the ghosted structures' transparency pass at half resolution in
+  /// each axis and composite it upscaled (bilinear) over the full-resolution
+  /// picture: a quarter of the blended pixels (the viewer while the camera
+  /// moves; docs/algorithms.md §16). Applies to a picture of one tile
+  /// without cutaway; otherwise ignored. Off: the picture is unchanged.
+  bool ghosts_half_resolution = false;
 };
 
 /// Where one render_hybrid frame spends its time (filled when asked for; the
