@@ -8,6 +8,8 @@ uniform sampler2D u_depth;
 uniform int u_hidden_mode;
 uniform float u_hidden_opacity;
 uniform float u_depth_tolerance;
+// 1: u_depth is at half resolution (ghosts while the camera moves).
+uniform int u_depth_shift;
 uniform vec2 u_near_far;
 uniform int u_orthographic;
 uniform float u_dash_px;
@@ -25,7 +27,7 @@ float linear_depth(float z) {
 void main() {
   float coverage = clamp(v_half_width + 0.5 - abs(v_across), 0.0, 1.0);
   if (coverage <= 0.0) discard;
-  ivec2 p = ivec2(gl_FragCoord.xy);
+  ivec2 p = ivec2(gl_FragCoord.xy) >> u_depth_shift;
   ivec2 size = textureSize(u_depth, 0) - 1;
   float scene = 0.0;
   scene = max(scene, texelFetch(u_depth, clamp(p, ivec2(0), size), 0).r);

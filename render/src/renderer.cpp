@@ -1230,16 +1230,26 @@ struct Renderer::Impl {
   }
 
   // Depth of every surface, for lines of ghosted structures.
+  // With F.ghost_half at half resolution, into half_depth (depth A copied
+  // down again: the lines of ghosted structures sample it at half their
+  // pixel coordinates, pass_lines).
   void pass_depth_b(const FrameState& F, const Tile& t) {
     if (!F.lines_need_depth_b) return;
     const GlFunctions& g = gl();
-    ensure_depth_b();
+    const int w = F.ghost_half ? (t.render_w + 1) / 2 : t.render_w;
+    const int h = F.ghost_half ? (t.render_h + 1) / 2 : t.render_h;
+    if (F.ghost_half)
+      ensure_oit_half();
+    else
+      ensure_depth_b();
+    const GLuint fbo = F.ghost_half ? half_fbo : depthb_fbo;
     g.BindFramebuffer(GL_READ_FRAMEBUFFER, main_fbo);
-    g.BindFramebuffer(GL_DRAW_FRAMEBUFFER, depthb_fbo);
-    g.BlitFramebuffer(0, 0, t.render_w, t.render_h, 0, 0, t.render_w, t.render_h,
-                      GL_DEPTH_BUFFER_BIT, GL_NEAREST);
-    g.BindFramebuffer(GL_FRAMEBUFFER, depthb_fbo);
+    g.BindFramebuffer(GL_DRAW_FRAMEBUFFER, fbo);
+    g.BlitFramebuffer(0, 0, t.render_w, t.render_h, 0, 0, w, h, GL_DEPTH_BUFFER_BIT, GL_NEAREST);
+    g.BindFramebuffer(GL_FRAMEBUFFER, fbo);
+    g.Viewport(0, 0, w, h);
     set_state_opaque();
+    g.ColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);  // half_fbo has colour targets
     ProgramSwitch programs(*this, F, t);
     for (std::size_t i = 0; i < F.scene.structures.size(); ++i) {
       const Structure& s = F.scene.structures[i];
@@ -1249,6 +1259,8 @@ struct Renderer::Impl {
       draw_mesh(*F.gpu[i]);
     }
     g.Disable(GL_CLIP_DISTANCE0);
+    g.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    g.Viewport(0, 0, t.render_w, t.render_h);
   }
 
   // Hybrid apparent ridges (where the tile meets the hybrid meshes).
@@ -1288,7 +1300,9 @@ struct Renderer::Impl {
       const Structure& s = F.scene.structures[b.structure];
       const LineStyle& ls =
           b.layer < 0 ? s.style.lines : s.polyline_layers[static_cast<std::size_t>(b.layer)].style;
-      g.BindTexture(GL_TEXTURE_2D, opaque(s) ? depth_a : depth_b);
+      const bool half = F.ghost_half && !opaque(s);
+      g.BindTexture(GL_TEXTURE_2D, opaque(s) ? depth_a : half ? half_depth : depth_b);
+      p.set("u_depth_shift", half ? 1 : 0);
       const double w = ls.width * (b.wide ? ls.contour_width_factor : 1.0) * F.line_scale;
       p.set("u_width", static_cast<float>(w));
       p.set("u_taper", static_cast<float>(ls.taper));

@@ -511,6 +511,30 @@ TEST(RenderDrawing, HalfResolutionGhostsStayCloseToTheFullPicture) {
     // Off (the still picture, exports): the same picture as before.
     EXPECT_EQ(fr::compare_images(full, renderer().render(scene, camera, {}), 0).max_abs, 0);
   }
+  // The ghost's lines are tested against its depth at half resolution: a
+  // line in front of it (z = 10.5, above the centre) is drawn, one behind
+  // the focus (z = -11, below it) omitted, as in the full picture.
+  ghost.style.lines.hidden = fr::HiddenLines::omit;
+  ghost.style.lines.width = 20.0;  // about 4 px at 200 px
+  ghost.style.lines.color = {0.0f, 0.0f, 0.0f, 1.0f};
+  ghost.style.lines.fade_by_strength = false;
+  ghost.style.lines.taper = 0.0;
+  ghost.lines.polylines = {straight_line(Vec3(-4, 3, 10.5), Vec3(4, 3, 10.5), 64),
+                           straight_line(Vec3(-4, -3, -11), Vec3(4, -3, -11), 64)};
+  scene.structures[1] = ghost;
+  {
+    const Camera camera = ortho_camera(200, 12.5);
+    fr::RenderOptions half_options;
+    half_options.ghosts_half_resolution = true;
+    const fr::Image full = renderer().render(scene, camera);
+    const fr::Image half = renderer().render(scene, camera, half_options);
+    const int front = 100 + 24, behind = 100 - 24;  // 3 mm = 24 px above and below the centre
+    for (const fr::Image* img : {&full, &half}) {
+      EXPECT_LT(img->pixel(100, img->height - 1 - front)[0], 60);    // line: dark
+      EXPECT_GT(img->pixel(100, img->height - 1 - behind)[0], 120);  // no line: the red focus
+    }
+    EXPECT_LE(fr::compare_images(full, half, 16).fraction_over, 0.05);
+  }
   // Several tiles: ignored, the same as the full picture in tiles.
   fr::RenderOptions tiled;
   tiled.max_tile_size = 96;
