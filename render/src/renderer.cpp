@@ -522,46 +522,46 @@ struct Renderer::Impl {
     check_fbo("overlay framebuffer");
   }
 
-  void ensure_oit() {
-    if (oit_fbo != 0) return;
+  // Weighted blended OIT targets of w x h: accumulation (RGBA16F) and
+  // revealage (R16F) textures, with `depth` attached, drawn into together.
+  void make_oit_targets(int w, int h, GLuint depth, GLuint& fbo, GLuint& acc, GLuint& rev,
+                        const char* name) {
     const GlFunctions& g = gl();
-    accum = make_texture(GL_RGBA16F, GL_RGBA, GL_FLOAT, target_w, target_h);
-    reveal = make_texture(GL_R16F, GL_RED, GL_FLOAT, target_w, target_h);
-    g.GenFramebuffers(1, &oit_fbo);
-    g.BindFramebuffer(GL_FRAMEBUFFER, oit_fbo);
-    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, accum, 0);
-    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, reveal, 0);
-    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, depth_a, 0);
+    acc = make_texture(GL_RGBA16F, GL_RGBA, GL_FLOAT, w, h);
+    rev = make_texture(GL_R16F, GL_RED, GL_FLOAT, w, h);
+    g.GenFramebuffers(1, &fbo);
+    g.BindFramebuffer(GL_FRAMEBUFFER, fbo);
+    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, acc, 0);
+    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, rev, 0);
+    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, depth, 0);
     const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
     g.DrawBuffers(2, bufs);
-    check_fbo("transparency framebuffer");
+    check_fbo(name);
+  }
+
+  void ensure_oit() {
+    if (oit_fbo != 0) return;
+    make_oit_targets(target_w, target_h, depth_a, oit_fbo, accum, reveal,
+                     "transparency framebuffer");
   }
 
   // Half-resolution transparency targets for render targets of target_w x
   // target_h: every half pixel covers 2x2 pixels (the last row and column
-  // may cover one).
+  // may cover one); the composite filters them linearly.
   void ensure_oit_half() {
     if (half_fbo != 0) return;
     const GlFunctions& g = gl();
     half_w = (target_w + 1) / 2;
     half_h = (target_h + 1) / 2;
-    half_accum = make_texture(GL_RGBA16F, GL_RGBA, GL_FLOAT, half_w, half_h);
-    half_reveal = make_texture(GL_R16F, GL_RED, GL_FLOAT, half_w, half_h);
+    half_depth =
+        make_texture(GL_DEPTH_COMPONENT24, GL_DEPTH_COMPONENT, GL_UNSIGNED_INT, half_w, half_h);
+    make_oit_targets(half_w, half_h, half_depth, half_fbo, half_accum, half_reveal,
+                     "half-resolution transparency framebuffer");
     for (GLuint t : {half_accum, half_reveal}) {
       g.BindTexture(GL_TEXTURE_2D, t);
       g.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
       g.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
     }
-    half_depth =
-        make_texture(GL_DEPTH_COMPONENT24, GL_DEPTH_COMPONENT, GL_UNSIGNED_INT, half_w, half_h);
-    g.GenFramebuffers(1, &half_fbo);
-    g.BindFramebuffer(GL_FRAMEBUFFER, half_fbo);
-    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, half_accum, 0);
-    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, half_reveal, 0);
-    g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, half_depth, 0);
-    const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
-    g.DrawBuffers(2, bufs);
-    check_fbo("half-resolution transparency framebuffer");
   }
 
   void ensure_depth_b() {

@@ -62,6 +62,21 @@ double ink_across(const fr::Image& img, int x) {
   return sum;
 }
 
+// A blue ghost (radius 10, opacity 0.25, no lines) and a red opaque focus
+// (radius 5) inside it, in that order, over `background`.
+fr::Scene ghost_over_focus(const fr::Color& background) {
+  fr::Scene scene;
+  fr::Structure focus = sphere_structure(5.0);
+  focus.style.color = {1.0f, 0.0f, 0.0f, 1.0f};
+  fr::Structure ghost = sphere_structure(10.0, fr::Role::context);
+  ghost.style.color = {0.0f, 0.0f, 1.0f, 1.0f};
+  ghost.style.opacity = 0.25;
+  ghost.style.families.clear();
+  scene.structures = {ghost, focus};
+  scene.background = background;
+  return scene;
+}
+
 }  // namespace
 
 TEST(RenderDrawing, LambertSphereMatchesAnalyticProfile) {
@@ -179,16 +194,7 @@ TEST(RenderDrawing, HiddenLinesOmittedDashedOrShown) {
 }
 
 TEST(RenderDrawing, GhostedContextBlendsOverFocusInAnyOrder) {
-  fr::Scene scene;
-  fr::Structure focus = sphere_structure(5.0);
-  focus.style.color = {1.0f, 0.0f, 0.0f, 1.0f};
-  fr::Structure ghost = sphere_structure(10.0, fr::Role::context);
-  ghost.style.color = {0.0f, 0.0f, 1.0f, 1.0f};
-  ghost.style.opacity = 0.25;
-  ghost.style.ambient = 0.0;
-  ghost.style.families.clear();
-  scene.structures = {ghost, focus};
-  scene.background = {0.0f, 0.0f, 0.0f, 1.0f};
+  fr::Scene scene = ghost_over_focus({0.0f, 0.0f, 0.0f, 1.0f});
   const fr::Image a = renderer().render(scene, ortho_camera(200, 12.5));
   std::swap(scene.structures[0], scene.structures[1]);
   const fr::Image b = renderer().render(scene, ortho_camera(200, 12.5));
@@ -484,15 +490,8 @@ TEST(RenderMeshLod, ClusterSimplifyKeepsTheShapeWithFewerFaces) {
 // mean 1.2), and inside the ghost, away from edges, within 3 levels. Off,
 // nothing changes; a picture of several tiles ignores it.
 TEST(RenderDrawing, HalfResolutionGhostsStayCloseToTheFullPicture) {
-  fr::Scene scene;
-  fr::Structure focus = sphere_structure(5.0);
-  focus.style.color = {1.0f, 0.0f, 0.0f, 1.0f};
-  fr::Structure ghost = sphere_structure(10.0, fr::Role::context);
-  ghost.style.color = {0.0f, 0.0f, 1.0f, 1.0f};
-  ghost.style.opacity = 0.25;
-  ghost.style.families.clear();
-  scene.structures = {focus, ghost};
-  scene.background = {1.0f, 1.0f, 1.0f, 1.0f};
+  fr::Scene scene = ghost_over_focus({1.0f, 1.0f, 1.0f, 1.0f});
+  fr::Structure& ghost = scene.structures[0];
   for (int size : {200, 201}) {  // even and odd: the last half pixel covers one
     const Camera camera = ortho_camera(size, 12.5);
     const fr::Image full = renderer().render(scene, camera);
@@ -521,7 +520,6 @@ TEST(RenderDrawing, HalfResolutionGhostsStayCloseToTheFullPicture) {
   ghost.style.lines.taper = 0.0;
   ghost.lines.polylines = {straight_line(Vec3(-4, 3, 10.5), Vec3(4, 3, 10.5), 64),
                            straight_line(Vec3(-4, -3, -11), Vec3(4, -3, -11), 64)};
-  scene.structures[1] = ghost;
   {
     const Camera camera = ortho_camera(200, 12.5);
     fr::RenderOptions half_options;
