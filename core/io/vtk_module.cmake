@@ -20,7 +20,12 @@ add_library(fabrica_io_vtk MODULE
 # the module exports its entry point only.
 target_link_libraries(fabrica_io_vtk PRIVATE
   fabrica_io fabrica::core fabrica::warnings TBB::tbb ${_fabrica_vtk_modules})
-target_link_options(fabrica_io_vtk PRIVATE LINKER:--exclude-libs,ALL LINKER:--no-undefined)
+target_link_options(fabrica_io_vtk PRIVATE LINKER:--exclude-libs,ALL)
+# Every symbol resolved at link time, except under clang's sanitizers and
+# libFuzzer (FABRICA_FUZZ): their runtimes live in the executable only.
+if(NOT (CMAKE_CXX_COMPILER_ID MATCHES "Clang" AND (FABRICA_SANITIZE OR FABRICA_FUZZ)))
+  target_link_options(fabrica_io_vtk PRIVATE LINKER:--no-undefined)
+endif()
 set_target_properties(fabrica_io_vtk PROPERTIES
   CXX_VISIBILITY_PRESET hidden VISIBILITY_INLINES_HIDDEN ON POSITION_INDEPENDENT_CODE ON
   LIBRARY_OUTPUT_DIRECTORY ${PROJECT_BINARY_DIR}/${CMAKE_INSTALL_LIBDIR}/fabrica)

@@ -184,6 +184,11 @@ TEST_F(VtpOffsets, AsciiOffsetsAreChecked) {
   expect_input_error(file("huge.vtp", vtp("3 4000000000")), "end at 4000000000");
   expect_input_error(file("negative.vtp", vtp("-3 6")), "hold -3 at index 0");
   expect_input_error(file("word.vtp", vtp("3 six")), "\"six\", which is not a number");
+  // A cell block's end tag without its start (found by fuzz_vtp: the offsets
+  // check read the block it was not in): refused as malformed, no crash.
+  std::string stray = vtp("3 6");
+  stray.erase(stray.find("<Polys>\n"), 8);
+  expect_input_error(file("stray_end.vtp", stray));
 }
 
 TEST_F(VtpOffsets, BundledCompressedVtpStillReads) {

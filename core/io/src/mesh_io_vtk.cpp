@@ -301,7 +301,7 @@ class VtpChecker {
         connectivity_values_.reset();
         offsets_.reset();
       } else if (b) {
-        check_offsets();
+        if (block_) check_offsets();  // (an end tag without its start: VTK's parser says so)
         block_.reset();
       } else if (tag.starts_with("Points")) {
         in_points_ = true;
