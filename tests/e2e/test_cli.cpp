@@ -689,6 +689,20 @@ TEST(VtkModule, WithoutItOtherFormatsWorkAndVtpIsExitCode4) {
   EXPECT_NE(r.err.find(vtp.string()), std::string::npos) << describe(r);
 }
 
+// Bad extraction options are bad input (exit 2) whether or not the module is
+// there: they are checked before it is looked for.
+TEST(VtkModule, WithoutItBadExtractOptionsAreStillExitCode2) {
+  if (!has_command("extract")) GTEST_SKIP() << "no extract command in this build";
+  const fs::path dir = work_dir();
+  const ScopedEnv missing("FABRICA_IO_VTK_MODULE", (dir / "libfabrica_io_vtk.so").string());
+  const Outcome r = run_fabrica(
+      {"extract", totalseg().string(), "--passband", "5", "-o", (dir / "out").string()});
+  EXPECT_EQ(r.code, 2) << describe(r);
+  EXPECT_TRUE(one_line(r.err)) << describe(r);
+  EXPECT_NE(r.err.find("pass band"), std::string::npos) << describe(r);
+  EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
 // An installed layout (bin/fabrica, lib/fabrica/libfabrica_io_vtk.so)
 // anywhere: the module beside the executable's bin folder is the one loaded.
 TEST(VtkModule, FoundBesideTheExecutablesBinFolder) {

@@ -283,28 +283,13 @@ TriangleMesh extract_iso(const LabelVolume& volume, double iso, const ExtractOpt
   return mesh;
 }
 
-void check_options(const ExtractOptions& options) {
-  if (options.smoothing_iterations &&
-      (*options.smoothing_iterations < 0 || *options.smoothing_iterations > 10000))
-    throw InputError("smoothing iterations must be between 0 and 10000, got " +
-                     std::to_string(*options.smoothing_iterations));
-  if (!(options.smoothing_passband >= 1e-3 && options.smoothing_passband < 2.0))
-    throw InputError("smoothing pass band (--passband) must be in [0.001, 2), got " +
-                     std::to_string(options.smoothing_passband));
-  if (!(options.decimate >= 0.0 && options.decimate < 1.0))
-    throw InputError("decimation must be a fraction of faces to remove in [0, 1), got " +
-                     std::to_string(options.decimate));
-  if (options.iso_value && !std::isfinite(*options.iso_value))
-    throw InputError("iso value must be a finite number");
-}
-
 }  // namespace
 
 void detail::smooth_surface_with_vtk(TriangleMesh& mesh, int iterations, double passband) {
   ExtractOptions check;
   check.smoothing_iterations = iterations;
   check.smoothing_passband = passband;
-  check_options(check);
+  check_extract_options(check);
   check_mesh_indices_and_values(mesh, "mesh");
   if (iterations == 0 || mesh.faces.empty()) return;
   vtkNew<vtkPoints> points;
@@ -333,7 +318,7 @@ void detail::smooth_surface_with_vtk(TriangleMesh& mesh, int iterations, double 
 
 std::vector<ExtractedSurface> detail::extract_surfaces_with_vtk(const LabelVolume& volume,
                                                                 const ExtractOptions& options) {
-  check_options(options);
+  check_extract_options(options);
   const std::string what = "volume '" + volume.path + "'";
   const std::size_t voxels = volume.geometry.voxel_count();
   if (volume.integer_labels) {

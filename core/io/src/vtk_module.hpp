@@ -36,6 +36,11 @@ struct VtkModule {
   void (*smooth_surface)(TriangleMesh& mesh, int iterations, double passband) = nullptr;
 };
 
+/// Throws InputError for out-of-range extraction or smoothing options: checked
+/// by the host before the module is loaded (bad options are exit code 2 with
+/// or without the module) and again by the module.
+void check_extract_options(const ExtractOptions& options);
+
 /// The module's implementations (src/mesh_io_vtk.cpp, src/label_volume_extract.cpp).
 void read_vtp_with_vtk(const std::filesystem::path& path, const std::string& name,
                        const ReadOptions& options, LoadedMesh& out);

@@ -2,6 +2,7 @@
 // the VTK-backed functions of fabrica_io to it.
 #include <dlfcn.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
@@ -111,13 +112,37 @@ void detail::read_vtp(const std::filesystem::path& path, const std::string& name
   vtk_module(name + ": reading .vtp files").read_vtp(path, name, options, out);
 }
 
+void detail::check_extract_options(const ExtractOptions& options) {
+  if (options.smoothing_iterations &&
+      (*options.smoothing_iterations < 0 || *options.smoothing_iterations > 10000))
+    throw InputError("smoothing iterations must be between 0 and 10000, got " +
+                     std::to_string(*options.smoothing_iterations));
+  if (!(options.smoothing_passband >= 1e-3 && options.smoothing_passband < 2.0))
+    throw InputError("smoothing pass band (--passband) must be in [0.001, 2), got " +
+                     std::to_string(options.smoothing_passband));
+  if (!(options.decimate >= 0.0 && options.decimate < 1.0))
+    throw InputError("decimation must be a fraction of faces to remove in [0, 1), got " +
+                     std::to_string(options.decimate));
+  if (options.iso_value && !std::isfinite(*options.iso_value))
+    throw InputError("iso value must be a finite number");
+}
+
 std::vector<ExtractedSurface> extract_surfaces(const LabelVolume& volume,
                                                const ExtractOptions& options) {
+  detail::check_extract_options(options);
   return detail::vtk_module("volume '" + volume.path + "': extracting surfaces")
       .extract_surfaces(volume, options);
 }
 
 void smooth_surface(TriangleMesh& mesh, int iterations, double passband) {
+  ExtractOptions check;
+  check.smoothing_iterations = iterations;
+  check.smoothing_passband = passband;
+  detail::check_extract_options(check);
+  if (iterations == 0) {  // nothing to smooth: no need for the module
+    check_mesh_indices_and_values(mesh, "mesh");
+    return;
+  }
   detail::vtk_module("windowed-sinc smoothing (--smooth)")
       .smooth_surface(mesh, iterations, passband);
 }
