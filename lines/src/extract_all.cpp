@@ -127,7 +127,7 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
   try {
     // D_t1 q1 (the apparent ridges' second field pass) is computed in the
     // apparent-ridge task below, concurrently with the other families.
-    detail::update_view_fields(fields_, *surface_, camera, req, precompute_.get(), true);
+    detail::update_view_fields(fields_, *surface_, camera, req, precompute_.get(), true, true);
   } catch (...) {
     view_independent.wait();
     throw;
@@ -177,7 +177,8 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
   std::optional<detail::Dt1q1Blocks> dt1q1;
   detail::ChunkReady ready;
   if (pipelined) {
-    dt1q1.emplace(fields_, *surface_, fields_.apparent_cull_threshold.has_value(), *precompute_);
+    dt1q1.emplace(fields_, *surface_, fields_.apparent_cull_threshold.has_value(), *precompute_,
+                  false);
     std::vector<std::int32_t>& top = apparent_faces_->top_vertex;
     if (top.empty()) {
       const auto& faces = surface_->faces();
@@ -239,7 +240,7 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
           break;
         }
         detail::update_dt1q1(fields_, *surface_, fields_.apparent_cull_threshold.has_value(),
-                             precompute_.get());
+                             precompute_.get(), false);
         ring_done();
         if (three) {
           if (arrived.fetch_add(1) == 1) apparent_kernel();

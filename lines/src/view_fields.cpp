@@ -242,7 +242,7 @@ void update_view_fields(ViewFields& fields, const Surface& surface, const Camera
 
 void detail::update_view_fields(ViewFields& fields, const Surface& surface, const Camera& camera,
                                 const ViewFieldsRequest& request, const LinePrecompute* precompute,
-                                bool defer_dt1q1) {
+                                bool defer_dt1q1, bool same_surface) {
   validate_camera(camera);
   const std::size_t nv = surface.vertex_count();
   fields.camera = camera;
@@ -254,6 +254,9 @@ void detail::update_view_fields(ViewFields& fields, const Surface& surface, cons
   detail::resize_or_clear(fields.t1, request.apparent, nv);
   detail::resize_or_clear(fields.t1_world, request.apparent, nv);
   detail::resize_or_clear(fields.dt1q1, request.apparent, nv);
+  // Sized before: for this surface when same_surface, so the positions
+  // written then are current.
+  const bool positioned = same_surface && fields.apparent_vertex.size() == nv;
   detail::resize_or_clear(fields.apparent_vertex, request.apparent, nv);
   detail::resize_or_clear(fields.signs, radial, nv);
   fields.apparent_cull_threshold =
@@ -369,7 +372,11 @@ void detail::update_view_fields(ViewFields& fields, const Surface& surface, cons
 #endif
       // Portable: one vertex at a time (the reference the AVX2 pass matches).
       detail::parallel_range(nv, vertex_and_direction);
-    if (want_app && !defer_dt1q1) detail::update_dt1q1(fields, surface, cull, precompute);
+    if (want_app && same_surface && !positioned)
+      detail::parallel_range(nv,
+                             [&](std::size_t i) { fields.apparent_vertex[i].position = pos[i]; });
+    if (want_app && !defer_dt1q1)
+      detail::update_dt1q1(fields, surface, cull, precompute, !same_surface);
   }
 
   detail::update_light_fields(fields, surface, camera, request, precompute, radial);

@@ -27,11 +27,14 @@ namespace fabrica::detail {
 
 namespace {
 
-inline void store_apparent_vertex(ApparentVertex& a, double d, const Vec3& t1_world, double q1,
-                                  const Vec3& pos) {
+inline void store_apparent_vertex(ApparentVertex& a, double d, const Vec3& t1_world, double q1) {
   a.field = d * t1_world;
   a.dt1q1 = d;
   a.q1 = q1;
+}
+inline void store_apparent_vertex(ApparentVertex& a, double d, const Vec3& t1_world, double q1,
+                                  const Vec3& pos) {
+  store_apparent_vertex(a, d, t1_world, q1);
   a.position = pos;
 }
 
@@ -329,6 +332,11 @@ struct RingPass {
   // With cull on the AVX2 pass: bit v of the words is kQ1Above of vertex v
   // (q1_above_bits), so a ring's test is one gather; nullptr otherwise.
   const std::uint32_t* above = nullptr;
+  // false: the records' positions are already there (written once for the
+  // surface, update_view_fields' same_surface) and not written again: the
+  // position stream and a third of each record's stores (~0.2 ms a view on
+  // igea at 1T) saved.
+  bool write_pos = true;
 
   // The faces of vertex i with neighbours (a, b) (relative to the ring) in
   // the order given by `next` (returns false at the end), one at a time, as
@@ -388,7 +396,10 @@ struct RingPass {
   // dt1q1 (0 where not finite) and the record of vertex i.
   [[gnu::always_inline]] inline void store(std::size_t i, double d) const {
     out[i] = std::isfinite(d) ? d : 0.0;
-    store_apparent_vertex(packed[i], out[i], t1_world[i], q1[i], pos[i]);
+    if (write_pos)
+      store_apparent_vertex(packed[i], out[i], t1_world[i], q1[i], pos[i]);
+    else
+      store_apparent_vertex(packed[i], out[i], t1_world[i], q1[i]);
   }
 
   // Copies of the pass (`r`) in registers, not reloaded after the stores.
@@ -563,7 +574,7 @@ struct RingPass {
 
 // The RingPass of update_dt1q1 over the precomputed tangent ring.
 RingPass ring_pass(ViewFields& fields, const Surface& surface, bool cull,
-                   const LinePrecompute& precompute) {
+                   const LinePrecompute& precompute, bool write_positions) {
   const auto& pos = surface.positions();
   const double* q1 = fields.q1.data();
   const std::uint8_t* sg = fields.signs.data();
@@ -590,7 +601,9 @@ RingPass ring_pass(ViewFields& fields, const Surface& surface, bool cull,
                   pos.data(),
                   fields.dt1q1.data(),
                   fields.apparent_vertex.data(),
-                  cull};
+                  cull,
+                  nullptr,
+                  write_positions};
 }
 
 }  // namespace
@@ -616,9 +629,9 @@ void attach_above_bits(RingPass& pass, const ViewFields& fields,
 }  // namespace
 
 Dt1q1Blocks::Dt1q1Blocks(ViewFields& fields, const Surface& surface, bool cull,
-                         const LinePrecompute& precompute) {
+                         const LinePrecompute& precompute, bool write_positions) {
   const std::size_t nv = surface.vertex_count(), blocks = (nv + kBlock - 1) / kBlock;
-  state_.reset(new State{ring_pass(fields, surface, cull, precompute),
+  state_.reset(new State{ring_pass(fields, surface, cull, precompute, write_positions),
                          nv,
                          blocks,
                          {},
@@ -666,7 +679,7 @@ void Dt1q1Blocks::ready_through(std::size_t v) {
 }
 
 void update_dt1q1(ViewFields& fields, const Surface& surface, bool cull,
-                  const LinePrecompute* precompute) {
+                  const LinePrecompute* precompute, bool write_positions) {
   const std::size_t nv = surface.vertex_count();
   const auto& pos = surface.positions();
   const auto& normals = surface.vertex_normals();
@@ -684,7 +697,7 @@ void update_dt1q1(ViewFields& fields, const Surface& surface, bool cull,
   const double* q1 = fields.q1.data();
   const std::uint8_t* sg = fields.signs.data();
   if (precompute) {
-    RingPass pass = ring_pass(fields, surface, cull, *precompute);
+    RingPass pass = ring_pass(fields, surface, cull, *precompute, write_positions);
     std::vector<std::uint32_t> above;
     attach_above_bits(pass, fields, above);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, Dt1q1Blocks::kBlock),

@@ -38,10 +38,15 @@ void update_light_fields(ViewFields& fields, const Surface& surface, const Camer
 
 /// update_view_fields(), optionally leaving fields.dt1q1 unset (sized, not
 /// computed) so the caller can compute it with update_dt1q1() concurrently
-/// with the families that do not need it.
+/// with the families that do not need it. With `same_surface` the caller
+/// guarantees that `fields` has only ever been updated for this `surface`
+/// (a LineExtractor's own fields): the positions in fields.apparent_vertex
+/// are then written for every vertex only when the array is (re)sized, and
+/// the D_t1 q1 pass must be told not to write them again
+/// (write_positions = false below); the deferred pass's caller does that.
 void update_view_fields(ViewFields& fields, const Surface& surface, const Camera& camera,
                         const ViewFieldsRequest& request, const LinePrecompute* precompute,
-                        bool defer_dt1q1);
+                        bool defer_dt1q1, bool same_surface = false);
 
 /// D_t1 q1 (fields.dt1q1) and the apparent-ridge kernel's records
 /// (fields.apparent_vertex: E = D_t1 q1 t1_world, D_t1 q1, q1, position)
@@ -49,9 +54,11 @@ void update_view_fields(ViewFields& fields, const Surface& surface, const Camera
 /// finite differences along t1 (docs/algorithms.md §6.2).
 /// With `cull`, only at vertices of faces with a corner carrying kQ1Above
 /// (dt1q1 0 elsewhere, records left as they were). `precompute` supplies
-/// the tangent ring; nullptr: from the topology.
+/// the tangent ring; nullptr: from the topology. `write_positions` false:
+/// the records' positions are current (update_view_fields' same_surface)
+/// and are not written again (with `precompute` only).
 void update_dt1q1(ViewFields& fields, const Surface& surface, bool cull,
-                  const LinePrecompute* precompute);
+                  const LinePrecompute* precompute, bool write_positions = true);
 
 /// update_dt1q1 (with the precomputed tangent ring) in blocks of kBlock
 /// vertices that any thread can claim, in increasing vertex order, so a
@@ -71,7 +78,7 @@ class Dt1q1Blocks {
  public:
   static constexpr std::size_t kBlock = 2048;
   Dt1q1Blocks(ViewFields& fields, const Surface& surface, bool cull,
-              const LinePrecompute& precompute);
+              const LinePrecompute& precompute, bool write_positions = true);
   ~Dt1q1Blocks();
   Dt1q1Blocks(const Dt1q1Blocks&) = delete;
   Dt1q1Blocks& operator=(const Dt1q1Blocks&) = delete;

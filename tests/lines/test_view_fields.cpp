@@ -382,6 +382,56 @@ TEST(LinesViewFields, Dt1q1InBlocksIsTheWholePass) {
   EXPECT_EQ(differing_segments(got.segments, want.segments), 0u);
 }
 
+// A LineExtractor's records keep their positions from when the array was
+// sized (same_surface) and the D_t1 q1 pass does not write them again: the
+// records the kernel reads are still the public pass's, bit for bit, over
+// several views and after apparent ridges were switched off and on (the
+// array cleared and sized again); positions written nowhere else fail it.
+TEST(LinesViewFields, ExtractorRecordsKeepTheirPositions) {
+  const Surface surface = load("meshes/classic/libigl_camelhead.off", true);
+  LineOptions o;
+  o.families = reference_families();
+  LineExtractor ex(surface, o);
+  const double fs = surface.feature_size();
+  ViewFieldsRequest req;
+  req.apparent_cull_threshold = o.apparent.threshold / (fs * fs);
+  req.suggestive_test_shift = o.suggestive.threshold / (fs * fs);
+  const Vec3 dirs[] = {Vec3(0.2, -0.3, 1.0), Vec3(-1.0, 0.4, 0.1), Vec3(0.3, 1.0, -0.5)};
+  for (int round = 0; round < 4; ++round) {
+    SCOPED_TRACE(round);
+    if (round == 2) {
+      LineOptions off = o;
+      off.families = {LineFamily::contour};
+      ex.set_options(off);
+      (void)ex.extract(camera_towards(surface, dirs[0]));
+      EXPECT_TRUE(ex.fields().apparent_vertex.empty());
+      ex.set_options(o);
+    }
+    const Camera c = camera_towards(surface, dirs[round % 3]);
+    (void)ex.extract(c);
+    const ViewFields whole = compute_view_fields(surface, c, req, &ex.precompute());
+    const ViewFields& f = ex.fields();
+    ASSERT_EQ(f.apparent_vertex.size(), surface.vertex_count());
+    std::size_t records = 0, differ = 0;
+    for (const Face& face : surface.faces()) {
+      if (!((whole.signs[face[0]] | whole.signs[face[1]] | whole.signs[face[2]]) & kQ1Above))
+        continue;
+      for (int k = 0; k < 3; ++k) {
+        ++records;
+        differ += std::memcmp(&f.apparent_vertex[face[k]], &whole.apparent_vertex[face[k]],
+                              sizeof(ApparentVertex)) != 0;
+      }
+    }
+    EXPECT_GT(records, 100u);
+    EXPECT_EQ(differ, 0u);
+    // Every record's position is the vertex's, read or not.
+    std::size_t off_position = 0;
+    for (std::size_t i = 0; i < surface.vertex_count(); ++i)
+      off_position += f.apparent_vertex[i].position != surface.positions()[i];
+    EXPECT_EQ(off_position, 0u);
+  }
+}
+
 // D_t1 q1 from the precomputed tangent ring (neighbour fans, and two
 // neighbours per face where the ring is not a closed fan: boundaries,
 // degenerate and non-manifold vertices) against the independent
