@@ -394,9 +394,12 @@ struct RingPass {
   }
 
   // dt1q1 (0 where not finite) and the record of vertex i.
+  // Pos: write_pos (a template argument: no branch, nor register, in the
+  // loop).
+  template <bool Pos>
   [[gnu::always_inline]] inline void store(std::size_t i, double d) const {
     out[i] = std::isfinite(d) ? d : 0.0;
-    if (write_pos)
+    if constexpr (Pos)
       store_apparent_vertex(packed[i], out[i], t1_world[i], q1[i], pos[i]);
     else
       store_apparent_vertex(packed[i], out[i], t1_world[i], q1[i]);
@@ -405,12 +408,18 @@ struct RingPass {
   // Copies of the pass (`r`) in registers, not reloaded after the stores.
   FABRICA_DT1Q1_MULTIVERSION void portable(std::size_t b, std::size_t e) const {
     const RingPass r = *this;
-    r.run<false>(b, e);
+    if (write_pos)
+      r.run<false, true>(b, e);
+    else
+      r.run<false, false>(b, e);
   }
 #if defined(FABRICA_LINES_AVX2)
   [[gnu::target("arch=x86-64-v3")]] void wide(std::size_t b, std::size_t e) const {
     const RingPass r = *this;
-    r.run<true>(b, e);
+    if (write_pos)
+      r.run<true, true>(b, e);
+    else
+      r.run<true, false>(b, e);
   }
 #endif
   // The same bits either way: the wide pass only finds the candidate faces
@@ -427,30 +436,33 @@ struct RingPass {
     return TwoInputs{xs + t.jb, ys + t.jb, nbr + t.jb,         t.j0, t.j1, t.two,
                      t1[i][0],  t1[i][1],  std::abs(ndotv[i]), q1[i]};
   }
+  template <bool Pos>
   [[gnu::always_inline]] inline void flush_portable(const TwoFaces* queue, int nq) const {
     for (int k = 0; k < nq; ++k) {
       const TwoInputs t = inputs(queue[k]);
-      store(queue[k].i, two_faces(t.x, t.y, t.nbr, q1, t.j0, t.j1, t.two, t.c, t.sn, t.an, t.q0));
+      store<Pos>(queue[k].i,
+                 two_faces(t.x, t.y, t.nbr, q1, t.j0, t.j1, t.two, t.c, t.sn, t.an, t.q0));
     }
   }
 #if defined(FABRICA_LINES_AVX2)
   // Two vertices at a time (two_faces2), then the odd one. Not inlined: the
   // main loop keeps fewer values live (fewer spills; 0.8 M fewer
   // instructions over 5 igea views).
+  template <bool Pos>
   [[gnu::target("arch=x86-64-v3"), gnu::noinline]] void flush_wide(const TwoFaces* queue,
                                                                    int nq) const {
     int k = 0;
     for (; k + 2 <= nq; k += 2) {
       double ra, rb;
       two_faces2(inputs(queue[k]), inputs(queue[k + 1]), q1, ra, rb);
-      store(queue[k].i, ra);
-      store(queue[k + 1].i, rb);
+      store<Pos>(queue[k].i, ra);
+      store<Pos>(queue[k + 1].i, rb);
     }
-    flush_portable(queue + k, nq - k);
+    flush_portable<Pos>(queue + k, nq - k);
   }
 #endif
 
-  template <bool Wide>
+  template <bool Wide, bool Pos>
   [[gnu::always_inline]] inline void run(std::size_t b, std::size_t e) const {
     constexpr int kQueue = 16;
     TwoFaces queue[kQueue];
@@ -459,12 +471,12 @@ struct RingPass {
     auto flush = [&] {
 #if defined(FABRICA_LINES_AVX2)
       if constexpr (Wide) {
-        flush_wide(queue, nq);
+        flush_wide<Pos>(queue, nq);
         nq = 0;
         return;
       }
 #endif
-      flush_portable(queue, nq);
+      flush_portable<Pos>(queue, nq);
       nq = 0;
     };
     for (std::size_t i = b; i < e; ++i) {
@@ -514,7 +526,7 @@ struct RingPass {
         }
       }
       if (t1_world[i].squaredNorm() == 0.0) {
-        store(i, 0.0);
+        store<Pos>(i, 0.0);
         continue;
       }
       const __m128d cs = _mm_loadu_pd(t1[i].data());
@@ -541,7 +553,7 @@ struct RingPass {
                 if (nq == kQueue) flush();
                 continue;
               }
-              store(i, 0.0);
+              store<Pos>(i, 0.0);
               continue;
             }
           }
@@ -565,7 +577,7 @@ struct RingPass {
       } else {
         result = general(i, nullptr, 0, c, sn, an, q0);
       }
-      store(i, result);
+      store<Pos>(i, result);
     }
     flush();
     if (doubles) dt1q1_double_path().fetch_add(doubles, std::memory_order_relaxed);
