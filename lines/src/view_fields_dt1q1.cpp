@@ -483,10 +483,16 @@ struct RingPass {
       const std::int32_t jb = off[i], je = off[i + 1];
       {
         // q1 of the neighbours of a vertex kAhead further (its ring
-        // entries are read in order; q1 is scattered), every other entry.
+        // entries are read in order; q1 is scattered), every other entry,
+        // and the start of its offsets (x, y): the hardware prefetcher
+        // misses them where culled vertices leave gaps (ring pass alone
+        // 2.04 → 1.93 ms on igea at 1T, min of 60).
         constexpr std::size_t kAhead = 6;
-        const std::int32_t* a = nbr + off[std::min(i + kAhead, e)];
+        const std::int32_t ahead = off[std::min(i + kAhead, e)];
+        const std::int32_t* a = nbr + ahead;
         for (int k = 0; k < 8; k += 2) __builtin_prefetch(q1 + a[k]);
+        __builtin_prefetch(xs + ahead);
+        __builtin_prefetch(ys + ahead);
       }
       if (cull && !(sg[i] & kQ1Above)) {
         // Branch-free over the ring (bytes), by pairs: a ring of odd size
