@@ -58,6 +58,25 @@ std::size_t differing_segments(const std::vector<LineSegment>& a,
   return n;
 }
 
+// The apparent-ridge records that the kernel reads (the corners of faces
+// with kQ1Above at some corner in `whole`) and differ in any bit between
+// `f` and `whole`; `records` counts those read.
+std::size_t differing_records(const Surface& surface, const ViewFields& f, const ViewFields& whole,
+                              std::size_t& records) {
+  std::size_t differ = 0;
+  records = 0;
+  for (const Face& face : surface.faces()) {
+    if (!((whole.signs[face[0]] | whole.signs[face[1]] | whole.signs[face[2]]) & kQ1Above))
+      continue;
+    for (int k = 0; k < 3; ++k) {
+      ++records;
+      differ += std::memcmp(&f.apparent_vertex[face[k]], &whole.apparent_vertex[face[k]],
+                            sizeof(ApparentVertex)) != 0;
+    }
+  }
+  return differ;
+}
+
 #define EXPECT_SAME_FIELD(a, b, name)                           \
   do {                                                          \
     EXPECT_FALSE((a).name.empty()) << #name;                    \
@@ -352,16 +371,8 @@ TEST(LinesViewFields, Dt1q1InBlocksIsTheWholePass) {
     EXPECT_EQ(wrong, 0u) << "round " << round;
     // The records the kernel reads (corners of faces with q1 above the
     // threshold somewhere) are the whole pass's too.
-    std::size_t records = 0, differ = 0;
-    for (const Face& face : surface.faces()) {
-      if (!((whole.signs[face[0]] | whole.signs[face[1]] | whole.signs[face[2]]) & kQ1Above))
-        continue;
-      for (int k = 0; k < 3; ++k) {
-        ++records;
-        differ += std::memcmp(&f.apparent_vertex[face[k]], &whole.apparent_vertex[face[k]],
-                              sizeof(ApparentVertex)) != 0;
-      }
-    }
+    std::size_t records = 0;
+    const std::size_t differ = differing_records(surface, f, whole, records);
     EXPECT_GT(records, 0u);
     EXPECT_EQ(differ, 0u) << "round " << round;
   }
@@ -412,16 +423,8 @@ TEST(LinesViewFields, ExtractorRecordsKeepTheirPositions) {
     const ViewFields whole = compute_view_fields(surface, c, req, &ex.precompute());
     const ViewFields& f = ex.fields();
     ASSERT_EQ(f.apparent_vertex.size(), surface.vertex_count());
-    std::size_t records = 0, differ = 0;
-    for (const Face& face : surface.faces()) {
-      if (!((whole.signs[face[0]] | whole.signs[face[1]] | whole.signs[face[2]]) & kQ1Above))
-        continue;
-      for (int k = 0; k < 3; ++k) {
-        ++records;
-        differ += std::memcmp(&f.apparent_vertex[face[k]], &whole.apparent_vertex[face[k]],
-                              sizeof(ApparentVertex)) != 0;
-      }
-    }
+    std::size_t records = 0;
+    const std::size_t differ = differing_records(surface, f, whole, records);
     EXPECT_GT(records, 100u);
     EXPECT_EQ(differ, 0u);
     // Every record's position is the vertex's, read or not.
