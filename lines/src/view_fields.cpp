@@ -258,9 +258,14 @@ void detail::update_view_fields(ViewFields& fields, const Surface& surface, cons
   detail::resize_or_clear(fields.t1_world, request.apparent, nv);
   detail::resize_or_clear(fields.dt1q1, request.apparent, nv);
   // Sized before: for this surface when same_surface, so the positions
-  // written then are current.
+  // written then are current. Written right after sizing, so a failure
+  // later in this call cannot leave a sized array without them.
   const bool positioned = same_surface && fields.apparent_vertex.size() == nv;
   detail::resize_or_clear(fields.apparent_vertex, request.apparent, nv);
+  if (request.apparent && same_surface && !positioned) {
+    const auto& p = surface.positions();
+    detail::parallel_range(nv, [&](std::size_t i) { fields.apparent_vertex[i].position = p[i]; });
+  }
   detail::resize_or_clear(fields.signs, radial, nv);
   fields.apparent_cull_threshold =
       request.apparent ? request.apparent_cull_threshold : std::optional<double>{};
@@ -375,9 +380,6 @@ void detail::update_view_fields(ViewFields& fields, const Surface& surface, cons
 #endif
       // Portable: one vertex at a time (the reference the AVX2 pass matches).
       detail::parallel_range(nv, vertex_and_direction);
-    if (want_app && same_surface && !positioned)
-      detail::parallel_range(nv,
-                             [&](std::size_t i) { fields.apparent_vertex[i].position = pos[i]; });
     if (want_app && !defer_dt1q1)
       detail::update_dt1q1(fields, surface, cull, precompute, !same_surface);
   }
