@@ -9,9 +9,10 @@
 // lane, and the sources are compiled with -ffp-contract=off, so both paths
 // give the same bits. rtsc computes these fits in float too.
 //
-// Inputs are gathered per lane from the Surface's double arrays (edges are
-// differences of double positions, rounded once), per-vertex records are
-// float (FitVertex), and each corner's weighted, re-expressed result goes
+// Inputs are loaded per lane from the Surface's double arrays (three
+// consecutive doubles: a position, a face normal, a face's corner areas;
+// edges are differences of double positions, rounded once), per-vertex
+// records are float (FitVertex, loaded whole and transposed), and each corner's weighted, re-expressed result goes
 // into its slot of the vertex -> faces CSR order, which the vertex passes
 // then sum in a fixed order (same bits at any thread count).
 #pragma once
@@ -77,23 +78,30 @@ struct FloatLanes {
     for (int l = 0; l < kLanes; ++l) r.v[l] = x;
     return r;
   }
-  /// float(base[i[l]])
-  static FloatLanes from_double(const double* base, const std::int32_t* i) {
+  /// Three consecutive doubles per lane, kept in double: c[k][l] = base[i[l] + k].
+  struct Double3 {
+    double c[3][kLanes];
+  };
+  static void load3(const double* base, const std::int32_t* i, Double3& out) {
+    for (int l = 0; l < kLanes; ++l)
+      for (int k = 0; k < 3; ++k) out.c[k][l] = base[i[l] + k];
+  }
+  /// float(a.c[k])
+  static FloatLanes to_float(const Double3& a, int k) {
     FloatLanes r;
-    for (int l = 0; l < kLanes; ++l) r.v[l] = static_cast<float>(base[i[l]]);
+    for (int l = 0; l < kLanes; ++l) r.v[l] = static_cast<float>(a.c[k][l]);
     return r;
   }
-  /// float(base[a[l]] - base[b[l]]): the difference in double, rounded once.
-  static FloatLanes diff_double(const double* base, const std::int32_t* a, const std::int32_t* b) {
+  /// float(a.c[k] - b.c[k]): the difference in double, rounded once.
+  static FloatLanes diff(const Double3& a, const Double3& b, int k) {
     FloatLanes r;
-    for (int l = 0; l < kLanes; ++l) r.v[l] = static_cast<float>(base[a[l]] - base[b[l]]);
+    for (int l = 0; l < kLanes; ++l) r.v[l] = static_cast<float>(a.c[k][l] - b.c[k][l]);
     return r;
   }
-  /// base[i[l]]
-  static FloatLanes gather(const float* base, const std::int32_t* i) {
-    FloatLanes r;
-    for (int l = 0; l < kLanes; ++l) r.v[l] = base[i[l]];
-    return r;
+  /// The twelve floats of each lane's record: out[f][l] = base[rec[l] + f].
+  static void load_records(const float* base, const std::int32_t* rec, FloatLanes (&out)[12]) {
+    for (int l = 0; l < kLanes; ++l)
+      for (int f = 0; f < 12; ++f) out[f].v[l] = base[rec[l] + f];
   }
   static FloatLanes load(const float* p) {
     FloatLanes r;
@@ -158,24 +166,19 @@ inline V3<L> sub(const V3<L>& a, const V3<L>& b) {
   return {a.x - b.x, a.y - b.y, a.z - b.z};
 }
 
-/// Component c of a float record field at `offset` floats, for each lane's
-/// record index (in floats) `rec`.
-template <class L>
-inline V3<L> gather3(const float* base, int offset, const std::int32_t* rec) {
-  return {L::gather(base + offset, rec), L::gather(base + offset + 1, rec),
-          L::gather(base + offset + 2, rec)};
-}
-
-/// A vertex record's normal n and tangent frame (x, y), for each lane's
-/// record index (in floats) `rec`.
+/// A vertex record's normal n and tangent frame (x, y) and its k1, k2, for
+/// each lane's record index (in floats) `rec`.
 template <class L>
 struct VertexFrame {
   V3<L> n, x, y;
+  L k1, k2;
 };
 
 template <class L>
-inline VertexFrame<L> gather_frame(const float* base, const std::int32_t* rec) {
-  return {gather3<L>(base, 0, rec), gather3<L>(base, 3, rec), gather3<L>(base, 6, rec)};
+inline VertexFrame<L> load_frame(const float* base, const std::int32_t* rec) {
+  L f[12];
+  L::load_records(base, rec, f);
+  return {{f[0], f[1], f[2]}, {f[3], f[4], f[5]}, {f[6], f[7], f[8]}, f[9], f[10]};
 }
 
 /// Coordinates, in the face frame (t, b), of the vertex tangent vectors x
@@ -255,25 +258,31 @@ inline void load_block(const FitArrays& a, std::size_t first, std::size_t end, B
   }
 }
 
-/// The face's edges e[k] = p[k+2] - p[k+1], its normal nT and the frame
-/// (t = e[0] / |e[0]|, b = nT x t) both fits use.
+/// The face's edges e[k] = p[k+2] - p[k+1], its normal nT, the frame
+/// (t = e[0] / |e[0]|, b = nT x t) both fits use, and the corner areas w
+/// (the fit weights).
 template <class L>
 struct FaceFrame {
   V3<L> e[3];
   V3<L> nT, t, b;
+  L w[3];
 };
 
 template <class L>
 inline FaceFrame<L> face_frame(const FitArrays& a, const Block& blk) {
   FaceFrame<L> F;
+  typename L::Double3 p[3];
+  for (int k = 0; k < 3; ++k) L::load3(a.positions, blk.pos[k], p[k]);
   for (int k = 0; k < 3; ++k) {
-    const std::int32_t* head = blk.pos[(k + 2) % 3];
-    const std::int32_t* tail = blk.pos[(k + 1) % 3];
-    F.e[k] = {L::diff_double(a.positions, head, tail), L::diff_double(a.positions + 1, head, tail),
-              L::diff_double(a.positions + 2, head, tail)};
+    const auto& head = p[(k + 2) % 3];
+    const auto& tail = p[(k + 1) % 3];
+    F.e[k] = {L::diff(head, tail, 0), L::diff(head, tail, 1), L::diff(head, tail, 2)};
   }
-  F.nT = {L::from_double(a.face_normals, blk.face3), L::from_double(a.face_normals + 1, blk.face3),
-          L::from_double(a.face_normals + 2, blk.face3)};
+  typename L::Double3 d;
+  L::load3(a.face_normals, blk.face3, d);
+  F.nT = {L::to_float(d, 0), L::to_float(d, 1), L::to_float(d, 2)};
+  L::load3(a.corner_areas, blk.face3, d);
+  for (int k = 0; k < 3; ++k) F.w[k] = L::to_float(d, k);
   const L inv = L::splat(1.0f) / sqrt(dot(F.e[0], F.e[0]));
   F.t = {F.e[0].x * inv, F.e[0].y * inv, F.e[0].z * inv};
   F.b = cross(F.nT, F.t);
@@ -313,8 +322,8 @@ template <class L>
 void fit_second_fundamental_forms(const FitArrays& a, std::size_t begin, std::size_t end) {
   const float* rec = &a.vertices[0].n[0];
   for_each_block<L>(a, begin, end, [&](const Block& blk, const FaceFrame<L>& F) {
-    const VertexFrame<L> V[3] = {gather_frame<L>(rec, blk.rec[0]), gather_frame<L>(rec, blk.rec[1]),
-                                 gather_frame<L>(rec, blk.rec[2])};
+    const VertexFrame<L> V[3] = {load_frame<L>(rec, blk.rec[0]), load_frame<L>(rec, blk.rec[1]),
+                                 load_frame<L>(rec, blk.rec[2])};
     L suu = L::splat(0.0f), suv = suu, svv = suu, r0 = suu, r1 = suu, r2 = suu;
     for (int j = 0; j < 3; ++j) {
       const L u = dot(F.e[j], F.t), v = dot(F.e[j], F.b);
@@ -336,7 +345,7 @@ void fit_second_fundamental_forms(const FitArrays& a, std::size_t begin, std::si
     const L zero = L::splat(0.0f), two = L::splat(2.0f);
     alignas(32) float out[3][4][kLanes];
     for (int k = 0; k < 3; ++k) {
-      const L w = L::from_double(a.corner_areas + k, blk.face3);
+      const L w = F.w[k];
       const typename L::Mask use = ok & greater(w, zero);
       const FrameInFace<L> r = frame_in_face(V[k].x, V[k].y, V[k].n, F.nT, F.t, F.b);
       const L a1 = r.x1, b1 = r.x2, a2 = r.y1, b2 = r.y2;
@@ -363,8 +372,8 @@ void fit_curvature_derivatives(const FitArrays& a, std::size_t begin, std::size_
     FrameInFace<L> r[3];
     L hxx[3], hxy[3], hyy[3];
     for (int k = 0; k < 3; ++k) {
-      const VertexFrame<L> V = gather_frame<L>(rec, blk.rec[k]);
-      const L k1 = L::gather(rec + 9, blk.rec[k]), k2 = L::gather(rec + 10, blk.rec[k]);
+      const VertexFrame<L> V = load_frame<L>(rec, blk.rec[k]);
+      const L k1 = V.k1, k2 = V.k2;
       r[k] = frame_in_face(V.x, V.y, V.n, F.nT, F.t, F.b);
       // II = k1 (c,s)(c,s)ᵀ + k2 (-s,c)(-s,c)ᵀ with (c, s) = e1 in the face frame.
       const L c = r[k].x1, s = r[k].x2;
@@ -394,7 +403,7 @@ void fit_curvature_derivatives(const FitArrays& a, std::size_t begin, std::size_
     solve_tridiagonal<L, 4>(diag, off, rhs, C, ok);
     alignas(32) float out[3][5][kLanes];
     for (int k = 0; k < 3; ++k) {
-      const L w = L::from_double(a.corner_areas + k, blk.face3);
+      const L w = F.w[k];
       const typename L::Mask use = ok & greater(w, zero);
       // C(p, q, .) as a linear form; p, q the vertex axes in the face frame.
       const L x1 = r[k].x1, x2 = r[k].x2, y1 = r[k].y1, y2 = r[k].y2;
