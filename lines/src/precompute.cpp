@@ -1,6 +1,5 @@
 #include "fabrica/lines/precompute.hpp"
 
-#include <tbb/parallel_invoke.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -17,6 +16,7 @@
 #include "fabrica/lines/zero_crossing.hpp"
 #include "parallel.hpp"
 #include "zero_crossing_internal.hpp"
+#include "zero_crossing_kernel.hpp"
 
 namespace fabrica {
 
@@ -328,25 +328,54 @@ void LinePrecompute::release_tangent_ring() const {
 
 namespace {
 
-void compute_ridges(const Surface& surface, const std::vector<double>& abs_k1, bool ridge,
-                    std::vector<LineSegment>& out) {
+// Raw ridges and valleys (docs/algorithms.md §3) in one pass over the faces:
+// the segments, in order, of vector_zero_crossings over each family alone
+// (δ = ±C(e1, e1, e1), direction e1, magnitude |k1|, threshold 0, the edge
+// test, the vertex mask "curvature and derivatives valid, k1 > 0" for
+// ridges, "k1 < 0" for valleys). A face is visited by the family whose
+// mask holds at its three corners (never both), which also implies the
+// magnitude test (|k1| > 0 there), so each face is read once instead of
+// twice and the kernel (zc::vector_face, its own mask test skipped) runs
+// only where a family can cross.
+void compute_ridges_and_valleys(const Surface& surface, const std::vector<double>& abs_k1,
+                                std::vector<LineSegment>& ridges,
+                                std::vector<LineSegment>& valleys) {
   const auto& curv = surface.curvature();
   const auto& dcurv = surface.curvature_derivatives();
   const std::size_t nv = surface.vertex_count();
-  detail::FilledVector<double> delta(nv);
-  detail::FilledVector<std::uint8_t> mask(nv);
-  const double sign = ridge ? 1.0 : -1.0;
+  detail::FilledVector<double> delta_ridge(nv), delta_valley(nv);
+  detail::FilledVector<std::uint8_t> family(nv);  // bit 0: ridge mask, bit 1: valley mask
   detail::parallel_range(nv, [&](std::size_t i) {
     const bool ok = curv.valid[i] && dcurv.valid[i];
-    delta[i] = ok ? sign * dcurv.a[i] : 0.0;
-    mask[i] = ok && (ridge ? curv.k1[i] > 0.0 : curv.k1[i] < 0.0);
+    delta_ridge[i] = ok ? dcurv.a[i] : 0.0;
+    delta_valley[i] = ok ? -dcurv.a[i] : 0.0;
+    family[i] = static_cast<std::uint8_t>(unsigned(ok && curv.k1[i] > 0.0) |
+                                          unsigned(ok && curv.k1[i] < 0.0) << 1);
   });
   VectorCrossingOptions o;
-  o.vertex_mask = mask;
   o.test = ExtremumTest::edge;
   o.threshold = 0.0;
   o.keep_raw_magnitude = true;
-  vector_zero_crossings(surface, delta, curv.e1, abs_k1, o, out);
+  const zc::MeshArrays m(surface);
+  const zc::VectorInputs in_ridge{m, delta_ridge.data(), curv.e1.data(), abs_k1.data(), o};
+  const zc::VectorInputs in_valley{m, delta_valley.data(), curv.e1.data(), abs_k1.data(), o};
+  const Face* faces = m.faces;
+  const std::uint8_t* fam = family.data();
+  static const char site = 0;
+  detail::ordered_chunks<2, LineSegment>(
+      surface.face_count(),
+      [&](std::size_t b, std::size_t e, std::vector<LineSegment>& r, std::vector<LineSegment>& v) {
+        for (std::size_t f = b; f < e; ++f) {
+          const Face& face = faces[f];
+          const unsigned all = fam[face[0]] & fam[face[1]] & fam[face[2]];
+          if (all == 0) continue;
+          if (all & 1u)
+            zc::vector_face(in_ridge, f, r);
+          else
+            zc::vector_face(in_valley, f, v);
+        }
+      },
+      std::array<std::vector<LineSegment>*, 2>{&ridges, &valleys}, &site);
 }
 
 // Minimal rotation taking a vector tangent to the plane with normal `from`
@@ -364,8 +393,7 @@ inline Vec3 rotate_tangent(const Vec3& x, const Vec3& from, const Vec3& to) {
 const std::vector<LineSegment>& LinePrecompute::raw_ridges() const {
   call_once_isolated(cache_->ridge_once, [&] {
     const auto& k1 = abs_k1();
-    tbb::parallel_invoke([&] { compute_ridges(*surface_, k1, true, cache_->ridges); },
-                         [&] { compute_ridges(*surface_, k1, false, cache_->valleys); });
+    compute_ridges_and_valleys(*surface_, k1, cache_->ridges, cache_->valleys);
   });
   return cache_->ridges;
 }
