@@ -467,16 +467,45 @@ std::shared_ptr<const LinePrecompute::RawAbove> LinePrecompute::raw_above(LineFa
   }
   auto a = std::make_shared<RawAbove>();
   a->t = t;
-  for (std::size_t i = 0; i < keys->size(); ++i) {
-    const RawKey& k = (*keys)[i];
-    const double k0 = raw_excess(k.m0, t), k1 = raw_excess(k.m1, t);
-    if (k0 == 0.0 && k1 == 0.0) continue;
-    a->index.push_back(static_cast<std::uint32_t>(i));
-    LineSegment& s = a->segments.emplace_back((*raw)[i]);
-    s.end[0].strength = t > 0.0 ? static_cast<float>(k0 / (k0 + t)) : 1.0f;
-    s.end[1].strength = t > 0.0 ? static_cast<float>(k1 / (k1 + t)) : 1.0f;
-    a->corners.push_back(k.corners);
-  }
+  // Two parallel passes over fixed chunks of the keys (count, then fill
+  // after the chunks before): the kept segments in increasing index order,
+  // the same at any thread count.
+  auto kept = [&](const RawKey& k) {
+    return !(raw_excess(k.m0, t) == 0.0 && raw_excess(k.m1, t) == 0.0);
+  };
+  constexpr std::size_t kChunk = 8192;
+  const std::size_t n = keys->size(), chunks = (n + kChunk - 1) / kChunk;
+  std::vector<std::size_t> first(chunks + 1, 0);
+  detail::parallel_range(
+      chunks,
+      [&](std::size_t c) {
+        std::size_t count = 0;
+        for (std::size_t i = c * kChunk, e = std::min(n, i + kChunk); i < e; ++i)
+          count += kept((*keys)[i]);
+        first[c + 1] = count;
+      },
+      1);
+  for (std::size_t c = 0; c < chunks; ++c) first[c + 1] += first[c];
+  a->index.resize(first[chunks]);
+  a->segments.resize(first[chunks]);
+  a->corners.resize(first[chunks]);
+  detail::parallel_range(
+      chunks,
+      [&](std::size_t c) {
+        std::size_t at = first[c];
+        for (std::size_t i = c * kChunk, e = std::min(n, i + kChunk); i < e; ++i) {
+          const RawKey& k = (*keys)[i];
+          if (!kept(k)) continue;
+          const double k0 = raw_excess(k.m0, t), k1 = raw_excess(k.m1, t);
+          a->index[at] = static_cast<std::uint32_t>(i);
+          LineSegment& s = a->segments[at] = (*raw)[i];
+          s.end[0].strength = t > 0.0 ? static_cast<float>(k0 / (k0 + t)) : 1.0f;
+          s.end[1].strength = t > 0.0 ? static_cast<float>(k1 / (k1 + t)) : 1.0f;
+          a->corners[at] = k.corners;
+          ++at;
+        }
+      },
+      1);
   std::lock_guard lock(cache_->above_mutex);
   cache_->above[slot] = a;
   return a;
