@@ -12,15 +12,19 @@ namespace fabrica::detail {
 
 namespace {
 
+// Three doubles at p as (p[0], p[1], p[2], 0): two loads, nothing read
+// past p[2] (the last vertex of an array is safe).
+inline __m256d load_row3(const double* p) {
+  return _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(p)), _mm_load_sd(p + 2), 1);
+}
+
 // Lane l's three doubles at base + i[l] for four lanes, transposed into
-// x, y, z (a masked load: the fourth double is never read, so the last
-// vertex of an array is safe).
+// x, y, z.
 inline void load3x4(const double* base, const std::int32_t* i, __m256d (&xyz)[3]) {
-  const __m256i m = _mm256_set_epi64x(0, -1, -1, -1);
-  const __m256d r0 = _mm256_maskload_pd(base + i[0], m);
-  const __m256d r1 = _mm256_maskload_pd(base + i[1], m);
-  const __m256d r2 = _mm256_maskload_pd(base + i[2], m);
-  const __m256d r3 = _mm256_maskload_pd(base + i[3], m);
+  const __m256d r0 = load_row3(base + i[0]);
+  const __m256d r1 = load_row3(base + i[1]);
+  const __m256d r2 = load_row3(base + i[2]);
+  const __m256d r3 = load_row3(base + i[3]);
   const __m256d t0 = _mm256_unpacklo_pd(r0, r1);  // x0 x1 z0 z1
   const __m256d t1 = _mm256_unpackhi_pd(r0, r1);  // y0 y1 .. ..
   const __m256d t2 = _mm256_unpacklo_pd(r2, r3);  // x2 x3 z2 z3
