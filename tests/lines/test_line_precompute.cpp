@@ -22,6 +22,7 @@
 #include "fabrica/io/repair.hpp"
 #include "fabrica/lines/extract.hpp"
 #include "fabrica/lines/precompute.hpp"
+#include "fabrica/lines/zero_crossing.hpp"
 #include "lines_test_meshes.hpp"
 #include "test_support.hpp"
 
@@ -272,6 +273,56 @@ TEST(LinePrecompute, RawKeysAndRawAboveFollowTheRawSegments) {
         const double k = std::max(double(r.end[e].strength) - tt, 0.0);
         EXPECT_EQ(a.end[e].strength, static_cast<float>(k / (k + tt)));
       }
+    }
+  }
+}
+
+// The raw ridges and valleys come from one pass over the faces; they must
+// be what vector_zero_crossings gives for each family alone (δ = ±a,
+// direction e1, magnitude |k1|, threshold 0, the edge test, the vertex
+// mask "curvature and derivatives valid, k1 > 0" or "< 0"), on a mesh with
+// many face chunks and degenerate faces, and raw_above over many key
+// chunks must keep exactly the segments above the threshold, in order.
+TEST(LinePrecompute, RawRidgesAndValleysMatchOnePassPerFamily) {
+  const Surface surface = load_mesh("meshes/classic/c3d_igea.ply", true);
+  const LinePrecompute pre(surface);
+  const auto& curv = surface.curvature();
+  const auto& dcurv = surface.curvature_derivatives();
+  const std::size_t nv = surface.vertex_count();
+  std::vector<double> abs_k1(nv);
+  for (std::size_t i = 0; i < nv; ++i) abs_k1[i] = std::abs(curv.k1[i]);
+  for (bool ridge : {true, false}) {
+    SCOPED_TRACE(ridge ? "ridges" : "valleys");
+    std::vector<double> delta(nv);
+    std::vector<std::uint8_t> mask(nv);
+    for (std::size_t i = 0; i < nv; ++i) {
+      const bool ok = curv.valid[i] && dcurv.valid[i];
+      delta[i] = ok ? (ridge ? dcurv.a[i] : -dcurv.a[i]) : 0.0;
+      mask[i] = ok && (ridge ? curv.k1[i] > 0.0 : curv.k1[i] < 0.0);
+    }
+    VectorCrossingOptions o;
+    o.vertex_mask = mask;
+    o.test = ExtremumTest::edge;
+    o.threshold = 0.0;
+    o.keep_raw_magnitude = true;
+    std::vector<LineSegment> expected;
+    vector_zero_crossings(surface, delta, curv.e1, abs_k1, o, expected);
+    const auto& raw = ridge ? pre.raw_ridges() : pre.raw_valleys();
+    EXPECT_GT(raw.size(), 20000u);  // several chunks of raw_above (8192 keys)
+    EXPECT_TRUE(same_segments(raw, expected));
+    const LineFamily family = ridge ? LineFamily::ridge : LineFamily::valley;
+    const double t = 0.1 / surface.feature_size();
+    const auto above = pre.raw_above(family, t);
+    std::vector<std::uint32_t> index;
+    for (std::size_t i = 0; i < raw.size(); ++i)
+      if (raw[i].end[0].strength > t || raw[i].end[1].strength > t)
+        index.push_back(static_cast<std::uint32_t>(i));
+    EXPECT_GT(index.size(), 8192u);
+    EXPECT_EQ(above->index, index);
+    ASSERT_EQ(above->corners.size(), index.size());
+    for (std::size_t j = 0; j < index.size(); ++j) {
+      const Face& f = surface.faces()[static_cast<std::size_t>(raw[index[j]].face)];
+      ASSERT_EQ(above->corners[j], (std::array<std::int32_t, 3>{f[0], f[1], f[2]}));
     }
   }
 }
