@@ -99,7 +99,25 @@ struct Avx2Lanes {
     out[10].v = _mm256_shuffle_ps(a1, a3, 0x44);
     out[11].v = _mm256_shuffle_ps(a1, a3, 0xEE);
   }
-  void store(float* out) const { _mm256_storeu_ps(out, v); }
+  /// Each real lane's corner result into its slot: the four values
+  /// transposed into one 16-byte store per lane, then the weight.
+  static void store_slots(FitSlot* slots, const std::int32_t* slot, int count,
+                          const Avx2Lanes (&v)[4], const Avx2Lanes& w) {
+    const __m256 t0 = _mm256_unpacklo_ps(v[0].v, v[1].v), t1 = _mm256_unpackhi_ps(v[0].v, v[1].v);
+    const __m256 t2 = _mm256_unpacklo_ps(v[2].v, v[3].v), t3 = _mm256_unpackhi_ps(v[2].v, v[3].v);
+    const __m256 r[4] = {_mm256_shuffle_ps(t0, t2, 0x44), _mm256_shuffle_ps(t0, t2, 0xEE),
+                         _mm256_shuffle_ps(t1, t3, 0x44), _mm256_shuffle_ps(t1, t3, 0xEE)};
+    alignas(32) float wl[8];
+    _mm256_store_ps(wl, w.v);
+    for (int l = 0; l < count; ++l) {
+      // Lane l of the four values: half l / 4 of r[l % 4].
+      const __m128 q =
+          l < 4 ? _mm256_castps256_ps128(r[l & 3]) : _mm256_extractf128_ps(r[l & 3], 1);
+      float* s = slots[slot[l]].data();
+      _mm_storeu_ps(s, q);
+      s[4] = wl[l];
+    }
+  }
   friend Avx2Lanes operator+(const Avx2Lanes& a, const Avx2Lanes& b) {
     return {_mm256_add_ps(a.v, b.v)};
   }

@@ -103,13 +103,20 @@ struct FloatLanes {
     for (int l = 0; l < kLanes; ++l)
       for (int f = 0; f < 12; ++f) out[f].v[l] = base[rec[l] + f];
   }
+  /// Each real lane's corner result into its slot: slots[slot[l]] =
+  /// (v[0][l], v[1][l], v[2][l], v[3][l], w[l]) for l < count.
+  static void store_slots(FitSlot* slots, const std::int32_t* slot, int count,
+                          const FloatLanes (&v)[4], const FloatLanes& w) {
+    for (int l = 0; l < count; ++l) {
+      FitSlot& s = slots[slot[l]];
+      for (int i = 0; i < 4; ++i) s[i] = v[i].v[l];
+      s[4] = w.v[l];
+    }
+  }
   static FloatLanes load(const float* p) {
     FloatLanes r;
     for (int l = 0; l < kLanes; ++l) r.v[l] = p[l];
     return r;
-  }
-  void store(float* out) const {
-    for (int l = 0; l < kLanes; ++l) out[l] = v[l];
   }
 #define FABRICA_FIT_LANE_OP(OP)                                             \
   friend FloatLanes operator OP(const FloatLanes& a, const FloatLanes& b) { \
@@ -289,19 +296,6 @@ inline FaceFrame<L> face_frame(const FitArrays& a, const Block& blk) {
   return F;
 }
 
-/// Writes the block's per-corner results (NV values, then the weight)
-/// into their slots.
-template <int NV>
-inline void write_slots(const FitArrays& a, const Block& blk,
-                        const float (&out)[3][NV + 1][kLanes]) {
-  for (int l = 0; l < blk.count; ++l)
-    for (int k = 0; k < 3; ++k) {
-      FitSlot& s = a.slots[blk.slot[k][l]];
-      for (int i = 0; i < 4; ++i) s[i] = i < NV ? out[k][i][l] : 0.0f;
-      s[4] = out[k][NV][l];
-    }
-}
-
 /// Calls body(block, face frame) for the faces [begin, end), eight at a
 /// time (the last block may be partial).
 template <class L, class Body>
@@ -343,7 +337,6 @@ void fit_second_fundamental_forms(const FitArrays& a, std::size_t begin, std::si
     typename L::Mask ok = greater(L::load(blk.usable), L::splat(0.0f));
     solve_tridiagonal<L, 3>(diag, off, rhs, s, ok);
     const L zero = L::splat(0.0f), two = L::splat(2.0f);
-    alignas(32) float out[3][4][kLanes];
     for (int k = 0; k < 3; ++k) {
       const L w = F.w[k];
       const typename L::Mask use = ok & greater(w, zero);
@@ -352,12 +345,9 @@ void fit_second_fundamental_forms(const FitArrays& a, std::size_t begin, std::si
       const L v0 = w * ((a1 * a1 * s[0] + two * a1 * b1 * s[1]) + b1 * b1 * s[2]);
       const L v1 = w * ((a1 * a2 * s[0] + (a1 * b2 + a2 * b1) * s[1]) + b1 * b2 * s[2]);
       const L v2 = w * ((a2 * a2 * s[0] + two * a2 * b2 * s[1]) + b2 * b2 * s[2]);
-      select(use, v0, zero).store(out[k][0]);
-      select(use, v1, zero).store(out[k][1]);
-      select(use, v2, zero).store(out[k][2]);
-      select(use, w, zero).store(out[k][3]);
+      const L v[4] = {select(use, v0, zero), select(use, v1, zero), select(use, v2, zero), zero};
+      L::store_slots(a.slots, blk.slot[k], blk.count, v, select(use, w, zero));
     }
-    write_slots<3>(a, blk, out);
   });
 }
 
@@ -401,7 +391,6 @@ void fit_curvature_derivatives(const FitArrays& a, std::size_t begin, std::size_
     L C[4];
     typename L::Mask ok = greater(L::load(blk.usable), zero);
     solve_tridiagonal<L, 4>(diag, off, rhs, C, ok);
-    alignas(32) float out[3][5][kLanes];
     for (int k = 0; k < 3; ++k) {
       const L w = F.w[k];
       const typename L::Mask use = ok & greater(w, zero);
@@ -411,13 +400,12 @@ void fit_curvature_derivatives(const FitArrays& a, std::size_t begin, std::size_
       const L xx2 = (C[1] * x1 * x1 + two * C[2] * x1 * x2) + C[3] * x2 * x2;
       const L yy1 = (C[0] * y1 * y1 + two * C[1] * y1 * y2) + C[2] * y2 * y2;
       const L yy2 = (C[1] * y1 * y1 + two * C[2] * y1 * y2) + C[3] * y2 * y2;
-      select(use, w * (xx1 * x1 + xx2 * x2), zero).store(out[k][0]);
-      select(use, w * (xx1 * y1 + xx2 * y2), zero).store(out[k][1]);
-      select(use, w * (yy1 * x1 + yy2 * x2), zero).store(out[k][2]);
-      select(use, w * (yy1 * y1 + yy2 * y2), zero).store(out[k][3]);
-      select(use, w, zero).store(out[k][4]);
+      const L v[4] = {select(use, w * (xx1 * x1 + xx2 * x2), zero),
+                      select(use, w * (xx1 * y1 + xx2 * y2), zero),
+                      select(use, w * (yy1 * x1 + yy2 * x2), zero),
+                      select(use, w * (yy1 * y1 + yy2 * y2), zero)};
+      L::store_slots(a.slots, blk.slot[k], blk.count, v, select(use, w, zero));
     }
-    write_slots<4>(a, blk, out);
   });
 }
 
