@@ -379,14 +379,23 @@ void compute_ridges_and_valleys(const Surface& surface, const std::vector<double
 }
 
 // Minimal rotation taking a vector tangent to the plane with normal `from`
-// into the plane with normal `to` (Rodrigues about from x to).
-inline Vec3 rotate_tangent(const Vec3& x, const Vec3& from, const Vec3& to) {
-  const double c = from.dot(to);
-  if (c <= -1.0 + 1e-12) return x - to * to.dot(x);
-  const Vec3 axis = from.cross(to);
-  // R x = c x + axis × x + axis (axis·x) / (1 + c)
-  return c * x + axis.cross(x) + axis * (axis.dot(x) / (1.0 + c));
-}
+// into the plane with normal `to` (Rodrigues about from x to), with what
+// depends only on the two normals computed once.
+class TangentRotation {
+ public:
+  TangentRotation(const Vec3& from, const Vec3& to)
+      : to_(to), c_(from.dot(to)), axis_(from.cross(to)) {}
+  Vec3 operator()(const Vec3& x) const {
+    if (c_ <= -1.0 + 1e-12) return x - to_ * to_.dot(x);
+    // R x = c x + axis × x + axis (axis·x) / (1 + c)
+    return c_ * x + axis_.cross(x) + axis_ * (axis_.dot(x) / (1.0 + c_));
+  }
+
+ private:
+  Vec3 to_;
+  double c_;
+  Vec3 axis_;
+};
 
 }  // namespace
 
@@ -591,7 +600,10 @@ const GradientOperator& LinePrecompute::gradient_operator() const {
     detail::parallel_range(nv, [&](std::size_t i) {
       const auto nb = topo.vertex_neighbors(i);
       const std::size_t base = static_cast<std::size_t>(G.offset[i]);
-      std::vector<Vec3> acc(nb.size() + 1, Vec3::Zero());
+      // The accumulators, reused by each thread (no allocation per vertex).
+      thread_local std::vector<Vec3> acc_buffer;
+      acc_buffer.assign(nb.size() + 1, Vec3::Zero());
+      Vec3* const acc = acc_buffer.data();
       G.column[base] = static_cast<std::int32_t>(i);
       for (std::size_t j = 0; j < nb.size(); ++j) G.column[base + 1 + j] = nb[j];
       auto slot = [&](std::int32_t v) -> std::size_t {
@@ -601,24 +613,32 @@ const GradientOperator& LinePrecompute::gradient_operator() const {
       double wsum = 0.0;
       const auto fs = topo.vertex_faces(i);
       const auto cs = topo.vertex_face_corners(i);
+      // Values, not references into the Surface's arrays: the compiler then
+      // knows the stores into acc leave them alone and computes what
+      // depends only on the face (and on n_i) once per face, not per corner
+      // (the same expressions, so the same bits).
+      const Vec3 ni = vn[i];
+      const bool rotate = ni.squaredNorm() > 0.0;
       for (std::size_t j = 0; j < fs.size(); ++j) {
         const auto t = static_cast<std::size_t>(fs[j]);
-        const Face& f = faces[t];
-        const Vec3& nt = fn[t];
-        const double twice_area = (pos[f[1]] - pos[f[0]]).cross(pos[f[2]] - pos[f[0]]).norm();
+        const Face f = faces[t];
+        const Vec3 nt = fn[t];
+        const Vec3 p[3] = {pos[f[0]], pos[f[1]], pos[f[2]]};
+        const double twice_area = (p[1] - p[0]).cross(p[2] - p[0]).norm();
         if (nt.squaredNorm() == 0.0 || !(twice_area > 0.0)) continue;
         const double w = corner[t][cs[j]];
         if (!(w > 0.0)) continue;
         wsum += w;
+        const TangentRotation r(nt, ni);
         for (int k = 0; k < 3; ++k) {
-          const Vec3 e = pos[f[(k + 2) % 3]] - pos[f[(k + 1) % 3]];
+          const Vec3 e = p[(k + 2) % 3] - p[(k + 1) % 3];
           Vec3 basis = nt.cross(e) / twice_area;
-          if (vn[i].squaredNorm() > 0.0) basis = rotate_tangent(basis, nt, vn[i]);
+          if (rotate) basis = r(basis);
           acc[slot(f[k])] += w * basis;
         }
       }
       const double inv = wsum > 0.0 ? 1.0 / wsum : 0.0;
-      for (std::size_t j = 0; j < acc.size(); ++j)
+      for (std::size_t j = 0; j < acc_buffer.size(); ++j)
         for (int c = 0; c < 3; ++c)
           G.coeff[3 * (base + j) + c] = static_cast<float>(acc[j][c] * inv);
     });
