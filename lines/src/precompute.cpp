@@ -165,9 +165,9 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
     // and the layout pass computes the offsets once, in place. Otherwise
     // they are computed to check (a Surface rejects coordinates beyond
     // 1e15, so only a frame that is not unit gets there).
-    bool positions_bounded = true;
-    for (const Vec3& p : pos)
-      positions_bounded &= std::abs(p[0]) < 1e30 && std::abs(p[1]) < 1e30 && std::abs(p[2]) < 1e30;
+    // (Every Surface's coordinates are at most 1e15 in magnitude:
+    // check_mesh_indices_and_values, so positions_bounded always holds.)
+    constexpr bool positions_bounded = true;
     auto unit_frame = [&](std::size_t i) {
       const Vec3 &e1 = curv.e1[i], &e2 = curv.e2[i];
       return positions_bounded && std::abs(e1[0]) <= 2.0 && std::abs(e1[1]) <= 2.0 &&
@@ -177,29 +177,50 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
     // Fan order first: the rank of each fan face, into `order` at the
     // vertex's corner offset (left uninitialised: the layout pass reads it
     // only for fans, whose entries this pass wrote).
+    // The pass runs over fixed chunks of vertices, each also writing its
+    // vertices' entry counts into t.offset[i + 1] and summing them; the
+    // offsets are then these counts' prefix sums, chunk after chunk (the
+    // same at any thread count, no serial pass over the vertices).
     const std::unique_ptr<std::uint8_t[]> order(new std::uint8_t[corners]);
     t.fan.resize(nv);
-    detail::parallel_range(nv, [&](std::size_t i) {
-      const auto o = topo.vertex_face_opposite(i);
-      const auto k = static_cast<std::int32_t>(o.size());
-      std::uint8_t* const rank = order.get() + corner_at(i);
-      bool fan = fan_order(o.data(), k, rank);
-      if (fan && curv.valid[i] && !unit_frame(i)) {
-        const Vec3 p = pos[i], e1 = curv.e1[i], e2 = curv.e2[i];
-        for (std::int32_t j = 0; j < k && fan; ++j) {
-          const Vec3 d = pos[static_cast<std::size_t>(o[rank[j]][0])] - p;
-          fan = std::isfinite(static_cast<float>(d.dot(e1))) &&
-                std::isfinite(static_cast<float>(d.dot(e2)));
-        }
-      }
-      t.fan[i] = fan;
-    });
     t.offset.resize(nv + 1);
     t.offset[0] = 0;
-    for (std::size_t i = 0; i < nv; ++i) {
-      const auto k = static_cast<std::int32_t>(topo.vertex_faces(i).size());
-      t.offset[i + 1] = t.offset[i] + (t.fan[i] ? k + 1 : 2 * k);
-    }
+    constexpr std::size_t kChunk = 4096;
+    const std::size_t chunks = (nv + kChunk - 1) / kChunk;
+    std::vector<std::int32_t> chunk_entries(chunks + 1, 0);
+    detail::parallel_range(
+        chunks,
+        [&](std::size_t c) {
+          std::int32_t entries = 0;
+          for (std::size_t i = c * kChunk, e = std::min(nv, i + kChunk); i < e; ++i) {
+            const auto o = topo.vertex_face_opposite(i);
+            const auto k = static_cast<std::int32_t>(o.size());
+            std::uint8_t* const rank = order.get() + corner_at(i);
+            bool fan = fan_order(o.data(), k, rank);
+            if (fan && curv.valid[i] && !unit_frame(i)) {
+              const Vec3 p = pos[i], e1 = curv.e1[i], e2 = curv.e2[i];
+              for (std::int32_t j = 0; j < k && fan; ++j) {
+                const Vec3 d = pos[static_cast<std::size_t>(o[rank[j]][0])] - p;
+                fan = std::isfinite(static_cast<float>(d.dot(e1))) &&
+                      std::isfinite(static_cast<float>(d.dot(e2)));
+              }
+            }
+            t.fan[i] = fan;
+            t.offset[i + 1] = fan ? k + 1 : 2 * k;
+            entries += t.offset[i + 1];
+          }
+          chunk_entries[c + 1] = entries;
+        },
+        1);
+    for (std::size_t c = 0; c < chunks; ++c) chunk_entries[c + 1] += chunk_entries[c];
+    detail::parallel_range(
+        chunks,
+        [&](std::size_t c) {
+          std::int32_t at = chunk_entries[c];
+          for (std::size_t i = c * kChunk, e = std::min(nv, i + kChunk); i < e; ++i)
+            t.offset[i + 1] = at += t.offset[i + 1];
+        },
+        1);
     const auto total = static_cast<std::size_t>(t.offset[nv]);
     // Every entry is written below (no zeroing pass first): kPad entries
     // after the last ring (vertex 0, zeros), so fixed-width reads past a
