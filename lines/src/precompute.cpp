@@ -638,6 +638,29 @@ const GradientOperator& LinePrecompute::gradient_operator() const {
           G.offset[i] + 1 + static_cast<std::int32_t>(topo.vertex_neighbors(i).size());
     G.column.resize(static_cast<std::size_t>(G.offset[nv]));
     G.coeff.resize(3 * G.column.size());
+    // Per face, first: whether it takes part (a normal and a positive
+    // area) and the in-plane gradients of its three hat functions,
+    // nT x e_k / 2A; each of its vertices reads them (computed once per
+    // face instead of once per corner; the same expressions, so the same
+    // bits). Transient: 72 bytes per face.
+    struct FaceBasis {
+      Vec3 b[3];
+    };
+    const std::size_t nf = faces.size();
+    const std::unique_ptr<FaceBasis[]> face_basis(new FaceBasis[nf]);
+    const std::unique_ptr<std::uint8_t[]> usable(new std::uint8_t[nf]);
+    detail::parallel_range(nf, [&](std::size_t t) {
+      const Face f = faces[t];
+      const Vec3 nt = fn[t];
+      const Vec3 p[3] = {pos[f[0]], pos[f[1]], pos[f[2]]};
+      const double twice_area = (p[1] - p[0]).cross(p[2] - p[0]).norm();
+      usable[t] = !(nt.squaredNorm() == 0.0 || !(twice_area > 0.0));
+      if (!usable[t]) return;
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 e = p[(k + 2) % 3] - p[(k + 1) % 3];
+        face_basis[t].b[k] = nt.cross(e) / twice_area;
+      }
+    });
     detail::parallel_range(nv, [&](std::size_t i) {
       const auto nb = topo.vertex_neighbors(i);
       const std::size_t base = static_cast<std::size_t>(G.offset[i]);
@@ -655,25 +678,21 @@ const GradientOperator& LinePrecompute::gradient_operator() const {
       const auto fs = topo.vertex_faces(i);
       const auto cs = topo.vertex_face_corners(i);
       // Values, not references into the Surface's arrays: the compiler then
-      // knows the stores into acc leave them alone and computes what
-      // depends only on the face (and on n_i) once per face, not per corner
-      // (the same expressions, so the same bits).
+      // knows the stores into acc leave them alone, and the rotation into
+      // n_i's plane is set up once per face, not per corner (the same
+      // expressions, so the same bits).
       const Vec3 ni = vn[i];
       const bool rotate = ni.squaredNorm() > 0.0;
       for (std::size_t j = 0; j < fs.size(); ++j) {
         const auto t = static_cast<std::size_t>(fs[j]);
-        const Face f = faces[t];
-        const Vec3 nt = fn[t];
-        const Vec3 p[3] = {pos[f[0]], pos[f[1]], pos[f[2]]};
-        const double twice_area = (p[1] - p[0]).cross(p[2] - p[0]).norm();
-        if (nt.squaredNorm() == 0.0 || !(twice_area > 0.0)) continue;
+        if (!usable[t]) continue;
         const double w = corner[t][cs[j]];
         if (!(w > 0.0)) continue;
         wsum += w;
-        const TangentRotation r(nt, ni);
+        const Face f = faces[t];
+        const TangentRotation r(fn[t], ni);
         for (int k = 0; k < 3; ++k) {
-          const Vec3 e = p[(k + 2) % 3] - p[(k + 1) % 3];
-          Vec3 basis = nt.cross(e) / twice_area;
+          Vec3 basis = face_basis[t].b[k];
           if (rotate) basis = r(basis);
           acc[slot(f[k])] += w * basis;
         }
