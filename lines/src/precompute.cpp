@@ -718,22 +718,35 @@ const std::vector<Vec3>& LinePrecompute::normal_laplacian() const {
     const std::size_t nv = s.vertex_count();
     auto& out = cache_->normal_laplacian;
     out.assign(nv, Vec3::Zero());
+    // The cotangent at each corner x of each face, once per face (each is
+    // read by the two vertices of the opposite edge): apex f[x], edge
+    // vectors u = p_f[x+1] - p_apex, v = p_f[x+2] - p_apex. The vertex
+    // whose corner is x + 2 would take u and v the other way round, which
+    // gives the same bits (u × v is exactly -(v × u), the dot product is
+    // symmetric). Transient: 24 bytes per face.
+    auto cot_at = [&](int apex, int p, int q) {
+      const Vec3 u = pos[p] - pos[apex], v = pos[q] - pos[apex];
+      const double cr = u.cross(v).norm();
+      return cr > 0.0 ? u.dot(v) / cr : 0.0;
+    };
+    const std::size_t nf = faces.size();
+    const std::unique_ptr<std::array<double, 3>[]> cot(new std::array<double, 3>[nf]);
+    detail::parallel_range(nf, [&](std::size_t t) {
+      const Face& f = faces[t];
+      for (int x = 0; x < 3; ++x) cot[t][x] = cot_at(f[x], f[(x + 1) % 3], f[(x + 2) % 3]);
+    });
     detail::parallel_range(nv, [&](std::size_t i) {
       Vec3 acc = Vec3::Zero();
       const auto fs = topo.vertex_faces(i);
       const auto cs = topo.vertex_face_corners(i);
       for (std::size_t j = 0; j < fs.size(); ++j) {
-        const Face& f = faces[static_cast<std::size_t>(fs[j])];
+        const auto t = static_cast<std::size_t>(fs[j]);
+        const Face& f = faces[t];
         const int c = cs[j];
         const int a = f[(c + 1) % 3], b = f[(c + 2) % 3];
         // Edge i-a is opposite corner b; edge i-b opposite corner a.
-        auto cot_at = [&](int apex, int p, int q) {
-          const Vec3 u = pos[p] - pos[apex], v = pos[q] - pos[apex];
-          const double cr = u.cross(v).norm();
-          return cr > 0.0 ? u.dot(v) / cr : 0.0;
-        };
-        const double cot_b = cot_at(b, static_cast<int>(i), a);
-        const double cot_a = cot_at(a, static_cast<int>(i), b);
+        const double cot_b = cot[t][(c + 2) % 3];
+        const double cot_a = cot[t][(c + 1) % 3];
         acc += 0.5 * cot_b * (vn[a] - vn[i]) + 0.5 * cot_a * (vn[b] - vn[i]);
       }
       out[i] = area[i] > 0.0 ? Vec3(acc / area[i]) : Vec3::Zero();

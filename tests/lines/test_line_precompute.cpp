@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -325,6 +326,87 @@ TEST(LinePrecompute, RawRidgesAndValleysMatchOnePassPerFamily) {
       ASSERT_EQ(above->corners[j], (std::array<std::int32_t, 3>{f[0], f[1], f[2]}));
     }
   }
+}
+
+// The light set's operators (per-face quantities computed once per face
+// and read by each corner) against the plain per-corner formulas, bit for
+// bit, on a mesh with degenerate faces: the normal Laplacian
+// (ΔN)_i = 1/A_i Σ (cot/2)(n_j - n_i) and the gradient operator
+// (corner-area weighted hat-function gradients, rotated into n_i's plane).
+TEST(LinePrecompute, LightOperatorsMatchThePlainFormulas) {
+  const Surface surface = load_mesh("meshes/classic/c3d_cow.obj", true);
+  const LinePrecompute pre(surface);
+  const Topology& topo = surface.topology();
+  const auto& pos = surface.positions();
+  const auto& faces = surface.faces();
+  const auto& vn = surface.vertex_normals();
+  const auto& fn = surface.face_normals();
+  const auto& corner = surface.corner_areas();
+  const auto& area = surface.vertex_areas();
+  const std::size_t nv = surface.vertex_count();
+  auto cot_at = [&](int apex, int p, int q) {
+    const Vec3 u = pos[p] - pos[apex], v = pos[q] - pos[apex];
+    const double cr = u.cross(v).norm();
+    return cr > 0.0 ? u.dot(v) / cr : 0.0;
+  };
+  auto rotate = [](const Vec3& x, const Vec3& from, const Vec3& to) -> Vec3 {
+    const double c = from.dot(to);
+    if (c <= -1.0 + 1e-12) return x - to * to.dot(x);
+    const Vec3 axis = from.cross(to);
+    return c * x + axis.cross(x) + axis * (axis.dot(x) / (1.0 + c));
+  };
+  const auto& lap = pre.normal_laplacian();
+  const GradientOperator& G = pre.gradient_operator();
+  ASSERT_EQ(lap.size(), nv);
+  ASSERT_EQ(G.offset.size(), nv + 1);
+  std::size_t mismatches = 0;
+  for (std::size_t i = 0; i < nv; ++i) {
+    Vec3 acc = Vec3::Zero();
+    const auto fs = topo.vertex_faces(i);
+    const auto cs = topo.vertex_face_corners(i);
+    for (std::size_t j = 0; j < fs.size(); ++j) {
+      const Face& f = faces[static_cast<std::size_t>(fs[j])];
+      const int c = cs[j];
+      const int a = f[(c + 1) % 3], b = f[(c + 2) % 3];
+      acc += 0.5 * cot_at(b, static_cast<int>(i), a) * (vn[a] - vn[i]) +
+             0.5 * cot_at(a, static_cast<int>(i), b) * (vn[b] - vn[i]);
+    }
+    const Vec3 want = area[i] > 0.0 ? Vec3(acc / area[i]) : Vec3::Zero();
+    mismatches += std::memcmp(want.data(), lap[i].data(), sizeof(Vec3)) != 0;
+    // The gradient operator's row i: column i first, then the neighbours.
+    const auto nb = topo.vertex_neighbors(i);
+    std::vector<Vec3> row(nb.size() + 1, Vec3::Zero());
+    auto slot = [&](std::int32_t v) -> std::size_t {
+      if (v == static_cast<std::int32_t>(i)) return 0;
+      return 1 + static_cast<std::size_t>(std::lower_bound(nb.begin(), nb.end(), v) - nb.begin());
+    };
+    double wsum = 0.0;
+    for (std::size_t j = 0; j < fs.size(); ++j) {
+      const auto t = static_cast<std::size_t>(fs[j]);
+      const Face& f = faces[t];
+      const Vec3& nt = fn[t];
+      const double twice_area = (pos[f[1]] - pos[f[0]]).cross(pos[f[2]] - pos[f[0]]).norm();
+      if (nt.squaredNorm() == 0.0 || !(twice_area > 0.0)) continue;
+      const double w = corner[t][cs[j]];
+      if (!(w > 0.0)) continue;
+      wsum += w;
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 e = pos[f[(k + 2) % 3]] - pos[f[(k + 1) % 3]];
+        Vec3 basis = nt.cross(e) / twice_area;
+        if (vn[i].squaredNorm() > 0.0) basis = rotate(basis, nt, vn[i]);
+        row[slot(f[k])] += w * basis;
+      }
+    }
+    const double inv = wsum > 0.0 ? 1.0 / wsum : 0.0;
+    const auto base = static_cast<std::size_t>(G.offset[i]);
+    ASSERT_EQ(static_cast<std::size_t>(G.offset[i + 1]) - base, row.size());
+    for (std::size_t j = 0; j < row.size(); ++j)
+      for (int c = 0; c < 3; ++c) {
+        const float want_c = static_cast<float>(row[j][c] * inv);
+        mismatches += std::memcmp(&want_c, &G.coeff[3 * (base + j) + c], sizeof(float)) != 0;
+      }
+  }
+  EXPECT_EQ(mismatches, 0u);
 }
 
 TEST(LinePrecompute, SameBitsAtAnyThreadCount) {
