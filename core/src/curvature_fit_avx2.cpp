@@ -1,9 +1,10 @@
 // The per-face curvature fits (curvature_fit_kernel.hpp) with an AVX2 lane
 // type (inputs loaded row by row and transposed, not gathered: Zen's
-// gathers cost more than the loads and shuffles): this file alone is compiled with -mavx2 (and
-// -ffp-contract=off, no FMA), and curvature.cpp calls it only when the CPU has AVX2. Each lane
-// operation is the IEEE single-precision operation the portable loop does,
-// so both give the same bits.
+// gathers cost more than the loads and shuffles): this file alone is
+// compiled with -mavx2 (and -ffp-contract=off, no FMA), and curvature.cpp
+// calls it only when the CPU has AVX2. Each lane operation is the IEEE
+// single-precision operation the portable loop does, so both give the same
+// bits.
 #include <immintrin.h>
 
 #include "curvature_fit_kernel.hpp"

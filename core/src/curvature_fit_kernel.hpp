@@ -12,9 +12,10 @@
 // Inputs are loaded per lane from the Surface's double arrays (three
 // consecutive doubles: a position, a face normal, a face's corner areas;
 // edges are differences of double positions, rounded once), per-vertex
-// records are float (FitVertex, loaded whole and transposed), and each corner's weighted,
-// re-expressed result goes into its slot of the vertex -> faces CSR order, which the vertex passes
-// then sum in a fixed order (same bits at any thread count).
+// records are float (FitVertex, loaded whole and transposed), and each
+// corner's weighted, re-expressed result goes into its slot of the
+// vertex -> faces CSR order, which the vertex passes then sum in a fixed
+// order (same bits at any thread count).
 #pragma once
 
 #include <array>
