@@ -78,8 +78,8 @@ const Topology& Surface::topology() const {
 
 namespace {
 
-// Faces [begin, end): normal, area, corner areas and, with a scratch, the
-// corners' vertex-normal weights.
+// Faces [begin, end): normal, area, corner areas and, with a scratch, each
+// corner's weighted normal and area in its CSR slot.
 FABRICA_MULTIVERSION
 void face_geometry_range(const TriangleMesh& mesh, const SurfaceOptions& opt, Vec3* face_normals,
                          double* face_areas, Vec3* corner_areas, detail::FaceFitScratch* scratch,
@@ -93,7 +93,9 @@ void face_geometry_range(const TriangleMesh& mesh, const SurfaceOptions& opt, Ve
     corner_areas[f] = ca;
     if (!scratch) continue;
     const Vec3 w = detail::normal_corner_weights(t, opt.normal_weighting);
-    scratch->normal_weights[f] = {w[0], w[1], w[2]};
+    const auto& slot = scratch->corner_slot[f];
+    for (int c = 0; c < 3; ++c)
+      scratch->slots[slot[c]] = {w[c] * n.x(), w[c] * n.y(), w[c] * n.z(), w[c], ca[c]};
   }
 }
 
@@ -115,11 +117,10 @@ void compute_face_and_vertex(const TriangleMesh& mesh, const Topology& topo,
                        [&] { detail::assign_large(corner_areas, nf, Vec3(Vec3::Zero())); },
                        [&] {
                          // With vertex outputs, each face also writes its three corners'
-                         // normal weights, which the vertex pass reads with the face normals
-                         // and corner areas; the fits' slot map is filled meanwhile.
+                         // weighted normals and areas into the CSR slots the vertex pass sums.
                          if (!vertex_normals) return;
                          detail::fill_corner_slots(topo, scratch->corner_slot);
-                         scratch->normal_weights.resize(nf);
+                         scratch->slots.resize(3 * nf);
                          scratch->vertices.resize(nv);
                        });
   auto face_pass = [&] {
@@ -139,20 +140,18 @@ void compute_face_and_vertex(const TriangleMesh& mesh, const Topology& topo,
         detail::assign_large(*vertex_areas, nv, 0.0);
       });
   scratch->frames_ready = true;
+  const std::int32_t* base = nv ? topo.vertex_faces(0).data() : nullptr;
   detail::parallel_chunks(nv, kVertexGrain, [&](std::size_t begin, std::size_t end) {
     for (std::size_t v = begin; v < end; ++v) {
       const auto faces = topo.vertex_faces(v);
-      const auto corners = topo.vertex_face_corners(v);
+      const auto first = static_cast<std::size_t>(faces.data() - base);
       Vec3 n = Vec3::Zero();
       double wsum = 0.0, area = 0.0;
       for (std::size_t i = 0; i < faces.size(); ++i) {
-        const auto f = static_cast<std::size_t>(faces[i]);
-        const int c = corners[i];
-        const Vec3& nf = face_normals[f];
-        const double w = scratch->normal_weights[f][c];
-        n += Vec3(w * nf.x(), w * nf.y(), w * nf.z());
-        wsum += w;
-        area += corner_areas[f][c];
+        const auto& c = scratch->slots[first + i];
+        n += Vec3(c[0], c[1], c[2]);
+        wsum += c[3];
+        area += c[4];
       }
       (*vertex_areas)[v] = area;
       const double len = n.norm();
@@ -168,7 +167,7 @@ void compute_face_and_vertex(const TriangleMesh& mesh, const Topology& topo,
       detail::set_fit_vertex(scratch->vertices[v], unit, x, y, 0.0, 0.0);
     }
   });
-  scratch->normal_weights.release();
+  scratch->slots.release();  // the fits use their own (float) slots
 }
 
 }  // namespace
