@@ -1,8 +1,10 @@
 // The per-face curvature fits (curvature_fit_kernel.hpp) with an AVX2 lane
-// type: this file alone is compiled with -mavx2 (and -ffp-contract=off, no
-// FMA), and curvature.cpp calls it only when the CPU has AVX2. Each lane
-// operation is the IEEE single-precision operation the portable loop does,
-// so both give the same bits.
+// type (inputs loaded row by row and transposed, not gathered: Zen's
+// gathers cost more than the loads and shuffles): this file alone is
+// compiled with -mavx2 (and -ffp-contract=off, no FMA), and curvature.cpp
+// calls it only when the CPU has AVX2. Each lane operation is the IEEE
+// single-precision operation the portable loop does, so both give the same
+// bits.
 #include <immintrin.h>
 
 #include "curvature_fit_kernel.hpp"
@@ -11,15 +13,26 @@ namespace fabrica::detail {
 
 namespace {
 
-// The masked gathers with a zero source and a full mask (the unmasked
-// intrinsics leave their source undefined, which GCC 12 warns about).
-inline __m256d gather4(const double* base, __m128i i) {
-  return _mm256_mask_i32gather_pd(_mm256_setzero_pd(), base, i,
-                                  _mm256_castsi256_pd(_mm256_set1_epi64x(-1)), 8);
+// Three doubles at p as (p[0], p[1], p[2], 0): two loads, nothing read
+// past p[2] (the last vertex of an array is safe).
+inline __m256d load_row3(const double* p) {
+  return _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(p)), _mm_load_sd(p + 2), 1);
 }
-inline __m256 gather8(const float* base, __m256i i) {
-  return _mm256_mask_i32gather_ps(_mm256_setzero_ps(), base, i,
-                                  _mm256_castsi256_ps(_mm256_set1_epi32(-1)), 4);
+
+// Lane l's three doubles at base + i[l] for four lanes, transposed into
+// x, y, z.
+inline void load3x4(const double* base, const std::int32_t* i, __m256d (&xyz)[3]) {
+  const __m256d r0 = load_row3(base + i[0]);
+  const __m256d r1 = load_row3(base + i[1]);
+  const __m256d r2 = load_row3(base + i[2]);
+  const __m256d r3 = load_row3(base + i[3]);
+  const __m256d t0 = _mm256_unpacklo_pd(r0, r1);  // x0 x1 z0 z1
+  const __m256d t1 = _mm256_unpackhi_pd(r0, r1);  // y0 y1 .. ..
+  const __m256d t2 = _mm256_unpacklo_pd(r2, r3);  // x2 x3 z2 z3
+  const __m256d t3 = _mm256_unpackhi_pd(r2, r3);  // y2 y3 .. ..
+  xyz[0] = _mm256_permute2f128_pd(t0, t2, 0x20);
+  xyz[1] = _mm256_permute2f128_pd(t1, t3, 0x20);
+  xyz[2] = _mm256_permute2f128_pd(t0, t2, 0x31);
 }
 
 struct Avx2Lanes {
@@ -32,26 +45,80 @@ struct Avx2Lanes {
 
   static Avx2Lanes splat(float x) { return {_mm256_set1_ps(x)}; }
   static Avx2Lanes load(const float* p) { return {_mm256_loadu_ps(p)}; }
-  static Avx2Lanes from_double(const double* base, const std::int32_t* i) {
-    const __m128i lo = _mm_loadu_si128(reinterpret_cast<const __m128i*>(i));
-    const __m128i hi = _mm_loadu_si128(reinterpret_cast<const __m128i*>(i + 4));
-    const __m128 a = _mm256_cvtpd_ps(gather4(base, lo));
-    const __m128 b = _mm256_cvtpd_ps(gather4(base, hi));
-    return {_mm256_set_m128(b, a)};
+  /// Three consecutive doubles per lane, in double: c[k][h] holds lanes
+  /// 4h..4h+3 of component k.
+  struct Double3 {
+    __m256d c[3][2];
+  };
+  static void load3(const double* base, const std::int32_t* i, Double3& out) {
+    for (int h = 0; h < 2; ++h) {
+      __m256d xyz[3];
+      load3x4(base, i + 4 * h, xyz);
+      for (int k = 0; k < 3; ++k) out.c[k][h] = xyz[k];
+    }
   }
-  static Avx2Lanes diff_double(const double* base, const std::int32_t* i, const std::int32_t* j) {
-    const __m128i ilo = _mm_loadu_si128(reinterpret_cast<const __m128i*>(i));
-    const __m128i ihi = _mm_loadu_si128(reinterpret_cast<const __m128i*>(i + 4));
-    const __m128i jlo = _mm_loadu_si128(reinterpret_cast<const __m128i*>(j));
-    const __m128i jhi = _mm_loadu_si128(reinterpret_cast<const __m128i*>(j + 4));
-    const __m128 a = _mm256_cvtpd_ps(_mm256_sub_pd(gather4(base, ilo), gather4(base, jlo)));
-    const __m128 b = _mm256_cvtpd_ps(_mm256_sub_pd(gather4(base, ihi), gather4(base, jhi)));
-    return {_mm256_set_m128(b, a)};
+  static Avx2Lanes to_float(const Double3& a, int k) {
+    return {_mm256_set_m128(_mm256_cvtpd_ps(a.c[k][1]), _mm256_cvtpd_ps(a.c[k][0]))};
   }
-  static Avx2Lanes gather(const float* base, const std::int32_t* i) {
-    return {gather8(base, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(i)))};
+  static Avx2Lanes diff(const Double3& a, const Double3& b, int k) {
+    return {_mm256_set_m128(_mm256_cvtpd_ps(_mm256_sub_pd(a.c[k][1], b.c[k][1])),
+                            _mm256_cvtpd_ps(_mm256_sub_pd(a.c[k][0], b.c[k][0])))};
   }
-  void store(float* out) const { _mm256_storeu_ps(out, v); }
+  /// The twelve floats of each lane's record (out[f] = field f of the eight
+  /// lanes): eight row loads of floats 0-7 and eight of floats 8-11,
+  /// transposed (cheaper than twelve gathers).
+  static void load_records(const float* base, const std::int32_t* rec, Avx2Lanes (&out)[12]) {
+    __m256 r[8];
+    for (int l = 0; l < 8; ++l) r[l] = _mm256_loadu_ps(base + rec[l]);
+    __m256 t[8];
+    for (int q = 0; q < 2; ++q) {
+      t[4 * q + 0] = _mm256_unpacklo_ps(r[4 * q + 0], r[4 * q + 1]);
+      t[4 * q + 1] = _mm256_unpackhi_ps(r[4 * q + 0], r[4 * q + 1]);
+      t[4 * q + 2] = _mm256_unpacklo_ps(r[4 * q + 2], r[4 * q + 3]);
+      t[4 * q + 3] = _mm256_unpackhi_ps(r[4 * q + 2], r[4 * q + 3]);
+    }
+    __m256 u[8];
+    for (int q = 0; q < 2; ++q) {
+      u[4 * q + 0] = _mm256_shuffle_ps(t[4 * q + 0], t[4 * q + 2], 0x44);
+      u[4 * q + 1] = _mm256_shuffle_ps(t[4 * q + 0], t[4 * q + 2], 0xEE);
+      u[4 * q + 2] = _mm256_shuffle_ps(t[4 * q + 1], t[4 * q + 3], 0x44);
+      u[4 * q + 3] = _mm256_shuffle_ps(t[4 * q + 1], t[4 * q + 3], 0xEE);
+    }
+    for (int f = 0; f < 4; ++f) {
+      out[f].v = _mm256_permute2f128_ps(u[f], u[f + 4], 0x20);
+      out[f + 4].v = _mm256_permute2f128_ps(u[f], u[f + 4], 0x31);
+    }
+    // Floats 8-11: lanes j and j + 4 share a register, then a 4x4
+    // transpose inside each half.
+    __m256 h[4];
+    for (int j = 0; j < 4; ++j)
+      h[j] = _mm256_set_m128(_mm_loadu_ps(base + rec[j + 4] + 8), _mm_loadu_ps(base + rec[j] + 8));
+    const __m256 a0 = _mm256_unpacklo_ps(h[0], h[1]), a1 = _mm256_unpackhi_ps(h[0], h[1]);
+    const __m256 a2 = _mm256_unpacklo_ps(h[2], h[3]), a3 = _mm256_unpackhi_ps(h[2], h[3]);
+    out[8].v = _mm256_shuffle_ps(a0, a2, 0x44);
+    out[9].v = _mm256_shuffle_ps(a0, a2, 0xEE);
+    out[10].v = _mm256_shuffle_ps(a1, a3, 0x44);
+    out[11].v = _mm256_shuffle_ps(a1, a3, 0xEE);
+  }
+  /// Each real lane's corner result into its slot: the four values
+  /// transposed into one 16-byte store per lane, then the weight.
+  static void store_slots(FitSlot* slots, const std::int32_t* slot, int count,
+                          const Avx2Lanes (&v)[4], const Avx2Lanes& w) {
+    const __m256 t0 = _mm256_unpacklo_ps(v[0].v, v[1].v), t1 = _mm256_unpackhi_ps(v[0].v, v[1].v);
+    const __m256 t2 = _mm256_unpacklo_ps(v[2].v, v[3].v), t3 = _mm256_unpackhi_ps(v[2].v, v[3].v);
+    const __m256 r[4] = {_mm256_shuffle_ps(t0, t2, 0x44), _mm256_shuffle_ps(t0, t2, 0xEE),
+                         _mm256_shuffle_ps(t1, t3, 0x44), _mm256_shuffle_ps(t1, t3, 0xEE)};
+    alignas(32) float wl[8];
+    _mm256_store_ps(wl, w.v);
+    for (int l = 0; l < count; ++l) {
+      // Lane l of the four values: half l / 4 of r[l % 4].
+      const __m128 q =
+          l < 4 ? _mm256_castps256_ps128(r[l & 3]) : _mm256_extractf128_ps(r[l & 3], 1);
+      float* s = slots[slot[l]].data();
+      _mm_storeu_ps(s, q);
+      s[4] = wl[l];
+    }
+  }
   friend Avx2Lanes operator+(const Avx2Lanes& a, const Avx2Lanes& b) {
     return {_mm256_add_ps(a.v, b.v)};
   }

@@ -9,11 +9,13 @@
 // lane, and the sources are compiled with -ffp-contract=off, so both paths
 // give the same bits. rtsc computes these fits in float too.
 //
-// Inputs are gathered per lane from the Surface's double arrays (edges are
-// differences of double positions, rounded once), per-vertex records are
-// float (FitVertex), and each corner's weighted, re-expressed result goes
-// into its slot of the vertex -> faces CSR order, which the vertex passes
-// then sum in a fixed order (same bits at any thread count).
+// Inputs are loaded per lane from the Surface's double arrays (three
+// consecutive doubles: a position, a face normal, a face's corner areas;
+// edges are differences of double positions, rounded once), per-vertex
+// records are float (FitVertex, loaded whole and transposed), and each
+// corner's weighted, re-expressed result goes into its slot of the
+// vertex -> faces CSR order, which the vertex passes then sum in a fixed
+// order (same bits at any thread count).
 #pragma once
 
 #include <array>
@@ -77,31 +79,45 @@ struct FloatLanes {
     for (int l = 0; l < kLanes; ++l) r.v[l] = x;
     return r;
   }
-  /// float(base[i[l]])
-  static FloatLanes from_double(const double* base, const std::int32_t* i) {
+  /// Three consecutive doubles per lane, kept in double: c[k][l] = base[i[l] + k].
+  struct Double3 {
+    double c[3][kLanes];
+  };
+  static void load3(const double* base, const std::int32_t* i, Double3& out) {
+    for (int l = 0; l < kLanes; ++l)
+      for (int k = 0; k < 3; ++k) out.c[k][l] = base[i[l] + k];
+  }
+  /// float(a.c[k])
+  static FloatLanes to_float(const Double3& a, int k) {
     FloatLanes r;
-    for (int l = 0; l < kLanes; ++l) r.v[l] = static_cast<float>(base[i[l]]);
+    for (int l = 0; l < kLanes; ++l) r.v[l] = static_cast<float>(a.c[k][l]);
     return r;
   }
-  /// float(base[a[l]] - base[b[l]]): the difference in double, rounded once.
-  static FloatLanes diff_double(const double* base, const std::int32_t* a, const std::int32_t* b) {
+  /// float(a.c[k] - b.c[k]): the difference in double, rounded once.
+  static FloatLanes diff(const Double3& a, const Double3& b, int k) {
     FloatLanes r;
-    for (int l = 0; l < kLanes; ++l) r.v[l] = static_cast<float>(base[a[l]] - base[b[l]]);
+    for (int l = 0; l < kLanes; ++l) r.v[l] = static_cast<float>(a.c[k][l] - b.c[k][l]);
     return r;
   }
-  /// base[i[l]]
-  static FloatLanes gather(const float* base, const std::int32_t* i) {
-    FloatLanes r;
-    for (int l = 0; l < kLanes; ++l) r.v[l] = base[i[l]];
-    return r;
+  /// The twelve floats of each lane's record: out[f][l] = base[rec[l] + f].
+  static void load_records(const float* base, const std::int32_t* rec, FloatLanes (&out)[12]) {
+    for (int l = 0; l < kLanes; ++l)
+      for (int f = 0; f < 12; ++f) out[f].v[l] = base[rec[l] + f];
+  }
+  /// Each real lane's corner result into its slot: slots[slot[l]] =
+  /// (v[0][l], v[1][l], v[2][l], v[3][l], w[l]) for l < count.
+  static void store_slots(FitSlot* slots, const std::int32_t* slot, int count,
+                          const FloatLanes (&v)[4], const FloatLanes& w) {
+    for (int l = 0; l < count; ++l) {
+      FitSlot& s = slots[slot[l]];
+      for (int i = 0; i < 4; ++i) s[i] = v[i].v[l];
+      s[4] = w.v[l];
+    }
   }
   static FloatLanes load(const float* p) {
     FloatLanes r;
     for (int l = 0; l < kLanes; ++l) r.v[l] = p[l];
     return r;
-  }
-  void store(float* out) const {
-    for (int l = 0; l < kLanes; ++l) out[l] = v[l];
   }
 #define FABRICA_FIT_LANE_OP(OP)                                             \
   friend FloatLanes operator OP(const FloatLanes& a, const FloatLanes& b) { \
@@ -158,24 +174,19 @@ inline V3<L> sub(const V3<L>& a, const V3<L>& b) {
   return {a.x - b.x, a.y - b.y, a.z - b.z};
 }
 
-/// Component c of a float record field at `offset` floats, for each lane's
-/// record index (in floats) `rec`.
-template <class L>
-inline V3<L> gather3(const float* base, int offset, const std::int32_t* rec) {
-  return {L::gather(base + offset, rec), L::gather(base + offset + 1, rec),
-          L::gather(base + offset + 2, rec)};
-}
-
-/// A vertex record's normal n and tangent frame (x, y), for each lane's
-/// record index (in floats) `rec`.
+/// A vertex record's normal n and tangent frame (x, y) and its k1, k2, for
+/// each lane's record index (in floats) `rec`.
 template <class L>
 struct VertexFrame {
   V3<L> n, x, y;
+  L k1, k2;
 };
 
 template <class L>
-inline VertexFrame<L> gather_frame(const float* base, const std::int32_t* rec) {
-  return {gather3<L>(base, 0, rec), gather3<L>(base, 3, rec), gather3<L>(base, 6, rec)};
+inline VertexFrame<L> load_frame(const float* base, const std::int32_t* rec) {
+  L f[12];
+  L::load_records(base, rec, f);
+  return {{f[0], f[1], f[2]}, {f[3], f[4], f[5]}, {f[6], f[7], f[8]}, f[9], f[10]};
 }
 
 /// Coordinates, in the face frame (t, b), of the vertex tangent vectors x
@@ -255,42 +266,35 @@ inline void load_block(const FitArrays& a, std::size_t first, std::size_t end, B
   }
 }
 
-/// The face's edges e[k] = p[k+2] - p[k+1], its normal nT and the frame
-/// (t = e[0] / |e[0]|, b = nT x t) both fits use.
+/// The face's edges e[k] = p[k+2] - p[k+1], its normal nT, the frame
+/// (t = e[0] / |e[0]|, b = nT x t) both fits use, and the corner areas w
+/// (the fit weights).
 template <class L>
 struct FaceFrame {
   V3<L> e[3];
   V3<L> nT, t, b;
+  L w[3];
 };
 
 template <class L>
 inline FaceFrame<L> face_frame(const FitArrays& a, const Block& blk) {
   FaceFrame<L> F;
+  typename L::Double3 p[3];
+  for (int k = 0; k < 3; ++k) L::load3(a.positions, blk.pos[k], p[k]);
   for (int k = 0; k < 3; ++k) {
-    const std::int32_t* head = blk.pos[(k + 2) % 3];
-    const std::int32_t* tail = blk.pos[(k + 1) % 3];
-    F.e[k] = {L::diff_double(a.positions, head, tail), L::diff_double(a.positions + 1, head, tail),
-              L::diff_double(a.positions + 2, head, tail)};
+    const auto& head = p[(k + 2) % 3];
+    const auto& tail = p[(k + 1) % 3];
+    F.e[k] = {L::diff(head, tail, 0), L::diff(head, tail, 1), L::diff(head, tail, 2)};
   }
-  F.nT = {L::from_double(a.face_normals, blk.face3), L::from_double(a.face_normals + 1, blk.face3),
-          L::from_double(a.face_normals + 2, blk.face3)};
+  typename L::Double3 d;
+  L::load3(a.face_normals, blk.face3, d);
+  F.nT = {L::to_float(d, 0), L::to_float(d, 1), L::to_float(d, 2)};
+  L::load3(a.corner_areas, blk.face3, d);
+  for (int k = 0; k < 3; ++k) F.w[k] = L::to_float(d, k);
   const L inv = L::splat(1.0f) / sqrt(dot(F.e[0], F.e[0]));
   F.t = {F.e[0].x * inv, F.e[0].y * inv, F.e[0].z * inv};
   F.b = cross(F.nT, F.t);
   return F;
-}
-
-/// Writes the block's per-corner results (NV values, then the weight)
-/// into their slots.
-template <int NV>
-inline void write_slots(const FitArrays& a, const Block& blk,
-                        const float (&out)[3][NV + 1][kLanes]) {
-  for (int l = 0; l < blk.count; ++l)
-    for (int k = 0; k < 3; ++k) {
-      FitSlot& s = a.slots[blk.slot[k][l]];
-      for (int i = 0; i < 4; ++i) s[i] = i < NV ? out[k][i][l] : 0.0f;
-      s[4] = out[k][NV][l];
-    }
 }
 
 /// Calls body(block, face frame) for the faces [begin, end), eight at a
@@ -313,8 +317,8 @@ template <class L>
 void fit_second_fundamental_forms(const FitArrays& a, std::size_t begin, std::size_t end) {
   const float* rec = &a.vertices[0].n[0];
   for_each_block<L>(a, begin, end, [&](const Block& blk, const FaceFrame<L>& F) {
-    const VertexFrame<L> V[3] = {gather_frame<L>(rec, blk.rec[0]), gather_frame<L>(rec, blk.rec[1]),
-                                 gather_frame<L>(rec, blk.rec[2])};
+    const VertexFrame<L> V[3] = {load_frame<L>(rec, blk.rec[0]), load_frame<L>(rec, blk.rec[1]),
+                                 load_frame<L>(rec, blk.rec[2])};
     L suu = L::splat(0.0f), suv = suu, svv = suu, r0 = suu, r1 = suu, r2 = suu;
     for (int j = 0; j < 3; ++j) {
       const L u = dot(F.e[j], F.t), v = dot(F.e[j], F.b);
@@ -334,21 +338,17 @@ void fit_second_fundamental_forms(const FitArrays& a, std::size_t begin, std::si
     typename L::Mask ok = greater(L::load(blk.usable), L::splat(0.0f));
     solve_tridiagonal<L, 3>(diag, off, rhs, s, ok);
     const L zero = L::splat(0.0f), two = L::splat(2.0f);
-    alignas(32) float out[3][4][kLanes];
     for (int k = 0; k < 3; ++k) {
-      const L w = L::from_double(a.corner_areas + k, blk.face3);
+      const L w = F.w[k];
       const typename L::Mask use = ok & greater(w, zero);
       const FrameInFace<L> r = frame_in_face(V[k].x, V[k].y, V[k].n, F.nT, F.t, F.b);
       const L a1 = r.x1, b1 = r.x2, a2 = r.y1, b2 = r.y2;
       const L v0 = w * ((a1 * a1 * s[0] + two * a1 * b1 * s[1]) + b1 * b1 * s[2]);
       const L v1 = w * ((a1 * a2 * s[0] + (a1 * b2 + a2 * b1) * s[1]) + b1 * b2 * s[2]);
       const L v2 = w * ((a2 * a2 * s[0] + two * a2 * b2 * s[1]) + b2 * b2 * s[2]);
-      select(use, v0, zero).store(out[k][0]);
-      select(use, v1, zero).store(out[k][1]);
-      select(use, v2, zero).store(out[k][2]);
-      select(use, w, zero).store(out[k][3]);
+      const L v[4] = {select(use, v0, zero), select(use, v1, zero), select(use, v2, zero), zero};
+      L::store_slots(a.slots, blk.slot[k], blk.count, v, select(use, w, zero));
     }
-    write_slots<3>(a, blk, out);
   });
 }
 
@@ -363,8 +363,8 @@ void fit_curvature_derivatives(const FitArrays& a, std::size_t begin, std::size_
     FrameInFace<L> r[3];
     L hxx[3], hxy[3], hyy[3];
     for (int k = 0; k < 3; ++k) {
-      const VertexFrame<L> V = gather_frame<L>(rec, blk.rec[k]);
-      const L k1 = L::gather(rec + 9, blk.rec[k]), k2 = L::gather(rec + 10, blk.rec[k]);
+      const VertexFrame<L> V = load_frame<L>(rec, blk.rec[k]);
+      const L k1 = V.k1, k2 = V.k2;
       r[k] = frame_in_face(V.x, V.y, V.n, F.nT, F.t, F.b);
       // II = k1 (c,s)(c,s)ᵀ + k2 (-s,c)(-s,c)ᵀ with (c, s) = e1 in the face frame.
       const L c = r[k].x1, s = r[k].x2;
@@ -392,9 +392,8 @@ void fit_curvature_derivatives(const FitArrays& a, std::size_t begin, std::size_
     L C[4];
     typename L::Mask ok = greater(L::load(blk.usable), zero);
     solve_tridiagonal<L, 4>(diag, off, rhs, C, ok);
-    alignas(32) float out[3][5][kLanes];
     for (int k = 0; k < 3; ++k) {
-      const L w = L::from_double(a.corner_areas + k, blk.face3);
+      const L w = F.w[k];
       const typename L::Mask use = ok & greater(w, zero);
       // C(p, q, .) as a linear form; p, q the vertex axes in the face frame.
       const L x1 = r[k].x1, x2 = r[k].x2, y1 = r[k].y1, y2 = r[k].y2;
@@ -402,13 +401,12 @@ void fit_curvature_derivatives(const FitArrays& a, std::size_t begin, std::size_
       const L xx2 = (C[1] * x1 * x1 + two * C[2] * x1 * x2) + C[3] * x2 * x2;
       const L yy1 = (C[0] * y1 * y1 + two * C[1] * y1 * y2) + C[2] * y2 * y2;
       const L yy2 = (C[1] * y1 * y1 + two * C[2] * y1 * y2) + C[3] * y2 * y2;
-      select(use, w * (xx1 * x1 + xx2 * x2), zero).store(out[k][0]);
-      select(use, w * (xx1 * y1 + xx2 * y2), zero).store(out[k][1]);
-      select(use, w * (yy1 * x1 + yy2 * x2), zero).store(out[k][2]);
-      select(use, w * (yy1 * y1 + yy2 * y2), zero).store(out[k][3]);
-      select(use, w, zero).store(out[k][4]);
+      const L v[4] = {select(use, w * (xx1 * x1 + xx2 * x2), zero),
+                      select(use, w * (xx1 * y1 + xx2 * y2), zero),
+                      select(use, w * (yy1 * x1 + yy2 * x2), zero),
+                      select(use, w * (yy1 * y1 + yy2 * y2), zero)};
+      L::store_slots(a.slots, blk.slot[k], blk.count, v, select(use, w, zero));
     }
-    write_slots<4>(a, blk, out);
   });
 }
 

@@ -1,6 +1,5 @@
 #include "fabrica/lines/precompute.hpp"
 
-#include <tbb/parallel_invoke.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -17,6 +16,7 @@
 #include "fabrica/lines/zero_crossing.hpp"
 #include "parallel.hpp"
 #include "zero_crossing_internal.hpp"
+#include "zero_crossing_kernel.hpp"
 
 namespace fabrica {
 
@@ -165,9 +165,9 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
     // and the layout pass computes the offsets once, in place. Otherwise
     // they are computed to check (a Surface rejects coordinates beyond
     // 1e15, so only a frame that is not unit gets there).
-    bool positions_bounded = true;
-    for (const Vec3& p : pos)
-      positions_bounded &= std::abs(p[0]) < 1e30 && std::abs(p[1]) < 1e30 && std::abs(p[2]) < 1e30;
+    // (Every Surface's coordinates are at most 1e15 in magnitude:
+    // check_mesh_indices_and_values, so positions_bounded always holds.)
+    constexpr bool positions_bounded = true;
     auto unit_frame = [&](std::size_t i) {
       const Vec3 &e1 = curv.e1[i], &e2 = curv.e2[i];
       return positions_bounded && std::abs(e1[0]) <= 2.0 && std::abs(e1[1]) <= 2.0 &&
@@ -177,29 +177,50 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
     // Fan order first: the rank of each fan face, into `order` at the
     // vertex's corner offset (left uninitialised: the layout pass reads it
     // only for fans, whose entries this pass wrote).
+    // The pass runs over fixed chunks of vertices, each also writing its
+    // vertices' entry counts into t.offset[i + 1] and summing them; the
+    // offsets are then these counts' prefix sums, chunk after chunk (the
+    // same at any thread count, no serial pass over the vertices).
     const std::unique_ptr<std::uint8_t[]> order(new std::uint8_t[corners]);
     t.fan.resize(nv);
-    detail::parallel_range(nv, [&](std::size_t i) {
-      const auto o = topo.vertex_face_opposite(i);
-      const auto k = static_cast<std::int32_t>(o.size());
-      std::uint8_t* const rank = order.get() + corner_at(i);
-      bool fan = fan_order(o.data(), k, rank);
-      if (fan && curv.valid[i] && !unit_frame(i)) {
-        const Vec3 p = pos[i], e1 = curv.e1[i], e2 = curv.e2[i];
-        for (std::int32_t j = 0; j < k && fan; ++j) {
-          const Vec3 d = pos[static_cast<std::size_t>(o[rank[j]][0])] - p;
-          fan = std::isfinite(static_cast<float>(d.dot(e1))) &&
-                std::isfinite(static_cast<float>(d.dot(e2)));
-        }
-      }
-      t.fan[i] = fan;
-    });
     t.offset.resize(nv + 1);
     t.offset[0] = 0;
-    for (std::size_t i = 0; i < nv; ++i) {
-      const auto k = static_cast<std::int32_t>(topo.vertex_faces(i).size());
-      t.offset[i + 1] = t.offset[i] + (t.fan[i] ? k + 1 : 2 * k);
-    }
+    constexpr std::size_t kChunk = 4096;
+    const std::size_t chunks = (nv + kChunk - 1) / kChunk;
+    std::vector<std::int32_t> chunk_entries(chunks + 1, 0);
+    detail::parallel_range(
+        chunks,
+        [&](std::size_t c) {
+          std::int32_t entries = 0;
+          for (std::size_t i = c * kChunk, e = std::min(nv, i + kChunk); i < e; ++i) {
+            const auto o = topo.vertex_face_opposite(i);
+            const auto k = static_cast<std::int32_t>(o.size());
+            std::uint8_t* const rank = order.get() + corner_at(i);
+            bool fan = fan_order(o.data(), k, rank);
+            if (fan && curv.valid[i] && !unit_frame(i)) {
+              const Vec3 p = pos[i], e1 = curv.e1[i], e2 = curv.e2[i];
+              for (std::int32_t j = 0; j < k && fan; ++j) {
+                const Vec3 d = pos[static_cast<std::size_t>(o[rank[j]][0])] - p;
+                fan = std::isfinite(static_cast<float>(d.dot(e1))) &&
+                      std::isfinite(static_cast<float>(d.dot(e2)));
+              }
+            }
+            t.fan[i] = fan;
+            t.offset[i + 1] = fan ? k + 1 : 2 * k;
+            entries += t.offset[i + 1];
+          }
+          chunk_entries[c + 1] = entries;
+        },
+        1);
+    for (std::size_t c = 0; c < chunks; ++c) chunk_entries[c + 1] += chunk_entries[c];
+    detail::parallel_range(
+        chunks,
+        [&](std::size_t c) {
+          std::int32_t at = chunk_entries[c];
+          for (std::size_t i = c * kChunk, e = std::min(nv, i + kChunk); i < e; ++i)
+            t.offset[i + 1] = at += t.offset[i + 1];
+        },
+        1);
     const auto total = static_cast<std::size_t>(t.offset[nv]);
     // Every entry is written below (no zeroing pass first): kPad entries
     // after the last ring (vertex 0, zeros), so fixed-width reads past a
@@ -328,44 +349,101 @@ void LinePrecompute::release_tangent_ring() const {
 
 namespace {
 
-void compute_ridges(const Surface& surface, const std::vector<double>& abs_k1, bool ridge,
-                    std::vector<LineSegment>& out) {
+// Raw ridges and valleys (docs/algorithms.md §3) in one pass over the faces:
+// the segments, in order, of vector_zero_crossings over each family alone
+// (δ = ±C(e1, e1, e1), direction e1, magnitude |k1|, threshold 0, the edge
+// test, the vertex mask "curvature and derivatives valid, k1 > 0" for
+// ridges, "k1 < 0" for valleys). A face is visited by the family whose
+// mask holds at its three corners (never both), which also implies the
+// magnitude test (|k1| > 0 there), so each face is read once instead of
+// twice and the kernel (zc::vector_face, its own mask test skipped) runs
+// only where a family can cross.
+void compute_ridges_and_valleys(const Surface& surface, const std::vector<double>& abs_k1,
+                                std::vector<LineSegment>& ridges,
+                                std::vector<LineSegment>& valleys) {
   const auto& curv = surface.curvature();
   const auto& dcurv = surface.curvature_derivatives();
   const std::size_t nv = surface.vertex_count();
-  detail::FilledVector<double> delta(nv);
-  detail::FilledVector<std::uint8_t> mask(nv);
-  const double sign = ridge ? 1.0 : -1.0;
+  detail::FilledVector<double> delta_ridge(nv), delta_valley(nv);
+  detail::FilledVector<std::uint8_t> family(nv);  // bit 0: ridge mask, bit 1: valley mask
   detail::parallel_range(nv, [&](std::size_t i) {
     const bool ok = curv.valid[i] && dcurv.valid[i];
-    delta[i] = ok ? sign * dcurv.a[i] : 0.0;
-    mask[i] = ok && (ridge ? curv.k1[i] > 0.0 : curv.k1[i] < 0.0);
+    delta_ridge[i] = ok ? dcurv.a[i] : 0.0;
+    delta_valley[i] = ok ? -dcurv.a[i] : 0.0;
+    family[i] = static_cast<std::uint8_t>(unsigned(ok && curv.k1[i] > 0.0) |
+                                          unsigned(ok && curv.k1[i] < 0.0) << 1);
   });
   VectorCrossingOptions o;
-  o.vertex_mask = mask;
   o.test = ExtremumTest::edge;
   o.threshold = 0.0;
   o.keep_raw_magnitude = true;
-  vector_zero_crossings(surface, delta, curv.e1, abs_k1, o, out);
+  const zc::MeshArrays m(surface);
+  const zc::VectorInputs in_ridge{m, delta_ridge.data(), curv.e1.data(), abs_k1.data(), o};
+  const zc::VectorInputs in_valley{m, delta_valley.data(), curv.e1.data(), abs_k1.data(), o};
+  const Face* faces = m.faces;
+  const std::uint8_t* fam = family.data();
+  static const char site = 0;
+  detail::ordered_chunks<2, LineSegment>(
+      surface.face_count(),
+      [&](std::size_t b, std::size_t e, std::vector<LineSegment>& r, std::vector<LineSegment>& v) {
+        // vector_face's first test (at least two edges with E_i·E_j <= 0,
+        // E = δ e1) without a branch per face, for a batch of faces, then
+        // the kernel for the survivors in face order (the test's outcome
+        // is hard to predict; the family mask is not: ridge and valley
+        // regions are large). A valley's E is the ridge's negated (δ = -a),
+        // which leaves every E_i·E_j as it is.
+        constexpr std::size_t kBatch = 64;
+        std::uint32_t keep[kBatch];
+        const double* a = delta_ridge.data();
+        const Vec3* e1 = curv.e1.data();
+        for (std::size_t first = b; first < e; first += kBatch) {
+          const std::size_t last = std::min(e, first + kBatch);
+          int n = 0;
+          for (std::size_t f = first; f < last; ++f) {
+            const Face& face = faces[f];
+            if ((fam[face[0]] & fam[face[1]] & fam[face[2]]) == 0) continue;
+            const Vec3 E0 = a[face[0]] * e1[face[0]], E1 = a[face[1]] * e1[face[1]],
+                       E2 = a[face[2]] * e1[face[2]];
+            keep[n] = static_cast<std::uint32_t>(f);
+            n += int(zc::two_crossings(zc::crossing_bits_of(E0, E1, E2)));
+          }
+          for (int k = 0; k < n; ++k) {
+            const Face& face = faces[keep[k]];
+            if (fam[face[0]] & fam[face[1]] & fam[face[2]] & 1u)
+              zc::vector_face(in_ridge, keep[k], r);
+            else
+              zc::vector_face(in_valley, keep[k], v);
+          }
+        }
+      },
+      std::array<std::vector<LineSegment>*, 2>{&ridges, &valleys}, &site);
 }
 
 // Minimal rotation taking a vector tangent to the plane with normal `from`
-// into the plane with normal `to` (Rodrigues about from x to).
-inline Vec3 rotate_tangent(const Vec3& x, const Vec3& from, const Vec3& to) {
-  const double c = from.dot(to);
-  if (c <= -1.0 + 1e-12) return x - to * to.dot(x);
-  const Vec3 axis = from.cross(to);
-  // R x = c x + axis × x + axis (axis·x) / (1 + c)
-  return c * x + axis.cross(x) + axis * (axis.dot(x) / (1.0 + c));
-}
+// into the plane with normal `to` (Rodrigues about from x to), with what
+// depends only on the two normals computed once.
+class TangentRotation {
+ public:
+  TangentRotation(const Vec3& from, const Vec3& to)
+      : to_(to), c_(from.dot(to)), axis_(from.cross(to)) {}
+  Vec3 operator()(const Vec3& x) const {
+    if (c_ <= -1.0 + 1e-12) return x - to_ * to_.dot(x);
+    // R x = c x + axis × x + axis (axis·x) / (1 + c)
+    return c_ * x + axis_.cross(x) + axis_ * (axis_.dot(x) / (1.0 + c_));
+  }
+
+ private:
+  Vec3 to_;
+  double c_;
+  Vec3 axis_;
+};
 
 }  // namespace
 
 const std::vector<LineSegment>& LinePrecompute::raw_ridges() const {
   call_once_isolated(cache_->ridge_once, [&] {
     const auto& k1 = abs_k1();
-    tbb::parallel_invoke([&] { compute_ridges(*surface_, k1, true, cache_->ridges); },
-                         [&] { compute_ridges(*surface_, k1, false, cache_->valleys); });
+    compute_ridges_and_valleys(*surface_, k1, cache_->ridges, cache_->valleys);
   });
   return cache_->ridges;
 }
@@ -439,16 +517,45 @@ std::shared_ptr<const LinePrecompute::RawAbove> LinePrecompute::raw_above(LineFa
   }
   auto a = std::make_shared<RawAbove>();
   a->t = t;
-  for (std::size_t i = 0; i < keys->size(); ++i) {
-    const RawKey& k = (*keys)[i];
-    const double k0 = raw_excess(k.m0, t), k1 = raw_excess(k.m1, t);
-    if (k0 == 0.0 && k1 == 0.0) continue;
-    a->index.push_back(static_cast<std::uint32_t>(i));
-    LineSegment& s = a->segments.emplace_back((*raw)[i]);
-    s.end[0].strength = t > 0.0 ? static_cast<float>(k0 / (k0 + t)) : 1.0f;
-    s.end[1].strength = t > 0.0 ? static_cast<float>(k1 / (k1 + t)) : 1.0f;
-    a->corners.push_back(k.corners);
-  }
+  // Two parallel passes over fixed chunks of the keys (count, then fill
+  // after the chunks before): the kept segments in increasing index order,
+  // the same at any thread count.
+  auto kept = [&](const RawKey& k) {
+    return !(raw_excess(k.m0, t) == 0.0 && raw_excess(k.m1, t) == 0.0);
+  };
+  constexpr std::size_t kChunk = 8192;
+  const std::size_t n = keys->size(), chunks = (n + kChunk - 1) / kChunk;
+  std::vector<std::size_t> first(chunks + 1, 0);
+  detail::parallel_range(
+      chunks,
+      [&](std::size_t c) {
+        std::size_t count = 0;
+        for (std::size_t i = c * kChunk, e = std::min(n, i + kChunk); i < e; ++i)
+          count += kept((*keys)[i]);
+        first[c + 1] = count;
+      },
+      1);
+  for (std::size_t c = 0; c < chunks; ++c) first[c + 1] += first[c];
+  a->index.resize(first[chunks]);
+  a->segments.resize(first[chunks]);
+  a->corners.resize(first[chunks]);
+  detail::parallel_range(
+      chunks,
+      [&](std::size_t c) {
+        std::size_t at = first[c];
+        for (std::size_t i = c * kChunk, e = std::min(n, i + kChunk); i < e; ++i) {
+          const RawKey& k = (*keys)[i];
+          if (!kept(k)) continue;
+          const double k0 = raw_excess(k.m0, t), k1 = raw_excess(k.m1, t);
+          a->index[at] = static_cast<std::uint32_t>(i);
+          LineSegment& s = a->segments[at] = (*raw)[i];
+          s.end[0].strength = t > 0.0 ? static_cast<float>(k0 / (k0 + t)) : 1.0f;
+          s.end[1].strength = t > 0.0 ? static_cast<float>(k1 / (k1 + t)) : 1.0f;
+          a->corners[at] = k.corners;
+          ++at;
+        }
+      },
+      1);
   std::lock_guard lock(cache_->above_mutex);
   cache_->above[slot] = a;
   return a;
@@ -531,10 +638,36 @@ const GradientOperator& LinePrecompute::gradient_operator() const {
           G.offset[i] + 1 + static_cast<std::int32_t>(topo.vertex_neighbors(i).size());
     G.column.resize(static_cast<std::size_t>(G.offset[nv]));
     G.coeff.resize(3 * G.column.size());
+    // Per face, first: whether it takes part (a normal and a positive
+    // area) and the in-plane gradients of its three hat functions,
+    // nT x e_k / 2A; each of its vertices reads them (computed once per
+    // face instead of once per corner; the same expressions, so the same
+    // bits). Transient: 72 bytes per face.
+    struct FaceBasis {
+      Vec3 b[3];
+    };
+    const std::size_t nf = faces.size();
+    const std::unique_ptr<FaceBasis[]> face_basis(new FaceBasis[nf]);
+    const std::unique_ptr<std::uint8_t[]> usable(new std::uint8_t[nf]);
+    detail::parallel_range(nf, [&](std::size_t t) {
+      const Face f = faces[t];
+      const Vec3 nt = fn[t];
+      const Vec3 p[3] = {pos[f[0]], pos[f[1]], pos[f[2]]};
+      const double twice_area = (p[1] - p[0]).cross(p[2] - p[0]).norm();
+      usable[t] = !(nt.squaredNorm() == 0.0 || !(twice_area > 0.0));
+      if (!usable[t]) return;
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 e = p[(k + 2) % 3] - p[(k + 1) % 3];
+        face_basis[t].b[k] = nt.cross(e) / twice_area;
+      }
+    });
     detail::parallel_range(nv, [&](std::size_t i) {
       const auto nb = topo.vertex_neighbors(i);
       const std::size_t base = static_cast<std::size_t>(G.offset[i]);
-      std::vector<Vec3> acc(nb.size() + 1, Vec3::Zero());
+      // The accumulators, reused by each thread (no allocation per vertex).
+      thread_local std::vector<Vec3> acc_buffer;
+      acc_buffer.assign(nb.size() + 1, Vec3::Zero());
+      Vec3* const acc = acc_buffer.data();
       G.column[base] = static_cast<std::int32_t>(i);
       for (std::size_t j = 0; j < nb.size(); ++j) G.column[base + 1 + j] = nb[j];
       auto slot = [&](std::int32_t v) -> std::size_t {
@@ -544,24 +677,28 @@ const GradientOperator& LinePrecompute::gradient_operator() const {
       double wsum = 0.0;
       const auto fs = topo.vertex_faces(i);
       const auto cs = topo.vertex_face_corners(i);
+      // Values, not references into the Surface's arrays: the compiler then
+      // knows the stores into acc leave them alone, and the rotation into
+      // n_i's plane is set up once per face, not per corner (the same
+      // expressions, so the same bits).
+      const Vec3 ni = vn[i];
+      const bool rotate = ni.squaredNorm() > 0.0;
       for (std::size_t j = 0; j < fs.size(); ++j) {
         const auto t = static_cast<std::size_t>(fs[j]);
-        const Face& f = faces[t];
-        const Vec3& nt = fn[t];
-        const double twice_area = (pos[f[1]] - pos[f[0]]).cross(pos[f[2]] - pos[f[0]]).norm();
-        if (nt.squaredNorm() == 0.0 || !(twice_area > 0.0)) continue;
+        if (!usable[t]) continue;
         const double w = corner[t][cs[j]];
         if (!(w > 0.0)) continue;
         wsum += w;
+        const Face f = faces[t];
+        const TangentRotation r(fn[t], ni);
         for (int k = 0; k < 3; ++k) {
-          const Vec3 e = pos[f[(k + 2) % 3]] - pos[f[(k + 1) % 3]];
-          Vec3 basis = nt.cross(e) / twice_area;
-          if (vn[i].squaredNorm() > 0.0) basis = rotate_tangent(basis, nt, vn[i]);
+          Vec3 basis = face_basis[t].b[k];
+          if (rotate) basis = r(basis);
           acc[slot(f[k])] += w * basis;
         }
       }
       const double inv = wsum > 0.0 ? 1.0 / wsum : 0.0;
-      for (std::size_t j = 0; j < acc.size(); ++j)
+      for (std::size_t j = 0; j < acc_buffer.size(); ++j)
         for (int c = 0; c < 3; ++c)
           G.coeff[3 * (base + j) + c] = static_cast<float>(acc[j][c] * inv);
     });
@@ -581,22 +718,35 @@ const std::vector<Vec3>& LinePrecompute::normal_laplacian() const {
     const std::size_t nv = s.vertex_count();
     auto& out = cache_->normal_laplacian;
     out.assign(nv, Vec3::Zero());
+    // The cotangent at each corner x of each face, once per face (each is
+    // read by the two vertices of the opposite edge): apex f[x], edge
+    // vectors u = p_f[x+1] - p_apex, v = p_f[x+2] - p_apex. The vertex
+    // whose corner is x + 2 would take u and v the other way round, which
+    // gives the same bits (u × v is exactly -(v × u), the dot product is
+    // symmetric). Transient: 24 bytes per face.
+    auto cot_at = [&](int apex, int p, int q) {
+      const Vec3 u = pos[p] - pos[apex], v = pos[q] - pos[apex];
+      const double cr = u.cross(v).norm();
+      return cr > 0.0 ? u.dot(v) / cr : 0.0;
+    };
+    const std::size_t nf = faces.size();
+    const std::unique_ptr<std::array<double, 3>[]> cot(new std::array<double, 3>[nf]);
+    detail::parallel_range(nf, [&](std::size_t t) {
+      const Face& f = faces[t];
+      for (int x = 0; x < 3; ++x) cot[t][x] = cot_at(f[x], f[(x + 1) % 3], f[(x + 2) % 3]);
+    });
     detail::parallel_range(nv, [&](std::size_t i) {
       Vec3 acc = Vec3::Zero();
       const auto fs = topo.vertex_faces(i);
       const auto cs = topo.vertex_face_corners(i);
       for (std::size_t j = 0; j < fs.size(); ++j) {
-        const Face& f = faces[static_cast<std::size_t>(fs[j])];
+        const auto t = static_cast<std::size_t>(fs[j]);
+        const Face& f = faces[t];
         const int c = cs[j];
         const int a = f[(c + 1) % 3], b = f[(c + 2) % 3];
         // Edge i-a is opposite corner b; edge i-b opposite corner a.
-        auto cot_at = [&](int apex, int p, int q) {
-          const Vec3 u = pos[p] - pos[apex], v = pos[q] - pos[apex];
-          const double cr = u.cross(v).norm();
-          return cr > 0.0 ? u.dot(v) / cr : 0.0;
-        };
-        const double cot_b = cot_at(b, static_cast<int>(i), a);
-        const double cot_a = cot_at(a, static_cast<int>(i), b);
+        const double cot_b = cot[t][(c + 2) % 3];
+        const double cot_a = cot[t][(c + 1) % 3];
         acc += 0.5 * cot_b * (vn[a] - vn[i]) + 0.5 * cot_a * (vn[b] - vn[i]);
       }
       out[i] = area[i] > 0.0 ? Vec3(acc / area[i]) : Vec3::Zero();

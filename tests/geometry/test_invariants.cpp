@@ -7,8 +7,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <numeric>
 #include <random>
+#include <string>
 #include <thread>
 
 #include "analytic.hpp"
@@ -515,6 +517,60 @@ TEST(Determinism, ConcurrentLazyAccess) {
 }
 
 // ---------------------------------------------------------------- misc
+
+// The mesh check of every Surface: a fast pass over all coordinates and
+// indices, then, only when it finds something, the first offender named.
+// Odd coordinate counts (the last coordinate outside the two-wide loop)
+// and each kind of error are covered.
+TEST(MeshCheck, NamesTheFirstBadVertexOrFace) {
+  auto strip = [](int n) {
+    TriangleMesh m;
+    for (int i = 0; i < n; ++i) m.positions.push_back(Vec3(i, i % 2, 0.1 * i));
+    for (int i = 0; i + 2 < n; ++i) m.faces.push_back({i, i + 1, i + 2});
+    return m;
+  };
+  auto message = [](const TriangleMesh& m) -> std::string {
+    try {
+      check_mesh_indices_and_values(m, "mesh");
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  for (int n : {3, 4, 7, 8}) {
+    SCOPED_TRACE(n);
+    const TriangleMesh ok = strip(n);
+    EXPECT_EQ(message(ok), "");
+    EXPECT_NO_THROW(Surface{TriangleMesh(ok)});
+    for (int v = 0; v < n; ++v)
+      for (int k = 0; k < 3; ++k) {
+        TriangleMesh m = ok;
+        m.positions[v][k] = std::numeric_limits<double>::quiet_NaN();
+        if (v + 1 < n) m.positions[v + 1][k] = 2e15;  // a later offender is not named
+        EXPECT_NE(message(m).find("vertex " + std::to_string(v) + " has a coordinate that is not"),
+                  std::string::npos);
+        m.positions[v][k] = -std::numeric_limits<double>::infinity();
+        EXPECT_NE(message(m).find("vertex " + std::to_string(v) + " has a coordinate that is not"),
+                  std::string::npos);
+        m.positions[v][k] = -2e15;
+        EXPECT_NE(message(m).find("vertex " + std::to_string(v) + " has a coordinate beyond 1e15"),
+                  std::string::npos);
+        m.positions[v][k] = 1e15;  // the limit itself is allowed
+        if (v + 1 < n) m.positions[v + 1][k] = ok.positions[v + 1][k];
+        EXPECT_EQ(message(m), "");
+      }
+    for (std::size_t f = 0; f < ok.faces.size(); ++f)
+      for (int k = 0; k < 3; ++k)
+        for (int bad : {-1, n, std::numeric_limits<std::int32_t>::min()}) {
+          TriangleMesh m = ok;
+          m.faces[f][k] = bad;
+          EXPECT_NE(message(m).find("face " + std::to_string(f) + " refers to vertex " +
+                                    std::to_string(bad)),
+                    std::string::npos);
+          EXPECT_THROW(Surface{std::move(m)}, InputError);
+        }
+  }
+}
 
 TEST(Statistics, EdgesSphereFeatureSize) {
   Surface p(test::make_plane(4.0, 5));  // 4x4 cells of side 1, diagonals sqrt 2

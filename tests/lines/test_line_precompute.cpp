@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -22,6 +23,7 @@
 #include "fabrica/io/repair.hpp"
 #include "fabrica/lines/extract.hpp"
 #include "fabrica/lines/precompute.hpp"
+#include "fabrica/lines/zero_crossing.hpp"
 #include "lines_test_meshes.hpp"
 #include "test_support.hpp"
 
@@ -274,6 +276,137 @@ TEST(LinePrecompute, RawKeysAndRawAboveFollowTheRawSegments) {
       }
     }
   }
+}
+
+// The raw ridges and valleys come from one pass over the faces; they must
+// be what vector_zero_crossings gives for each family alone (δ = ±a,
+// direction e1, magnitude |k1|, threshold 0, the edge test, the vertex
+// mask "curvature and derivatives valid, k1 > 0" or "< 0"), on a mesh with
+// many face chunks and degenerate faces, and raw_above over many key
+// chunks must keep exactly the segments above the threshold, in order.
+TEST(LinePrecompute, RawRidgesAndValleysMatchOnePassPerFamily) {
+  const Surface surface = load_mesh("meshes/classic/c3d_igea.ply", true);
+  const LinePrecompute pre(surface);
+  const auto& curv = surface.curvature();
+  const auto& dcurv = surface.curvature_derivatives();
+  const std::size_t nv = surface.vertex_count();
+  std::vector<double> abs_k1(nv);
+  for (std::size_t i = 0; i < nv; ++i) abs_k1[i] = std::abs(curv.k1[i]);
+  for (bool ridge : {true, false}) {
+    SCOPED_TRACE(ridge ? "ridges" : "valleys");
+    std::vector<double> delta(nv);
+    std::vector<std::uint8_t> mask(nv);
+    for (std::size_t i = 0; i < nv; ++i) {
+      const bool ok = curv.valid[i] && dcurv.valid[i];
+      delta[i] = ok ? (ridge ? dcurv.a[i] : -dcurv.a[i]) : 0.0;
+      mask[i] = ok && (ridge ? curv.k1[i] > 0.0 : curv.k1[i] < 0.0);
+    }
+    VectorCrossingOptions o;
+    o.vertex_mask = mask;
+    o.test = ExtremumTest::edge;
+    o.threshold = 0.0;
+    o.keep_raw_magnitude = true;
+    std::vector<LineSegment> expected;
+    vector_zero_crossings(surface, delta, curv.e1, abs_k1, o, expected);
+    const auto& raw = ridge ? pre.raw_ridges() : pre.raw_valleys();
+    EXPECT_GT(raw.size(), 20000u);  // several chunks of raw_above (8192 keys)
+    EXPECT_TRUE(same_segments(raw, expected));
+    const LineFamily family = ridge ? LineFamily::ridge : LineFamily::valley;
+    const double t = 0.1 / surface.feature_size();
+    const auto above = pre.raw_above(family, t);
+    std::vector<std::uint32_t> index;
+    for (std::size_t i = 0; i < raw.size(); ++i)
+      if (raw[i].end[0].strength > t || raw[i].end[1].strength > t)
+        index.push_back(static_cast<std::uint32_t>(i));
+    EXPECT_GT(index.size(), 8192u);
+    EXPECT_EQ(above->index, index);
+    ASSERT_EQ(above->corners.size(), index.size());
+    for (std::size_t j = 0; j < index.size(); ++j) {
+      const Face& f = surface.faces()[static_cast<std::size_t>(raw[index[j]].face)];
+      ASSERT_EQ(above->corners[j], (std::array<std::int32_t, 3>{f[0], f[1], f[2]}));
+    }
+  }
+}
+
+// The light set's operators (per-face quantities computed once per face
+// and read by each corner) against the plain per-corner formulas, bit for
+// bit, on a mesh with degenerate faces: the normal Laplacian
+// (ΔN)_i = 1/A_i Σ (cot/2)(n_j - n_i) and the gradient operator
+// (corner-area weighted hat-function gradients, rotated into n_i's plane).
+TEST(LinePrecompute, LightOperatorsMatchThePlainFormulas) {
+  const Surface surface = load_mesh("meshes/classic/c3d_cow.obj", true);
+  const LinePrecompute pre(surface);
+  const Topology& topo = surface.topology();
+  const auto& pos = surface.positions();
+  const auto& faces = surface.faces();
+  const auto& vn = surface.vertex_normals();
+  const auto& fn = surface.face_normals();
+  const auto& corner = surface.corner_areas();
+  const auto& area = surface.vertex_areas();
+  const std::size_t nv = surface.vertex_count();
+  auto cot_at = [&](int apex, int p, int q) {
+    const Vec3 u = pos[p] - pos[apex], v = pos[q] - pos[apex];
+    const double cr = u.cross(v).norm();
+    return cr > 0.0 ? u.dot(v) / cr : 0.0;
+  };
+  auto rotate = [](const Vec3& x, const Vec3& from, const Vec3& to) -> Vec3 {
+    const double c = from.dot(to);
+    if (c <= -1.0 + 1e-12) return x - to * to.dot(x);
+    const Vec3 axis = from.cross(to);
+    return c * x + axis.cross(x) + axis * (axis.dot(x) / (1.0 + c));
+  };
+  const auto& lap = pre.normal_laplacian();
+  const GradientOperator& G = pre.gradient_operator();
+  ASSERT_EQ(lap.size(), nv);
+  ASSERT_EQ(G.offset.size(), nv + 1);
+  std::size_t mismatches = 0;
+  for (std::size_t i = 0; i < nv; ++i) {
+    Vec3 acc = Vec3::Zero();
+    const auto fs = topo.vertex_faces(i);
+    const auto cs = topo.vertex_face_corners(i);
+    for (std::size_t j = 0; j < fs.size(); ++j) {
+      const Face& f = faces[static_cast<std::size_t>(fs[j])];
+      const int c = cs[j];
+      const int a = f[(c + 1) % 3], b = f[(c + 2) % 3];
+      acc += 0.5 * cot_at(b, static_cast<int>(i), a) * (vn[a] - vn[i]) +
+             0.5 * cot_at(a, static_cast<int>(i), b) * (vn[b] - vn[i]);
+    }
+    const Vec3 want = area[i] > 0.0 ? Vec3(acc / area[i]) : Vec3::Zero();
+    mismatches += std::memcmp(want.data(), lap[i].data(), sizeof(Vec3)) != 0;
+    // The gradient operator's row i: column i first, then the neighbours.
+    const auto nb = topo.vertex_neighbors(i);
+    std::vector<Vec3> row(nb.size() + 1, Vec3::Zero());
+    auto slot = [&](std::int32_t v) -> std::size_t {
+      if (v == static_cast<std::int32_t>(i)) return 0;
+      return 1 + static_cast<std::size_t>(std::lower_bound(nb.begin(), nb.end(), v) - nb.begin());
+    };
+    double wsum = 0.0;
+    for (std::size_t j = 0; j < fs.size(); ++j) {
+      const auto t = static_cast<std::size_t>(fs[j]);
+      const Face& f = faces[t];
+      const Vec3& nt = fn[t];
+      const double twice_area = (pos[f[1]] - pos[f[0]]).cross(pos[f[2]] - pos[f[0]]).norm();
+      if (nt.squaredNorm() == 0.0 || !(twice_area > 0.0)) continue;
+      const double w = corner[t][cs[j]];
+      if (!(w > 0.0)) continue;
+      wsum += w;
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 e = pos[f[(k + 2) % 3]] - pos[f[(k + 1) % 3]];
+        Vec3 basis = nt.cross(e) / twice_area;
+        if (vn[i].squaredNorm() > 0.0) basis = rotate(basis, nt, vn[i]);
+        row[slot(f[k])] += w * basis;
+      }
+    }
+    const double inv = wsum > 0.0 ? 1.0 / wsum : 0.0;
+    const auto base = static_cast<std::size_t>(G.offset[i]);
+    ASSERT_EQ(static_cast<std::size_t>(G.offset[i + 1]) - base, row.size());
+    for (std::size_t j = 0; j < row.size(); ++j)
+      for (int c = 0; c < 3; ++c) {
+        const float want_c = static_cast<float>(row[j][c] * inv);
+        mismatches += std::memcmp(&want_c, &G.coeff[3 * (base + j) + c], sizeof(float)) != 0;
+      }
+  }
+  EXPECT_EQ(mismatches, 0u);
 }
 
 TEST(LinePrecompute, SameBitsAtAnyThreadCount) {
