@@ -9,6 +9,7 @@
 #include <tbb/parallel_invoke.h>
 #include <tbb/task_arena.h>
 
+#include <atomic>
 #include <mutex>
 
 #include "curvature_internal.hpp"
@@ -22,7 +23,17 @@ struct Surface::Cache {
   std::once_flag topology_once;
   Topology topology;
 
-  std::once_flag face_once;
+  // The face quantities: filled by the first of face_normals() (or
+  // face_areas(), corner_areas()) and vertex_normals() (whose face pass
+  // gives them too), under face_mutex. Once a caller has asked for them
+  // (face_public) they stay; until then they are the curvature fits'
+  // inputs, and release_face_quantities() frees them once the derivatives
+  // exist (face_held false: a later call computes them again).
+  std::mutex face_mutex;
+  std::atomic<bool> face_public{false};
+  bool face_held = false;
+  bool face_release_pending = false;
+  bool derivatives_done = false;
   std::vector<Vec3> face_normals;
   std::vector<double> face_areas;
   std::vector<Vec3> corner_areas;
@@ -172,14 +183,28 @@ void compute_face_and_vertex(const TriangleMesh& mesh, const Topology& topo,
 
 }  // namespace
 
+// Frees the face quantities that no caller holds (under face_mutex).
+void Surface::free_face_quantities(Cache& c) {
+  if (c.face_public.load(std::memory_order_relaxed)) return;
+  // (Assigning {} would keep the capacity.)
+  std::vector<Vec3>().swap(c.face_normals);
+  std::vector<double>().swap(c.face_areas);
+  std::vector<Vec3>().swap(c.corner_areas);
+  c.face_held = false;
+}
+
 const std::vector<Vec3>& Surface::face_normals() const {
   Cache& c = *cache_;
-  std::call_once(c.face_once, [&] {
+  if (c.face_public.load(std::memory_order_acquire)) return c.face_normals;
+  std::lock_guard lock(c.face_mutex);
+  if (!c.face_held) {
     isolated([&] {
       compute_face_and_vertex(mesh_, c.topology, options_, c.face_normals, c.face_areas,
                               c.corner_areas, nullptr, nullptr, nullptr, nullptr);
     });
-  });
+    c.face_held = true;
+  }
+  c.face_public.store(true, std::memory_order_release);
   return c.face_normals;
 }
 
@@ -205,11 +230,13 @@ const std::vector<Vec3>& Surface::vertex_normals() const {
       compute_face_and_vertex(mesh_, topo, options_, fn, fa, ca, &c.vertex_normals, &c.normal_valid,
                               &c.vertex_areas, &c.fit_scratch);
     });
-    std::call_once(c.face_once, [&] {
+    std::lock_guard lock(c.face_mutex);
+    if (!c.face_held) {
       c.face_normals = std::move(fn);
       c.face_areas = std::move(fa);
       c.corner_areas = std::move(ca);
-    });
+      c.face_held = true;
+    }
   });
   return c.vertex_normals;
 }
@@ -250,8 +277,21 @@ const CurvatureDerivatives& Surface::curvature_derivatives() const {
                                      options_.curvature_smoothing_sigma * median_edge_length(),
                                      options_.derivative_smoothing_passes);
     });
+    std::lock_guard lock(c.face_mutex);
+    c.derivatives_done = true;
+    if (c.face_release_pending) free_face_quantities(c);
   });
   return c.derivatives;
+}
+
+void Surface::release_face_quantities() const {
+  Cache& c = *cache_;
+  std::lock_guard lock(c.face_mutex);
+  if (c.face_public.load(std::memory_order_relaxed)) return;
+  if (c.derivatives_done)
+    free_face_quantities(c);
+  else
+    c.face_release_pending = true;
 }
 
 double Surface::median_edge_length() const {
