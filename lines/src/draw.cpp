@@ -144,6 +144,17 @@ LineDrawing draw_lines(const Surface& surface, const Camera& camera,
   if (!has(LineFamily::crease) && !has(LineFamily::pel) && !has(LineFamily::laplacian) &&
       !(has(LineFamily::contour) && options.lines.contour.mesh_edges))
     surface.release_face_quantities();
+  // The families whose view fields read the curvature derivatives: these
+  // are computed now, so that the curvature fits' scratch (~45 bytes per
+  // corner) and the face quantities are freed before the depth raster and
+  // the view fields allocate theirs (the same values as computed later).
+  for (LineFamily f :
+       {LineFamily::contour, LineFamily::ridge, LineFamily::valley, LineFamily::demarcating,
+        LineFamily::suggestive, LineFamily::highlight, LineFamily::apparent})
+    if (has(f)) {
+      (void)surface.curvature_derivatives();
+      break;
+    }
   const double feature_size = extractor->feature_size();
   DepthBuffer depth;
   if (options.visibility) {

@@ -38,10 +38,13 @@ void update_light_fields(ViewFields& fields, const Surface& surface, const Camer
 
 /// update_view_fields(), optionally leaving fields.dt1q1 unset (sized, not
 /// computed) so the caller can compute it with update_dt1q1() concurrently
-/// with the families that do not need it.
+/// with the families that do not need it. With `stream_vertex_blocks`
+/// (one-shot extraction) the AVX2 vertex pass packs its inputs a few blocks
+/// at a time (LinePrecompute::pack_vertex_blocks) instead of reading (and
+/// building, and keeping) LinePrecompute::vertex_blocks(): the same bits.
 void update_view_fields(ViewFields& fields, const Surface& surface, const Camera& camera,
                         const ViewFieldsRequest& request, const LinePrecompute* precompute,
-                        bool defer_dt1q1);
+                        bool defer_dt1q1, bool stream_vertex_blocks = false);
 
 /// D_t1 q1 (fields.dt1q1) and the apparent-ridge kernel's records
 /// (fields.apparent_vertex: E = D_t1 q1 t1_world, D_t1 q1, q1, position)
