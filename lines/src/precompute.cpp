@@ -233,7 +233,12 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
       }
     };
     detail::parallel_range(nv, [&](std::size_t i) {
-      const auto k = static_cast<std::int32_t>(topo.vertex_faces(i).size());
+      const auto fs = topo.vertex_faces(i);
+      const auto cs = topo.vertex_face_corners(i);
+      const auto k = static_cast<std::int32_t>(fs.size());
+      auto o = [&](std::int32_t j) {
+        return Topology::opposite_corners(faces[static_cast<std::size_t>(fs[j])], cs[j]);
+      };
       const auto n = static_cast<std::size_t>(t.offset[i]);
       const auto m = static_cast<std::size_t>(t.offset[i + 1]) - n;  // entries
       std::int32_t* const vertex = t.vertex.data() + n;
@@ -245,10 +250,8 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
         const std::uint8_t* const rank = order.get() + corner_at(i);
         std::copy(rank, rank + k, t.rank.data() + n);
         t.rank[n + static_cast<std::size_t>(k)] = 0;
-        std::array<std::int32_t, 2> o[64];  // (a fan has at most 63 faces)
-        topo.vertex_face_opposite(faces, i, o);
-        for (std::int32_t j = 0; j < k; ++j) vertex[j] = o[rank[j]][0];
-        vertex[k] = o[rank[k - 1]][1];
+        for (std::int32_t j = 0; j < k; ++j) vertex[j] = o(rank[j])[0];
+        vertex[k] = o(rank[k - 1])[1];
         // (the last entry is n_0's offset again)
         offsets(i, static_cast<std::size_t>(k), vertex, x, y);
         x[k] = x[0];
@@ -256,8 +259,11 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
         return;
       }
       std::fill(t.rank.data() + n, t.rank.data() + n + m, std::uint8_t{0});
-      // The pairs (i1, i2) of each face, in place.
-      topo.vertex_face_opposite(faces, i, vertex);
+      for (std::int32_t j = 0; j < k; ++j) {
+        const auto oj = o(j);
+        vertex[2 * j] = oj[0];
+        vertex[2 * j + 1] = oj[1];
+      }
       offsets(i, m, vertex, x, y);
     });
   });

@@ -82,30 +82,13 @@ class Topology {
                             std::array<std::int32_t, 2>* out) const {
     const auto begin = static_cast<std::size_t>(vertex_face_offsets_[v]);
     const auto end = static_cast<std::size_t>(vertex_face_offsets_[v + 1]);
-    const Face* const f = faces.data();
-    const std::int32_t* const vf = vertex_faces_.data();
-    const std::uint8_t* const c = vertex_face_corners_.data();
     for (std::size_t j = begin; j < end; ++j)
-      *out++ = opposite_corners(f[static_cast<std::size_t>(vf[j])], c[j]);
-  }
-  /// The same pairs, interleaved: out[2 j], out[2 j + 1].
-  void vertex_face_opposite(std::span<const Face> faces, std::size_t v, std::int32_t* out) const {
-    const auto begin = static_cast<std::size_t>(vertex_face_offsets_[v]);
-    const auto end = static_cast<std::size_t>(vertex_face_offsets_[v + 1]);
-    const Face* const f = faces.data();
-    const std::int32_t* const vf = vertex_faces_.data();
-    const std::uint8_t* const c = vertex_face_corners_.data();
-    for (std::size_t j = begin; j < end; ++j) {
-      const auto o = opposite_corners(f[static_cast<std::size_t>(vf[j])], c[j]);
-      *out++ = o[0];
-      *out++ = o[1];
-    }
+      *out++ = opposite_corners(faces[static_cast<std::size_t>(vertex_faces_[j])],
+                                vertex_face_corners_[j]);
   }
   /// The corners of f after corner c, in face order: (f[(c+1)%3], f[(c+2)%3]).
   static std::array<std::int32_t, 2> opposite_corners(const Face& f, int c) {
-    // (Indexed by c: no branch on a corner that follows no pattern.)
-    static constexpr std::uint8_t kNext[3] = {1, 2, 0}, kPrev[3] = {2, 0, 1};
-    return {f[kNext[c]], f[kPrev[c]]};
+    return {f[c == 2 ? 0 : c + 1], f[c == 0 ? 2 : c - 1]};
   }
   /// Vertices joined to v by an edge, increasing index.
   std::span<const std::int32_t> vertex_neighbors(std::size_t v) const {
