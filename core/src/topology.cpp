@@ -123,9 +123,7 @@ Topology::Topology(const TriangleMesh& mesh) {
   // in a scratch segment of two slots per incident face (left
   // uninitialised: the parallel pass touches it first), with, slot by slot,
   // how many faces share the edge to that neighbour.
-  // (Only while the adjacency is built: vertex_face_opposite() reads the
-  // faces afterwards.)
-  detail::FilledVector<std::array<std::int32_t, 2>> opposite(vertex_faces_.size());
+  vertex_face_opposite_.resize(vertex_faces_.size());
   const std::size_t slots = 2 * vertex_faces_.size();
   // (+ kRankPad: the rank count below reads eight entries at a time; what it
   // reads past a list is masked out.)
@@ -168,8 +166,8 @@ Topology::Topology(const TriangleMesh& mesh) {
         for (std::size_t i = begin; i < end; ++i) {
           const Face& f = mesh.faces[static_cast<std::size_t>(vertex_faces_[i])];
           const int c = vertex_face_corners_[i];
-          const std::array<std::int32_t, 2> o = opposite_corners(f, c);
-          opposite[i] = o;
+          const std::array<std::int32_t, 2> o{f[c == 2 ? 0 : c + 1], f[c == 0 ? 2 : c - 1]};
+          vertex_face_opposite_[i] = o;
           seen.entry(vertex_faces_[i], o, vi);
           insert(o[0]);
           insert(o[1]);
@@ -245,7 +243,7 @@ Topology::Topology(const TriangleMesh& mesh) {
         const auto end = static_cast<std::size_t>(vertex_face_offsets_[v + 1]);
         for (std::size_t j = begin; j < end; ++j) {
           const std::int32_t f = vertex_faces_[j];
-          const auto& o = opposite[j];
+          const auto& o = vertex_face_opposite_[j];
           seen.entry(f, o, vi);
           const int c = vertex_face_corners_[j];
           // The edges opposite the two other corners k touch v; their other

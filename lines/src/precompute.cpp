@@ -67,7 +67,7 @@ const std::vector<double>& LinePrecompute::abs_k1() const {
 
 const LinePrecompute::CornerRing& LinePrecompute::corner_ring() const {
   call_once_isolated(cache_->ring_once, [&] {
-    // Topology::vertex_face_opposite with its offsets.
+    // A copy of Topology::vertex_face_opposite with its offsets.
     const Topology& topo = surface_->topology();
     const std::size_t nv = surface_->vertex_count();
     CornerRing& r = cache_->ring;
@@ -76,9 +76,9 @@ const LinePrecompute::CornerRing& LinePrecompute::corner_ring() const {
     for (std::size_t i = 0; i < nv; ++i)
       r.offset[i + 1] = r.offset[i] + static_cast<std::int32_t>(topo.vertex_faces(i).size());
     r.opposite.resize(static_cast<std::size_t>(r.offset[nv]));
-    const auto& faces = surface_->faces();
     detail::parallel_range(nv, [&](std::size_t i) {
-      topo.vertex_face_opposite(faces, i, r.opposite.data() + r.offset[i]);
+      const auto o = topo.vertex_face_opposite(i);
+      std::copy(o.begin(), o.end(), r.opposite.begin() + r.offset[i]);
     });
   });
   return cache_->ring;
@@ -145,10 +145,9 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
   // Isolated: a thread waiting inside takes no outer task that could ask
   // for the ring again (the mutex is held).
   tbb::this_task_arena::isolate([&] {
-    // Topology::vertex_face_opposite per vertex (CSR like vertex_faces: the
-    // corner offset of vertex i is its vertex_faces(i) position).
+    // Topology::vertex_face_opposite read in place (CSR like vertex_faces:
+    // the corner offset of vertex i is its vertex_faces(i) position).
     const Topology& topo = surface_->topology();
-    const auto& faces = surface_->faces();
     const std::size_t nv = surface_->vertex_count();
     const std::int32_t* const face_base = nv ? topo.vertex_faces(0).data() : nullptr;
     auto corner_at = [&](std::size_t i) {
@@ -181,12 +180,10 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
     const std::unique_ptr<std::uint8_t[]> order(new std::uint8_t[corners]);
     t.fan.resize(nv);
     detail::parallel_range(nv, [&](std::size_t i) {
-      // (A fan has at most 63 faces: more are not gathered.)
-      const auto k = static_cast<std::int32_t>(topo.vertex_faces(i).size());
-      std::array<std::int32_t, 2> o[64];
-      if (k <= 63) topo.vertex_face_opposite(faces, i, o);
+      const auto o = topo.vertex_face_opposite(i);
+      const auto k = static_cast<std::int32_t>(o.size());
       std::uint8_t* const rank = order.get() + corner_at(i);
-      bool fan = fan_order(o, k, rank);
+      bool fan = fan_order(o.data(), k, rank);
       if (fan && curv.valid[i] && !unit_frame(i)) {
         const Vec3 p = pos[i], e1 = curv.e1[i], e2 = curv.e2[i];
         for (std::int32_t j = 0; j < k && fan; ++j) {
@@ -233,12 +230,8 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
       }
     };
     detail::parallel_range(nv, [&](std::size_t i) {
-      const auto fs = topo.vertex_faces(i);
-      const auto cs = topo.vertex_face_corners(i);
-      const auto k = static_cast<std::int32_t>(fs.size());
-      auto o = [&](std::int32_t j) {
-        return Topology::opposite_corners(faces[static_cast<std::size_t>(fs[j])], cs[j]);
-      };
+      const auto o = topo.vertex_face_opposite(i);
+      const auto k = static_cast<std::int32_t>(o.size());
       const auto n = static_cast<std::size_t>(t.offset[i]);
       const auto m = static_cast<std::size_t>(t.offset[i + 1]) - n;  // entries
       std::int32_t* const vertex = t.vertex.data() + n;
@@ -250,8 +243,8 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
         const std::uint8_t* const rank = order.get() + corner_at(i);
         std::copy(rank, rank + k, t.rank.data() + n);
         t.rank[n + static_cast<std::size_t>(k)] = 0;
-        for (std::int32_t j = 0; j < k; ++j) vertex[j] = o(rank[j])[0];
-        vertex[k] = o(rank[k - 1])[1];
+        for (std::int32_t j = 0; j < k; ++j) vertex[j] = o[rank[j]][0];
+        vertex[k] = o[rank[k - 1]][1];
         // (the last entry is n_0's offset again)
         offsets(i, static_cast<std::size_t>(k), vertex, x, y);
         x[k] = x[0];
@@ -260,9 +253,8 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
       }
       std::fill(t.rank.data() + n, t.rank.data() + n + m, std::uint8_t{0});
       for (std::int32_t j = 0; j < k; ++j) {
-        const auto oj = o(j);
-        vertex[2 * j] = oj[0];
-        vertex[2 * j + 1] = oj[1];
+        vertex[2 * j] = o[j][0];
+        vertex[2 * j + 1] = o[j][1];
       }
       offsets(i, m, vertex, x, y);
     });

@@ -113,8 +113,8 @@ TEST(Topology, AdjacencyListsAgreeWithEdgesOnAnIrregularSoup) {
   for (std::size_t v = 0; v < t.vertex_count(); ++v) {
     const auto fs = t.vertex_faces(v);
     const auto cs = t.vertex_face_corners(v);
-    std::vector<std::array<std::int32_t, 2>> os(fs.size());
-    t.vertex_face_opposite(m.faces, v, os.data());
+    const auto os = t.vertex_face_opposite(v);
+    ASSERT_EQ(os.size(), fs.size());
     for (std::size_t j = 0; j < fs.size(); ++j) {
       const Face& f = m.faces[static_cast<std::size_t>(fs[j])];
       EXPECT_EQ(f[cs[j]], static_cast<std::int32_t>(v));

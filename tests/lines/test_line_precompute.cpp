@@ -74,8 +74,7 @@ ReferenceRing reference_ring(const Surface& s) {
   const auto& curv = s.curvature();
   ReferenceRing r;
   for (std::size_t i = 0; i < s.vertex_count(); ++i) {
-    std::vector<std::array<std::int32_t, 2>> o(topo.vertex_faces(i).size());
-    topo.vertex_face_opposite(s.faces(), i, o.data());
+    const auto o = topo.vertex_face_opposite(i);
     const std::size_t k = o.size();
     auto offset = [&](std::int32_t v, const Vec3& axis) {
       return static_cast<float>((pos[static_cast<std::size_t>(v)] - pos[i]).dot(axis));

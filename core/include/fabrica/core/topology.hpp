@@ -75,20 +75,10 @@ class Topology {
   }
   /// The two other corners (i1, i2) of each face of vertex_faces(v), same
   /// order, in the face's corner order after v: i1 = f[(c+1)%3],
-  /// i2 = f[(c+2)%3] where c is v's corner; written to out[0 ..
-  /// vertex_faces(v).size()). Read from `faces` (those of the mesh this
-  /// topology was built from), not stored (8 bytes per corner).
-  void vertex_face_opposite(std::span<const Face> faces, std::size_t v,
-                            std::array<std::int32_t, 2>* out) const {
-    const auto begin = static_cast<std::size_t>(vertex_face_offsets_[v]);
-    const auto end = static_cast<std::size_t>(vertex_face_offsets_[v + 1]);
-    for (std::size_t j = begin; j < end; ++j)
-      *out++ = opposite_corners(faces[static_cast<std::size_t>(vertex_faces_[j])],
-                                vertex_face_corners_[j]);
-  }
-  /// The corners of f after corner c, in face order: (f[(c+1)%3], f[(c+2)%3]).
-  static std::array<std::int32_t, 2> opposite_corners(const Face& f, int c) {
-    return {f[c == 2 ? 0 : c + 1], f[c == 0 ? 2 : c - 1]};
+  /// i2 = f[(c+2)%3] where c is v's corner.
+  std::span<const std::array<std::int32_t, 2>> vertex_face_opposite(std::size_t v) const {
+    return {vertex_face_opposite_.data() + vertex_face_offsets_[v],
+            vertex_face_opposite_.data() + vertex_face_offsets_[v + 1]};
   }
   /// Vertices joined to v by an edge, increasing index.
   std::span<const std::int32_t> vertex_neighbors(std::size_t v) const {
@@ -166,6 +156,7 @@ class Topology {
   std::vector<std::int32_t> vertex_face_offsets_;
   detail::FilledVector<std::int32_t> vertex_faces_;
   detail::FilledVector<std::uint8_t> vertex_face_corners_;
+  detail::FilledVector<std::array<std::int32_t, 2>> vertex_face_opposite_;
   std::vector<std::int32_t> vertex_neighbor_offsets_;
   detail::FilledVector<std::int32_t> vertex_neighbors_;
   // First edge of each vertex (edges numbered by lower vertex), size nv + 1.
