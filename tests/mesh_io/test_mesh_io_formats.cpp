@@ -182,8 +182,9 @@ TEST(MeshIoPly, TriangleStripsWithRestartsAndDegenerates) {
   EXPECT_NE(r.info.notes[0].find("2 degenerate"), std::string::npos) << r.info.notes[0];
 }
 
-// A face element of triangles is read into storage of its size (reserved
-// from the element count, not grown by doubling: up to twice the memory).
+// A face element of triangles, or a triangle strip, is read into storage of
+// its size (reserved from the element count or the strip's length, not
+// grown by doubling: up to twice the memory).
 TEST(MeshIoPly, TriangleFacesAreReadWithoutOverReserve) {
   const auto dir = test::temp_dir("mesh_io_ply_reserve");
   const int n = 1000;
@@ -207,7 +208,18 @@ TEST(MeshIoPly, TriangleFacesAreReadWithoutOverReserve) {
     binary.append(reinterpret_cast<const char*>(&three), 1);
     binary.append(reinterpret_cast<const char*>(c), sizeof c);
   }
-  for (const auto& [name, bytes] : {std::pair{"a.ply", ascii}, std::pair{"b.ply", binary}}) {
+  // And one strip of n triangles (n + 2 indices, alternating 0 1 2 3 ...).
+  std::string strip =
+      "ply\nformat ascii 1.0\nelement vertex " + std::to_string(n + 2) +
+      "\nproperty float x\nproperty float y\nproperty float z\nelement tristrips 1\n"
+      "property list int int vertex_indices\nend_header\n";
+  for (int v = 0; v < n + 2; ++v)
+    strip += std::to_string(v / 2) + " " + std::to_string(v % 2) + " 0\n";
+  strip += std::to_string(n + 2);
+  for (int v = 0; v < n + 2; ++v) strip += " " + std::to_string(v);
+  strip += "\n";
+  for (const auto& [name, bytes] :
+       {std::pair{"a.ply", ascii}, std::pair{"b.ply", binary}, std::pair{"s.ply", strip}}) {
     test::write_bytes(dir / name, bytes);
     const auto r = read_mesh(dir / name);
     ASSERT_EQ(r.mesh.faces.size(), static_cast<std::size_t>(n)) << name;

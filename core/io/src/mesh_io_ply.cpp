@@ -255,6 +255,13 @@ void read_body(Source& src, const std::vector<PlyElement>& elements, PlyState& s
           ++info.file_polygons;
           add_polygon(polygon.data(), polygon.size(), mesh, info);
         } else if (prop.role == Role::strip_indices) {
+          // At most n - 2 triangles (fewer with restarts and degenerate
+          // ones), at most as many as the body holds indices.
+          const auto most = static_cast<std::uint64_t>(
+              st.body_bytes / (st.binary ? type_size(prop.type) : std::size_t{2}) + 1);
+          if (n > 2)
+            mesh.faces.reserve(mesh.faces.size() + static_cast<std::size_t>(std::min<std::uint64_t>(
+                                                       static_cast<std::uint64_t>(n - 2), most)));
           std::int32_t a = -1, b = -1;
           std::int64_t in_strip = 0;  // vertices in the current strip
           for (std::int64_t k = 0; k < n; ++k) {
