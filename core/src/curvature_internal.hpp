@@ -27,13 +27,10 @@ struct CurvatureInputs {
 /// Buffers shared by the passes of one Surface (allocated once, reused, so
 /// that fresh memory, whose first touch is expensive, is touched once): each
 /// (face, corner)'s position in the vertex -> faces CSR list; one slot per
-/// such position for the vertex-normal pass (weighted normal: 3 values,
-/// weight, area; double, freed once the normals exist) and one for the
-/// fits (II: 3 values, C: 4, then the weight, 0 = not used; float,
-/// curvature_fit_kernel.hpp); and one float record per vertex.
+/// such position for the fits (II: 3 values, C: 4, then the weight, 0 = not
+/// used; float, curvature_fit_kernel.hpp); and one float record per vertex.
 struct FaceFitScratch {
   ScratchArray<std::array<std::int32_t, 3>> corner_slot;
-  ScratchArray<std::array<double, 5>> slots;
   ScratchArray<FitSlot> fit_slots;
   ScratchArray<FitVertex> vertices;
   bool frames_ready = false;  ///< vertices hold (n, u, v) for the II fit

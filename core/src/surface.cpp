@@ -9,6 +9,8 @@
 #include <tbb/parallel_invoke.h>
 #include <tbb/task_arena.h>
 
+#include <array>
+#include <atomic>
 #include <mutex>
 
 #include "curvature_internal.hpp"
@@ -22,7 +24,17 @@ struct Surface::Cache {
   std::once_flag topology_once;
   Topology topology;
 
-  std::once_flag face_once;
+  // The face quantities: filled by the first of face_normals() (or
+  // face_areas(), corner_areas()) and vertex_normals() (whose face pass
+  // gives them too), under face_mutex. Once a caller has asked for them
+  // (face_public) they stay; until then they are the curvature fits'
+  // inputs, and release_face_quantities() frees them once the derivatives
+  // exist (face_held false: a later call computes them again).
+  std::mutex face_mutex;
+  std::atomic<bool> face_public{false};
+  bool face_held = false;
+  bool face_release_pending = false;
+  bool derivatives_done = false;
   std::vector<Vec3> face_normals;
   std::vector<double> face_areas;
   std::vector<Vec3> corner_areas;
@@ -78,29 +90,29 @@ const Topology& Surface::topology() const {
 
 namespace {
 
-// Faces [begin, end): normal, area, corner areas and, with a scratch, each
-// corner's weighted normal and area in its CSR slot.
+// Faces [begin, end): normal, area, corner areas and, with `weights`, the
+// normal weight of each corner.
 FABRICA_MULTIVERSION
 void face_geometry_range(const TriangleMesh& mesh, const SurfaceOptions& opt, Vec3* face_normals,
-                         double* face_areas, Vec3* corner_areas, detail::FaceFitScratch* scratch,
+                         double* face_areas, Vec3* corner_areas, std::array<double, 3>* weights,
                          std::size_t begin, std::size_t end) {
   for (std::size_t f = begin; f < end; ++f) {
     const auto t = detail::triangle_shape(mesh, mesh.faces[f]);
     face_areas[f] = 0.5 * t.twice_area;
     const Vec3 n = t.degenerate ? Vec3::Zero() : Vec3(t.cross / t.twice_area);
     face_normals[f] = n;
-    const Vec3 ca = detail::corner_areas(t, opt.mixed_areas);
-    corner_areas[f] = ca;
-    if (!scratch) continue;
+    corner_areas[f] = detail::corner_areas(t, opt.mixed_areas);
+    if (!weights) continue;
     const Vec3 w = detail::normal_corner_weights(t, opt.normal_weighting);
-    const auto& slot = scratch->corner_slot[f];
-    for (int c = 0; c < 3; ++c)
-      scratch->slots[slot[c]] = {w[c] * n.x(), w[c] * n.y(), w[c] * n.z(), w[c], ca[c]};
+    weights[f] = {w[0], w[1], w[2]};
   }
 }
 
 // One pass over faces (normals, areas, corner areas, normal weights), then
-// one gather per vertex (normals, areas).
+// one gather per vertex (normals, areas) over its faces in vertex_faces(v)
+// order. (The corner's weighted normal w n is formed in the gather: 24
+// bytes of weights per face instead of 40 bytes per corner of products,
+// the same IEEE products and sums in the same order.)
 void compute_face_and_vertex(const TriangleMesh& mesh, const Topology& topo,
                              const SurfaceOptions& opt, std::vector<Vec3>& face_normals,
                              std::vector<double>& face_areas, std::vector<Vec3>& corner_areas,
@@ -109,6 +121,7 @@ void compute_face_and_vertex(const TriangleMesh& mesh, const Topology& topo,
                              std::vector<double>* vertex_areas, detail::FaceFitScratch* scratch) {
   const std::size_t nf = mesh.faces.size();
   const std::size_t nv = mesh.positions.size();
+  detail::ScratchArray<std::array<double, 3>> weights;
   // Fresh memory is slow to touch the first time (page faults, and in a VM
   // the host backing it): the arrays are filled concurrently, and the
   // vertex outputs while the face pass runs.
@@ -116,17 +129,16 @@ void compute_face_and_vertex(const TriangleMesh& mesh, const Topology& topo,
                        [&] { detail::assign_large(face_areas, nf, 0.0); },
                        [&] { detail::assign_large(corner_areas, nf, Vec3(Vec3::Zero())); },
                        [&] {
-                         // With vertex outputs, each face also writes its three corners'
-                         // weighted normals and areas into the CSR slots the vertex pass sums.
                          if (!vertex_normals) return;
+                         // The fits' CSR slot of each corner (kept for them).
                          detail::fill_corner_slots(topo, scratch->corner_slot);
-                         scratch->slots.resize(3 * nf);
+                         weights.resize(nf);
                          scratch->vertices.resize(nv);
                        });
   auto face_pass = [&] {
     detail::parallel_chunks(nf, kFaceGrain, [&](std::size_t begin, std::size_t end) {
       face_geometry_range(mesh, opt, face_normals.data(), face_areas.data(), corner_areas.data(),
-                          vertex_normals ? scratch : nullptr, begin, end);
+                          vertex_normals ? &weights[0] : nullptr, begin, end);
     });
   };
   if (!vertex_normals) {
@@ -140,18 +152,20 @@ void compute_face_and_vertex(const TriangleMesh& mesh, const Topology& topo,
         detail::assign_large(*vertex_areas, nv, 0.0);
       });
   scratch->frames_ready = true;
-  const std::int32_t* base = nv ? topo.vertex_faces(0).data() : nullptr;
   detail::parallel_chunks(nv, kVertexGrain, [&](std::size_t begin, std::size_t end) {
     for (std::size_t v = begin; v < end; ++v) {
       const auto faces = topo.vertex_faces(v);
-      const auto first = static_cast<std::size_t>(faces.data() - base);
+      const auto corners = topo.vertex_face_corners(v);
       Vec3 n = Vec3::Zero();
       double wsum = 0.0, area = 0.0;
       for (std::size_t i = 0; i < faces.size(); ++i) {
-        const auto& c = scratch->slots[first + i];
-        n += Vec3(c[0], c[1], c[2]);
-        wsum += c[3];
-        area += c[4];
+        const auto f = static_cast<std::size_t>(faces[i]);
+        const int k = corners[i];
+        const Vec3& fn = face_normals[f];
+        const double w = weights[f][k];
+        n += Vec3(w * fn.x(), w * fn.y(), w * fn.z());
+        wsum += w;
+        area += corner_areas[f][k];
       }
       (*vertex_areas)[v] = area;
       const double len = n.norm();
@@ -167,19 +181,32 @@ void compute_face_and_vertex(const TriangleMesh& mesh, const Topology& topo,
       detail::set_fit_vertex(scratch->vertices[v], unit, x, y, 0.0, 0.0);
     }
   });
-  scratch->slots.release();  // the fits use their own (float) slots
 }
 
 }  // namespace
 
+// Frees the face quantities that no caller holds (under face_mutex).
+void Surface::free_face_quantities(Cache& c) {
+  if (c.face_public.load(std::memory_order_relaxed)) return;
+  // (Assigning {} would keep the capacity.)
+  std::vector<Vec3>().swap(c.face_normals);
+  std::vector<double>().swap(c.face_areas);
+  std::vector<Vec3>().swap(c.corner_areas);
+  c.face_held = false;
+}
+
 const std::vector<Vec3>& Surface::face_normals() const {
   Cache& c = *cache_;
-  std::call_once(c.face_once, [&] {
+  if (c.face_public.load(std::memory_order_acquire)) return c.face_normals;
+  std::lock_guard lock(c.face_mutex);
+  if (!c.face_held) {
     isolated([&] {
       compute_face_and_vertex(mesh_, c.topology, options_, c.face_normals, c.face_areas,
                               c.corner_areas, nullptr, nullptr, nullptr, nullptr);
     });
-  });
+    c.face_held = true;
+  }
+  c.face_public.store(true, std::memory_order_release);
   return c.face_normals;
 }
 
@@ -205,11 +232,13 @@ const std::vector<Vec3>& Surface::vertex_normals() const {
       compute_face_and_vertex(mesh_, topo, options_, fn, fa, ca, &c.vertex_normals, &c.normal_valid,
                               &c.vertex_areas, &c.fit_scratch);
     });
-    std::call_once(c.face_once, [&] {
+    std::lock_guard lock(c.face_mutex);
+    if (!c.face_held) {
       c.face_normals = std::move(fn);
       c.face_areas = std::move(fa);
       c.corner_areas = std::move(ca);
-    });
+      c.face_held = true;
+    }
   });
   return c.vertex_normals;
 }
@@ -250,8 +279,21 @@ const CurvatureDerivatives& Surface::curvature_derivatives() const {
                                      options_.curvature_smoothing_sigma * median_edge_length(),
                                      options_.derivative_smoothing_passes);
     });
+    std::lock_guard lock(c.face_mutex);
+    c.derivatives_done = true;
+    if (c.face_release_pending) free_face_quantities(c);
   });
   return c.derivatives;
+}
+
+void Surface::release_face_quantities() const {
+  Cache& c = *cache_;
+  std::lock_guard lock(c.face_mutex);
+  if (c.face_public.load(std::memory_order_relaxed)) return;
+  if (c.derivatives_done)
+    free_face_quantities(c);
+  else
+    c.face_release_pending = true;
 }
 
 double Surface::median_edge_length() const {

@@ -1,5 +1,6 @@
 #include "fabrica/lines/draw.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <string>
@@ -134,6 +135,26 @@ LineDrawing draw_lines(const Surface& surface, const Camera& camera,
   // computed, as LineDrawer does (its precompute is filled on extraction).
   auto extractor = std::make_unique<LineExtractor>(surface, options.lines);
   extractor->set_one_shot(true);  // its per-view inputs freed as each pass is through
+  // The face normals and areas that the Surface computed for the curvature
+  // fits are freed once the derivatives exist, unless a family of this
+  // drawing reads them (creases, mesh-edge contours, and the gradient
+  // operator of PELs and Laplacian lines), which would compute them again.
+  const auto& fam = options.lines.families;
+  const auto has = [&](LineFamily f) { return std::find(fam.begin(), fam.end(), f) != fam.end(); };
+  if (!has(LineFamily::crease) && !has(LineFamily::pel) && !has(LineFamily::laplacian) &&
+      !(has(LineFamily::contour) && options.lines.contour.mesh_edges))
+    surface.release_face_quantities();
+  // The families whose view fields read the curvature derivatives: these
+  // are computed now, so that the curvature fits' scratch (~45 bytes per
+  // corner) and the face quantities are freed before the depth raster and
+  // the view fields allocate theirs (the same values as computed later).
+  for (LineFamily f :
+       {LineFamily::contour, LineFamily::ridge, LineFamily::valley, LineFamily::demarcating,
+        LineFamily::suggestive, LineFamily::highlight, LineFamily::apparent})
+    if (has(f)) {
+      (void)surface.curvature_derivatives();
+      break;
+    }
   const double feature_size = extractor->feature_size();
   DepthBuffer depth;
   if (options.visibility) {

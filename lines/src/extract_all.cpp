@@ -127,13 +127,16 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
   try {
     // D_t1 q1 (the apparent ridges' second field pass) is computed in the
     // apparent-ridge task below, concurrently with the other families.
-    detail::update_view_fields(fields_, *surface_, camera, req, precompute_.get(), true, true);
+    detail::update_view_fields(fields_, *surface_, camera, req, precompute_.get(), true, true,
+                               one_shot_);
   } catch (...) {
     view_independent.wait();
     throw;
   }
   view_independent.wait();
-  // The vertex and light passes are done with the vertex blocks; the
+  // The vertex and light passes are done with the vertex blocks (in one-shot
+  // mode only the light pass builds them: the vertex pass packs its own a
+  // few at a time); the
   // D_t1 q1 pass (the apparent-ridge task) is the only reader of the
   // tangent ring, freed when it is through (one-shot only).
   if (one_shot_) precompute_->release_vertex_blocks();

@@ -284,52 +284,59 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
   return cache_->tangent_ring;
 }
 
+void LinePrecompute::pack_vertex_blocks(std::size_t b0, std::size_t b1, VertexBlock* block,
+                                        std::uint8_t* valid_out) const {
+  const auto& pos = surface_->positions();
+  const auto& nrm = surface_->vertex_normals();
+  const auto& curv = surface_->curvature();
+  const auto& dcurv = surface_->curvature_derivatives();
+  const std::size_t nv = surface_->vertex_count();
+  for (std::size_t b = b0; b < b1; ++b) {
+    // Every block is written whole (no zeroing pass first); the lanes past
+    // the last vertex are zeros.
+    VertexBlock& blk = block[b - b0];
+    unsigned valid = 0;
+    for (std::size_t l = 0; l < 4; ++l) {
+      const std::size_t i = 4 * b + l;
+      if (i >= nv) {
+        for (int k = 0; k < 3; ++k) blk.p[k][l] = blk.n[k][l] = blk.e1[k][l] = blk.e2[k][l] = 0.0;
+        blk.k1[l] = blk.k2[l] = blk.a[l] = blk.b[l] = blk.c[l] = blk.d[l] = 0.0;
+        continue;
+      }
+      for (int k = 0; k < 3; ++k) {
+        blk.p[k][l] = pos[i][k];
+        blk.n[k][l] = nrm[i][k];
+        blk.e1[k][l] = curv.e1[i][k];
+        blk.e2[k][l] = curv.e2[i][k];
+      }
+      blk.k1[l] = curv.k1[i];
+      blk.k2[l] = curv.k2[i];
+      blk.a[l] = dcurv.a[i];
+      blk.b[l] = dcurv.b[i];
+      blk.c[l] = dcurv.c[i];
+      blk.d[l] = dcurv.d[i];
+      valid |= unsigned(curv.valid[i] != 0) << l;
+      valid |= unsigned(dcurv.valid[i] != 0) << (4 + l);
+    }
+    valid_out[b - b0] = static_cast<std::uint8_t>(valid);
+  }
+}
+
 const LinePrecompute::VertexBlocks& LinePrecompute::vertex_blocks() const {
   std::lock_guard lock(cache_->blocks_mutex);
   if (cache_->blocks_ready) return cache_->blocks;
   tbb::this_task_arena::isolate([&] {
-    const auto& pos = surface_->positions();
-    const auto& nrm = surface_->vertex_normals();
-    const auto& curv = surface_->curvature();
-    const auto& dcurv = surface_->curvature_derivatives();
-    const std::size_t nv = surface_->vertex_count();
-    const std::size_t nb = (nv + 3) / 4;
+    // The Surface's quantities first (computed once, outside the loop).
+    (void)surface_->curvature_derivatives();
+    const std::size_t nb = (surface_->vertex_count() + 3) / 4;
     VertexBlocks& vb = cache_->blocks;
-    // Every block is written whole below (no zeroing pass first); the lanes
-    // past the last vertex are zeros.
     vb.block.resize(nb);
     vb.valid.resize(nb);
-    detail::parallel_range(
-        nb,
-        [&](std::size_t b) {
-          VertexBlock& blk = vb.block[b];
-          unsigned valid = 0;
-          for (std::size_t l = 0; l < 4; ++l) {
-            const std::size_t i = 4 * b + l;
-            if (i >= nv) {
-              for (int k = 0; k < 3; ++k)
-                blk.p[k][l] = blk.n[k][l] = blk.e1[k][l] = blk.e2[k][l] = 0.0;
-              blk.k1[l] = blk.k2[l] = blk.a[l] = blk.b[l] = blk.c[l] = blk.d[l] = 0.0;
-              continue;
-            }
-            for (int k = 0; k < 3; ++k) {
-              blk.p[k][l] = pos[i][k];
-              blk.n[k][l] = nrm[i][k];
-              blk.e1[k][l] = curv.e1[i][k];
-              blk.e2[k][l] = curv.e2[i][k];
-            }
-            blk.k1[l] = curv.k1[i];
-            blk.k2[l] = curv.k2[i];
-            blk.a[l] = dcurv.a[i];
-            blk.b[l] = dcurv.b[i];
-            blk.c[l] = dcurv.c[i];
-            blk.d[l] = dcurv.d[i];
-            valid |= unsigned(curv.valid[i] != 0) << l;
-            valid |= unsigned(dcurv.valid[i] != 0) << (4 + l);
-          }
-          vb.valid[b] = static_cast<std::uint8_t>(valid);
-        },
-        512);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nb, 512),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        pack_vertex_blocks(r.begin(), r.end(), vb.block.data() + r.begin(),
+                                           vb.valid.data() + r.begin());
+                      });
   });
   cache_->blocks_ready = true;
   return cache_->blocks;

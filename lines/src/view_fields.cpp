@@ -80,11 +80,14 @@ struct VertexPassArgs {
 
 // Blocks [b0, b1) whose four vertices all have valid curvature; the others
 // go to `other(b)`.
+// blocks[b - first] and valid[b - first] hold block b.
 template <class Other>
 [[gnu::target("avx2")]] void vertex_pass_avx2(const LinePrecompute::VertexBlock* blocks,
-                                              const std::uint8_t* valid, std::size_t b0,
-                                              std::size_t b1, const VertexPassArgs& A,
-                                              Other&& other) {
+                                              const std::uint8_t* valid, std::size_t first,
+                                              std::size_t b0, std::size_t b1,
+                                              const VertexPassArgs& A, Other&& other) {
+  blocks -= first;  // (first <= b0: the pointer is only used for b >= b0)
+  valid -= first;
   const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0);
   const __m256d neg0 = _mm256_set1_pd(-0.0), three = _mm256_set1_pd(3.0);
   const __m256i lane_bits = _mm256_set_epi64x(8, 4, 2, 1);
@@ -245,7 +248,7 @@ void update_view_fields(ViewFields& fields, const Surface& surface, const Camera
 
 void detail::update_view_fields(ViewFields& fields, const Surface& surface, const Camera& camera,
                                 const ViewFieldsRequest& request, const LinePrecompute* precompute,
-                                bool defer_dt1q1, bool same_surface) {
+                                bool defer_dt1q1, bool same_surface, bool stream_vertex_blocks) {
   validate_camera(camera);
   const std::size_t nv = surface.vertex_count();
   fields.camera = camera;
@@ -352,7 +355,12 @@ void detail::update_view_fields(ViewFields& fields, const Surface& surface, cons
     };
 #if defined(FABRICA_LINES_AVX2)
     if (precompute && detail::cpu_has_avx2()) {
-      const LinePrecompute::VertexBlocks& vb = precompute->vertex_blocks();
+      // In one-shot mode the blocks are packed 64 at a time (18 KB, in the
+      // cache) just before the pass reads them, instead of all of them
+      // (144 bytes per vertex) being built first and kept.
+      const LinePrecompute::VertexBlocks* vb =
+          stream_vertex_blocks ? nullptr : &precompute->vertex_blocks();
+      if (stream_vertex_blocks) (void)surface.curvature_derivatives();
       VertexPassArgs args{nv, detail::ViewVector4(camera)};
       args.want_sc = want_sc;
       args.want_app = want_app;
@@ -371,10 +379,21 @@ void detail::update_view_fields(ViewFields& fields, const Surface& surface, cons
       auto other = [&](std::size_t b) {
         for (std::size_t i = 4 * b; i < std::min(nv, 4 * b + 4); ++i) vertex_and_direction(i);
       };
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vb.block.size(), 512),
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, (nv + 3) / 4, 512),
                         [&](const tbb::blocked_range<std::size_t>& r) {
-                          vertex_pass_avx2(vb.block.data(), vb.valid.data(), r.begin(), r.end(),
-                                           args, other);
+                          if (vb) {
+                            vertex_pass_avx2(vb->block.data(), vb->valid.data(), 0, r.begin(),
+                                             r.end(), args, other);
+                            return;
+                          }
+                          constexpr std::size_t kPacked = 64;
+                          LinePrecompute::VertexBlock packed[kPacked];
+                          std::uint8_t packed_valid[kPacked];
+                          for (std::size_t b = r.begin(); b < r.end(); b += kPacked) {
+                            const std::size_t e = std::min(r.end(), b + kPacked);
+                            precompute->pack_vertex_blocks(b, e, packed, packed_valid);
+                            vertex_pass_avx2(packed, packed_valid, b, b, e, args, other);
+                          }
                         });
     } else
 #endif

@@ -44,9 +44,14 @@ void update_light_fields(ViewFields& fields, const Surface& surface, const Camer
 /// are then written for every vertex only when the array is (re)sized, and
 /// the D_t1 q1 pass must be told not to write them again
 /// (write_positions = false below); the deferred pass's caller does that.
+/// With `stream_vertex_blocks` (one-shot extraction) the AVX2 vertex pass
+/// packs its inputs a few blocks at a time (LinePrecompute::pack_vertex_blocks)
+/// instead of reading (and building, and keeping)
+/// LinePrecompute::vertex_blocks(): the same bits.
 void update_view_fields(ViewFields& fields, const Surface& surface, const Camera& camera,
                         const ViewFieldsRequest& request, const LinePrecompute* precompute,
-                        bool defer_dt1q1, bool same_surface = false);
+                        bool defer_dt1q1, bool same_surface = false,
+                        bool stream_vertex_blocks = false);
 
 /// D_t1 q1 (fields.dt1q1) and the apparent-ridge kernel's records
 /// (fields.apparent_vertex: E = D_t1 q1 t1_world, D_t1 q1, q1, position)

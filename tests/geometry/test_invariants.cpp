@@ -516,6 +516,49 @@ TEST(Determinism, ConcurrentLazyAccess) {
   for (const auto& g : got) EXPECT_EQ(g, expected);
 }
 
+// release_face_quantities frees only the face quantities that the Surface
+// computed as curvature inputs and that no caller obtained, and only once
+// the derivatives exist; asking for them later computes the same values.
+TEST(Determinism, ReleasedFaceQuantitiesComeBackTheSame) {
+  const TriangleMesh m = test::make_torus(16, 4.5, 64, 32, 0.2);
+  Surface ref(m);
+  ref.precompute();
+  const std::vector<Vec3> normals = ref.face_normals(), corners = ref.corner_areas();
+  const std::vector<double> areas = ref.face_areas();
+  const auto same = [](const auto& a, const auto& b) {
+    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0])) == 0;
+  };
+  {
+    // Released before the curvature: pending until the derivatives exist,
+    // which still read them and come out the same.
+    Surface s(m);
+    s.release_face_quantities();
+    s.precompute();
+    EXPECT_EQ(bytes_of(s), bytes_of(ref));
+    EXPECT_TRUE(same(s.face_normals(), normals));
+    EXPECT_TRUE(same(s.face_areas(), areas));
+    EXPECT_TRUE(same(s.corner_areas(), corners));
+  }
+  {
+    // Released after: the curvature and derivatives stay, and the face
+    // quantities asked for again are the same.
+    Surface s(m);
+    s.curvature_derivatives();
+    s.release_face_quantities();
+    EXPECT_TRUE(same(s.face_normals(), normals));
+    EXPECT_TRUE(same(s.corner_areas(), corners));
+    EXPECT_TRUE(same(s.face_areas(), areas));
+  }
+  {
+    // Arrays a caller holds are never freed: the same storage after.
+    Surface s(m);
+    const std::vector<Vec3>& held = s.face_normals();
+    s.curvature_derivatives();
+    s.release_face_quantities();
+    EXPECT_TRUE(same(held, normals));  // (freed, it would be empty)
+  }
+}
+
 // ---------------------------------------------------------------- misc
 
 // The mesh check of every Surface: a fast pass over all coordinates and

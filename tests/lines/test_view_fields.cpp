@@ -191,6 +191,48 @@ TEST(LinesViewFields, SimdAndPortablePassesGiveTheSameBits) {
   }
 }
 
+// The one-shot vertex pass packs its vertex blocks a few at a time instead
+// of reading LinePrecompute::vertex_blocks(): the same bits (on a mesh
+// whose vertex count is not a multiple of four, so the partial last block
+// is packed too).
+TEST(LinesViewFields, StreamedVertexBlocksGiveTheSameBits) {
+#if !defined(FABRICA_LINES_AVX2)
+  GTEST_SKIP() << "no AVX2 passes in this build";
+#else
+  if (!detail::cpu_has_avx2()) GTEST_SKIP() << "this CPU has no AVX2";
+#endif
+  const Surface surface = load("meshes/classic/libigl_camelhead.off", true);
+  ASSERT_NE(surface.vertex_count() % 4, 0u);
+  ASSERT_GT(surface.vertex_count(), 4u * 64u * 3u);  // several packs of 64 blocks
+  const Camera c = camera_towards(surface, Vec3(0.3, 0.2, 1.0));
+  for (const bool cull : {true, false}) {
+    ViewFieldsRequest req;
+    req.apparent_cull_threshold = cull ? std::optional<double>(1.0e3) : std::nullopt;
+    req.suggestive_test_shift = cull ? std::optional<double>(0.05) : std::nullopt;
+    const LinePrecompute streamed_pre(surface), held_pre(surface);
+    ViewFields streamed, held;
+    detail::update_view_fields(streamed, surface, c, req, &streamed_pre, false, false, true);
+    detail::update_view_fields(held, surface, c, req, &held_pre, false, false, false);
+    EXPECT_SAME_FIELD(streamed, held, ndotv);
+    EXPECT_SAME_FIELD(streamed, held, kr);
+    EXPECT_SAME_FIELD(streamed, held, sc_num);
+    EXPECT_SAME_FIELD(streamed, held, q1);
+    EXPECT_SAME_FIELD(streamed, held, t1);
+    EXPECT_SAME_FIELD(streamed, held, t1_world);
+    EXPECT_SAME_FIELD(streamed, held, signs);
+    EXPECT_SAME_FIELD(streamed, held, dt1q1);
+    EXPECT_SAME_FIELD(streamed, held, apparent_vertex);
+    // pack_vertex_blocks writes what vertex_blocks() holds.
+    const auto& vb = held_pre.vertex_blocks();
+    const std::size_t nb = vb.block.size();
+    std::vector<LinePrecompute::VertexBlock> packed(nb);
+    std::vector<std::uint8_t> valid(nb);
+    streamed_pre.pack_vertex_blocks(0, nb, packed.data(), valid.data());
+    EXPECT_EQ(std::memcmp(packed.data(), vb.block.data(), nb * sizeof(packed[0])), 0);
+    EXPECT_EQ(std::memcmp(valid.data(), vb.valid.data(), nb), 0);
+  }
+}
+
 // The AVX2 D_t1 q1 pass finds a fan's candidate faces from float signs and
 // hands the fan to the double search when a sign is within the float
 // error: on a cylinder seen across its axis, t1 runs around it, so the

@@ -182,6 +182,51 @@ TEST(MeshIoPly, TriangleStripsWithRestartsAndDegenerates) {
   EXPECT_NE(r.info.notes[0].find("2 degenerate"), std::string::npos) << r.info.notes[0];
 }
 
+// A face element of triangles, or a triangle strip, is read into storage of
+// its size (reserved from the element count or the strip's length, not
+// grown by doubling: up to twice the memory).
+TEST(MeshIoPly, TriangleFacesAreReadWithoutOverReserve) {
+  const auto dir = test::temp_dir("mesh_io_ply_reserve");
+  const int n = 1000;
+  const std::string head =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+      "property float y\nproperty float z\nelement face " +
+      std::to_string(n) + "\nproperty list uchar int vertex_indices\n";
+  std::string ascii = head;
+  ascii += "end_header\n0 0 0\n1 0 0\n0 1 0\n";
+  for (int i = 0; i < n; ++i) ascii += "3 0 1 2\n";
+  std::string binary = head;
+  binary.replace(binary.find("ascii"), 5, "binary_little_endian");
+  binary += "end_header\n";
+  for (int v = 0; v < 3; ++v) {
+    const float p[3] = {v == 1 ? 1.0f : 0.0f, v == 2 ? 1.0f : 0.0f, 0.0f};
+    binary.append(reinterpret_cast<const char*>(p), sizeof p);
+  }
+  for (int i = 0; i < n; ++i) {
+    const std::uint8_t three = 3;
+    const std::int32_t c[3] = {0, 1, 2};
+    binary.append(reinterpret_cast<const char*>(&three), 1);
+    binary.append(reinterpret_cast<const char*>(c), sizeof c);
+  }
+  // And one strip of n triangles (n + 2 indices, alternating 0 1 2 3 ...).
+  std::string strip =
+      "ply\nformat ascii 1.0\nelement vertex " + std::to_string(n + 2) +
+      "\nproperty float x\nproperty float y\nproperty float z\nelement tristrips 1\n"
+      "property list int int vertex_indices\nend_header\n";
+  for (int v = 0; v < n + 2; ++v)
+    strip += std::to_string(v / 2) + " " + std::to_string(v % 2) + " 0\n";
+  strip += std::to_string(n + 2);
+  for (int v = 0; v < n + 2; ++v) strip += " " + std::to_string(v);
+  strip += "\n";
+  for (const auto& [name, bytes] :
+       {std::pair{"a.ply", ascii}, std::pair{"b.ply", binary}, std::pair{"s.ply", strip}}) {
+    test::write_bytes(dir / name, bytes);
+    const auto r = read_mesh(dir / name);
+    ASSERT_EQ(r.mesh.faces.size(), static_cast<std::size_t>(n)) << name;
+    EXPECT_EQ(r.mesh.faces.capacity(), r.mesh.faces.size()) << name;
+  }
+}
+
 TEST(MeshIoPly, BigAndLittleEndianAnyPropertyOrderAndTypes) {
   const auto dir = test::temp_dir("mesh_io_ply_endian");
   // Properties in unusual order and types, an extra element with a list.

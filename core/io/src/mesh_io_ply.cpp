@@ -171,6 +171,8 @@ struct PlyState {
   std::size_t element = 0;   // index into elements, for messages
   std::uint64_t record = 0;  // record within the element
   std::size_t degenerate_strip_triangles = 0;
+  std::size_t body_bytes = 0;  // the size of the body, bounding reservations
+  bool binary = false;
 };
 
 template <typename Source>
@@ -197,6 +199,17 @@ void read_body(Source& src, const std::vector<PlyElement>& elements, PlyState& s
       mesh.positions.resize(e.count, Vec3::Zero());
       if (keep_normals) info.file_normals.resize(e.count, Vec3::Zero());
     }
+    // A face element of triangles gives one face per record: room for them
+    // at once, instead of growing by doubling (up to twice the size kept).
+    // At most what the body could hold: a face record has a count and at
+    // least three indices (binary), or "3 0 1 2" and a blank (ascii).
+    for (const PlyProperty& prop : e.properties)
+      if (prop.list && prop.role == Role::face_indices) {
+        const std::size_t min_record =
+            st.binary ? type_size(prop.count_type) + 3 * type_size(prop.type) : 8;
+        const auto most = static_cast<std::uint64_t>(st.body_bytes / min_record + 1);
+        mesh.faces.reserve(mesh.faces.size() + static_cast<std::size_t>(std::min(e.count, most)));
+      }
     // Tristrip state runs across the records of a tristrips element.
     for (st.record = 0; st.record < e.count; ++st.record) {
       for (const PlyProperty& prop : e.properties) {
@@ -242,6 +255,13 @@ void read_body(Source& src, const std::vector<PlyElement>& elements, PlyState& s
           ++info.file_polygons;
           add_polygon(polygon.data(), polygon.size(), mesh, info);
         } else if (prop.role == Role::strip_indices) {
+          // At most n - 2 triangles (fewer with restarts and degenerate
+          // ones), at most as many as the body holds indices.
+          const auto most = static_cast<std::uint64_t>(
+              st.body_bytes / (st.binary ? type_size(prop.type) : std::size_t{2}) + 1);
+          if (n > 2)
+            mesh.faces.reserve(mesh.faces.size() + static_cast<std::size_t>(std::min<std::uint64_t>(
+                                                       static_cast<std::uint64_t>(n - 2), most)));
           std::int32_t a = -1, b = -1;
           std::int64_t in_strip = 0;  // vertices in the current strip
           for (std::int64_t k = 0; k < n; ++k) {
@@ -418,6 +438,8 @@ void read_ply(std::string_view data, const std::string& name, const ReadOptions&
 
   // ---- body
   PlyState st{out, options};
+  st.body_bytes = body;
+  st.binary = info.binary;
   const std::string_view rest = data.substr(std::min(pos, data.size()));
   auto context = [&]() {
     const PlyElement& e = elements[std::min(st.element, elements.size() - 1)];

@@ -14,11 +14,11 @@
 // Every accessor computes on first use and caches; the cache is thread-safe
 // (several threads may ask at once). Results are bit-identical at any
 // thread count. Method, accuracy and the CSV of `fabrica geometry`:
-// docs/geometry.md; speed: docs/PERFORMANCE.md. While curvature is being
-// computed the Surface holds a per-corner scratch buffer (40 bytes per
-// corner, 3 per face), released once the derivatives exist. Vertices where a quantity is undefined (isolated vertices,
-// vertices whose faces are all degenerate) are marked invalid in `valid`
-// and hold zeros, never NaN.
+// docs/geometry.md; speed: docs/PERFORMANCE.md. While curvature is computed the Surface holds
+// scratch (20-byte float fit slot per corner, 12 bytes of slot indices and, in the normal pass, 24
+// of weights per face, 48 per vertex), released once the derivatives exist. Vertices where a
+// quantity is undefined (isolated vertices, vertices whose faces are all degenerate) are marked
+// invalid in `valid` and hold zeros, never NaN.
 #pragma once
 
 #include <cstdint>
@@ -124,8 +124,20 @@ class Surface {
   /// curvature derivatives, feature size), in parallel.
   void precompute() const;
 
+  /// Lets the Surface free the face quantities (face normals, face areas,
+  /// corner areas: 56 bytes per face) that it computed on its own as
+  /// inputs of the curvature fits, once the curvature derivatives exist
+  /// (at once if they do, else when they are done), for a single-use
+  /// Surface whose later work does not read them (the one-shot
+  /// draw_lines). Arrays that a caller obtained from face_normals(),
+  /// face_areas() or corner_areas() are never freed, so
+  /// no reference is invalidated; after the release, these accessors
+  /// compute them again.
+  void release_face_quantities() const;
+
  private:
   struct Cache;
+  static void free_face_quantities(Cache& c);
   TriangleMesh mesh_;
   SurfaceOptions options_;
   std::unique_ptr<Cache> cache_;

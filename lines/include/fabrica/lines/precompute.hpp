@@ -131,6 +131,12 @@ class LinePrecompute {
     detail::FilledVector<std::uint8_t> valid;
   };
   const VertexBlocks& vertex_blocks() const;
+  /// Blocks [b0, b1) of vertex_blocks() and their valid bytes, written to
+  /// block[0 .. b1 - b0) and valid[0 .. b1 - b0) without keeping them: the
+  /// one-shot vertex pass packs a few at a time into a small buffer instead
+  /// of holding all of them (the same bits).
+  void pack_vertex_blocks(std::size_t b0, std::size_t b1, VertexBlock* block,
+                          std::uint8_t* valid) const;
   /// Free vertex_blocks() / tangent_ring() (~144 and ~90 bytes per vertex)
   /// when no further view will read them, as in the one-shot draw_lines
   /// (LineExtractor::set_one_shot): the peak memory of one view is lower. A
