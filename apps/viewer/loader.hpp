@@ -37,7 +37,27 @@ struct LoadedStructure {
   /// (render::cluster_simplify) with its own line source.
   std::shared_ptr<const render::RenderMesh> mesh_lod;
   std::shared_ptr<LineSource> lines_lod;
+  /// Coarser copies of the mesh for drawing the structure opaque while the
+  /// camera moves, each about a quarter of the faces of the one before,
+  /// finest first (empty for small meshes); drawing only: the lines stay
+  /// the full mesh's (moving_mesh picks one for the camera).
+  std::vector<std::shared_ptr<const render::RenderMesh>> moving_levels;
 };
+
+/// Coarse levels stop at this many faces (moving_levels).
+constexpr std::size_t kMovingLevelMinFaces = 8000;
+/// While the camera moves an opaque structure is drawn from its coarsest
+/// level whose mean edge is at most this many pixels long at the mesh's
+/// centre (the full mesh when no level is that fine).
+constexpr double kMovingEdgePx = 5.0;
+
+/// The mesh an opaque structure is drawn with while the camera moves:
+/// the coarsest of `levels` whose mean edge length, seen at the distance of
+/// `full`'s centre by `camera`, is at most kMovingEdgePx pixels; `full`
+/// when none is (or when the eye is within its bounding sphere).
+std::shared_ptr<const render::RenderMesh> moving_mesh(
+    const std::shared_ptr<const render::RenderMesh>& full,
+    const std::vector<std::shared_ptr<const render::RenderMesh>>& levels, const Camera& camera);
 
 /// Faces of a ghosted structure's level of detail; meshes of more than
 /// twice as many faces get one.

@@ -147,6 +147,7 @@ void Viewer::adopt_loaded() {
       s.lines = l.lines;
       s.mesh_lod = l.mesh_lod;
       s.lines_lod = l.lines_lod;
+      s.moving_levels = l.moving_levels;
       structures_.push_back(std::move(s));
     }
     if (f.scene) {
@@ -432,7 +433,7 @@ std::uint64_t Viewer::post_lines(const Camera& camera, bool force, bool lod) {
   return lines_version_;
 }
 
-render::Scene Viewer::build_scene(const LinesResult* lines, bool fading) {
+render::Scene Viewer::build_scene(const LinesResult* lines, bool fading, const Camera* moving) {
   const double t = fade_from_.empty() ? 1.0 : std::min(1.0, ms_since(fade_start_) / 300.0);
   render::Scene scene;
   scene.background = background_;
@@ -455,6 +456,8 @@ render::Scene Viewer::build_scene(const LinesResult* lines, bool fading) {
     } else if (lines != nullptr &&
                std::find(lines->lod.begin(), lines->lod.end(), s.id) != lines->lod.end()) {
       st.mesh = s.mesh_lod;  // its lines come from the same coarse mesh
+    } else if (moving != nullptr && st.style.opacity >= 0.999) {
+      st.mesh = moving_mesh(s.mesh, s.moving_levels, *moving);  // drawing only
     } else {
       st.mesh = s.mesh;
     }
@@ -553,8 +556,9 @@ void Viewer::frame() {
         // Simplified while moving: the ghosts' transparency at half resolution too.
         render::RenderOptions ro = render_options(false);
         ro.ghosts_half_resolution = moving && simplify_while_moving_;
-        renderer_->render_to_framebuffer(build_scene(lines.get(), true), c, ro, picture_fbo_,
-                                         picture_w_, picture_h_);
+        renderer_->render_to_framebuffer(
+            build_scene(lines.get(), true, ro.ghosts_half_resolution ? &c : nullptr), c, ro,
+            picture_fbo_, picture_w_, picture_h_);
         has_picture_ = true;
       } catch (const Error& e) {
         report_error(e.what());
