@@ -181,7 +181,7 @@ LoadedStructure Loader::build(TriangleMesh mesh, const std::string& name) {
   s.lines = line_source(std::move(mesh));
   s.surface = s.lines->surface;
   s.mesh = std::make_shared<render::RenderMesh>(render::make_render_mesh(*s.surface, false));
-  if (s.surface->mesh().face_count() > 2 * kLodFaces) {
+  if (s.surface->mesh().face_count() > kLodMinFaces) {
     s.lines_lod = line_source(render::cluster_simplify(s.surface->mesh(), kLodFaces));
     auto lod_mesh = render::make_render_mesh(*s.lines_lod->surface, false);
     // The full mesh's edge length: the renderer's depth tolerance for lines

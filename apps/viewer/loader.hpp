@@ -60,8 +60,9 @@ std::shared_ptr<const render::RenderMesh> moving_mesh(
     const std::vector<std::shared_ptr<const render::RenderMesh>>& levels, const Camera& camera);
 
 /// Faces of a ghosted structure's level of detail; meshes of more than
-/// twice as many faces get one.
+/// kLodMinFaces faces (one and a half times as many) get one.
 constexpr std::size_t kLodFaces = 12000;
+constexpr std::size_t kLodMinFaces = kLodFaces + kLodFaces / 2;
 
 /// Everything one `open` produced.
 struct LoadedFile {
