@@ -20,6 +20,7 @@
 #include "fabrica/core/surface.hpp"
 #include "fabrica/lines/draw.hpp"
 #include "fabrica/lines/line_set.hpp"
+#include "fabrica/render/render_mesh.hpp"
 #include "fabrica/render/scene.hpp"
 
 namespace fabrica::viewer {
@@ -39,9 +40,10 @@ struct LinesJob {
     int id = 0;
     std::shared_ptr<LineSource> source;
     /// When set, the lines come from this coarse copy of the surface (the
-    /// level of detail a ghosted structure is drawn with while the camera
-    /// moves) instead of `source`; hatching always uses `source`.
+    /// level of detail the structure is drawn with while the camera moves,
+    /// `lod_mesh`) instead of `source`; hatching always uses `source`.
     std::shared_ptr<LineSource> lod;
+    std::shared_ptr<const render::RenderMesh> lod_mesh;
     render::StructureStyle style;
     LineOptions thresholds;
     bool hatching = false;
@@ -60,7 +62,9 @@ struct LinesResult {
   Camera camera;
   std::map<int, LineSet> lines;                   ///< by structure id
   std::map<int, render::PolylineLayer> hatching;  ///< by structure id, where asked for
-  std::vector<int> lod;    ///< ids whose lines come from the level of detail (Item::lod)
+  /// By structure id, the mesh to draw where the lines come from a level of
+  /// detail (Item::lod_mesh); the others are drawn from their full mesh.
+  std::map<int, std::shared_ptr<const render::RenderMesh>> lod;
   std::size_t merged = 0;  ///< vertices removed by merge_collinear (LinesJob::merge_px)
   double ms = 0.0;         ///< wall time of the extraction
   std::string error;       ///< empty unless a structure's lines failed

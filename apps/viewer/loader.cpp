@@ -189,49 +189,49 @@ LoadedStructure Loader::build(TriangleMesh mesh, const std::string& name) {
     lod_mesh.mean_edge_length = s.mesh->mean_edge_length;
     s.mesh_lod = std::make_shared<render::RenderMesh>(std::move(lod_mesh));
   }
-  // Drawing levels for an opaque structure while moving, each clustered
-  // from the one before (normals from its own faces, its own edge length:
-  // the lines' depth tolerance grows with it while moving).
+  // Levels for an opaque structure while moving, each clustered from the
+  // one before, with their own line precomputation.
   const TriangleMesh* source = &s.surface->mesh();
   TriangleMesh level;
   while (source->face_count() / 4 >= kMovingLevelMinFaces) {
-    if (cancelled()) throw Cancelled{};
     TriangleMesh next = render::cluster_simplify(*source, source->face_count() / 4);
     if (next.face_count() >= source->face_count()) break;
-    TriangleMesh repaired = next;
-    io::prepare_for_lines(repaired);
-    const Surface coarse(std::move(repaired));
-    render::RenderMesh drawn = render::make_render_mesh(coarse, false);
-    // Clustering leaves a closed mesh nearly closed (the igea's first level:
-    // 0.6 % of its edges without their twin): culled as the full mesh is, a
-    // moving frame may show the background through a pinhole of a few
-    // pixels, for half the triangles drawn.
+    MovingLevel m;
+    m.lines = line_source(next);
+    render::RenderMesh drawn = render::make_render_mesh(*m.lines->surface, false);
+    // The full mesh's edge length: the lines' depth tolerance stays the
+    // still picture's. Clustering leaves a closed mesh nearly closed (the
+    // igea's first level: 0.6 % of its edges without their twin): culled as
+    // the full mesh is, a moving frame may show the background through a
+    // pinhole of a few pixels, for half the triangles drawn.
+    drawn.mean_edge_length = s.mesh->mean_edge_length;
     drawn.closed_outward = s.mesh->closed_outward;
-    s.moving_levels.push_back(std::make_shared<render::RenderMesh>(std::move(drawn)));
+    m.mesh = std::make_shared<render::RenderMesh>(std::move(drawn));
+    s.moving_levels.push_back(std::move(m));
     level = std::move(next);
     source = &level;
   }
   return s;
 }
 
-std::shared_ptr<const render::RenderMesh> moving_mesh(
-    const std::shared_ptr<const render::RenderMesh>& full,
-    const std::vector<std::shared_ptr<const render::RenderMesh>>& levels, const Camera& camera) {
-  if (levels.empty() || camera.height <= 0) return full;
+int moving_level(const render::RenderMesh& full, const std::vector<MovingLevel>& levels,
+                 const Camera& camera) {
+  if (levels.empty() || camera.height <= 0) return -1;
   const double t = std::tan(camera.fov_deg * M_PI / 360.0);
   double half_mm = 0.0;  // half the picture's height in mm at the mesh's centre
   if (camera.projection == Projection::orthographic) {
     half_mm = (camera.center - camera.eye).norm() * t;
   } else {
-    const double depth = (full->center - camera.eye).dot(camera.forward());
-    if (depth <= full->radius) return full;  // near or around the eye
+    const double depth = (full.center - camera.eye).dot(camera.forward());
+    if (depth <= full.radius) return -1;  // near or around the eye
     half_mm = depth * t;
   }
-  if (!(half_mm > 0.0)) return full;
+  if (!(half_mm > 0.0)) return -1;
   const double px_per_mm = 0.5 * camera.height / half_mm;
-  std::shared_ptr<const render::RenderMesh> chosen = full;
-  for (const auto& level : levels)
-    if (level->mean_edge_length * px_per_mm <= kMovingEdgePx) chosen = level;
+  int chosen = -1;
+  for (std::size_t i = 0; i < levels.size(); ++i)
+    if (levels[i].lines->surface->mean_edge_length() * px_per_mm <= kMovingEdgePx)
+      chosen = static_cast<int>(i);
   return chosen;
 }
 

@@ -40,7 +40,7 @@ struct ViewerStructure {
   std::shared_ptr<LineSource> lines;
   std::shared_ptr<const render::RenderMesh> mesh_lod;  ///< see LoadedStructure
   std::shared_ptr<LineSource> lines_lod;
-  std::vector<std::shared_ptr<const render::RenderMesh>> moving_levels;  ///< see LoadedStructure
+  std::vector<MovingLevel> moving_levels;  ///< see LoadedStructure
 };
 
 /// A point picked on a surface.
@@ -167,8 +167,8 @@ class Viewer {
   float& moving_scale() { return moving_scale_; }
   /// While the camera moves: ghosted structures drawn with their level of
   /// detail (a coarse copy of the mesh, and lines from it), opaque ones
-  /// from a coarser copy whose triangles fit the pixels (moving_mesh; their
-  /// lines are the full mesh's), and every
+  /// from the coarser copy whose triangles fit the pixels (moving_level,
+  /// lines from it too), and every
   /// structure's lines with near-collinear vertices merged (within half a
   /// pixel); the still picture and every export use the full meshes and lines.
   bool& simplify_while_moving() { return simplify_while_moving_; }
@@ -181,14 +181,12 @@ class Viewer {
   void adopt_loaded();
   /// Posts a lines job for `camera` when anything changed; returns its
   /// version. `lod`: ghosted structures' lines from their level of detail,
-  /// and all lines merged (LinesJob::merge_px), for a moving camera.
+  /// opaque ones' from the level that fits the camera (moving_level), and
+  /// all lines merged (LinesJob::merge_px), for a moving camera.
   std::uint64_t post_lines(const Camera& camera, bool force, bool lod = false);
   /// `fading`: opacities on their way after a role change (the window only;
-  /// exports always draw the styles as they are). `moving`: the camera of a
-  /// frame while the camera moves: opaque structures are drawn from the
-  /// level of detail that fits it (moving_mesh); null for still pictures.
-  render::Scene build_scene(const LinesResult* lines, bool fading = false,
-                            const Camera* moving = nullptr);
+  /// exports always draw the styles as they are).
+  render::Scene build_scene(const LinesResult* lines, bool fading = false);
   render::RenderOptions render_options(bool transparent) const;
   /// The window's picture (a texture and its framebuffer) at width x height.
   void ensure_picture(int width, int height);
