@@ -59,7 +59,7 @@ void LinesWorker::run() {
     for (auto& item : job->items) {
       try {
         const LineSource& source = item.lod ? *item.lod : *item.source;
-        if (item.lod) result->lod[item.id] = item.lod_mesh;
+        if (item.lod_mesh) result->lod[item.id] = item.lod_mesh;
         LineSet& lines = result->lines[item.id] =
             structure_lines(*source.drawer, item.style, item.thresholds, job->camera);
         if (job->merge_px > 0.0)

@@ -33,16 +33,25 @@ struct LineSource {
   std::unique_ptr<LineDrawer> drawer;
 };
 
+/// A coarse copy of a mesh with its own line precomputation: while the
+/// camera moves, an opaque structure is drawn from it (and its lines
+/// extracted from it with Viewer::coarse_lines_while_moving; docs/algorithms.md §16).
+struct MovingLevel {
+  std::shared_ptr<const render::RenderMesh> mesh;
+  std::shared_ptr<LineSource> lines;
+};
+
 struct LinesJob {
   std::uint64_t version = 0;
   Camera camera;
   struct Item {
     int id = 0;
     std::shared_ptr<LineSource> source;
-    /// When set, the lines come from this coarse copy of the surface (the
-    /// level of detail the structure is drawn with while the camera moves,
-    /// `lod_mesh`) instead of `source`; hatching always uses `source`.
+    /// When set, the lines come from this coarse copy of the surface
+    /// instead of `source`; hatching always uses `source`.
     std::shared_ptr<LineSource> lod;
+    /// When set, the structure is drawn with this coarse mesh (the level of
+    /// detail of a moving camera; `lod`'s mesh when that is set).
     std::shared_ptr<const render::RenderMesh> lod_mesh;
     render::StructureStyle style;
     LineOptions thresholds;

@@ -199,12 +199,12 @@ LoadedStructure Loader::build(TriangleMesh mesh, const std::string& name) {
     MovingLevel m;
     m.lines = line_source(next);
     render::RenderMesh drawn = render::make_render_mesh(*m.lines->surface, false);
-    // The full mesh's edge length: the lines' depth tolerance stays the
-    // still picture's. Clustering leaves a closed mesh nearly closed (the
-    // igea's first level: 0.6 % of its edges without their twin): culled as
-    // the full mesh is, a moving frame may show the background through a
-    // pinhole of a few pixels, for half the triangles drawn.
-    drawn.mean_edge_length = s.mesh->mean_edge_length;
+    // Its own edge length: the lines' depth tolerance grows with it while
+    // moving (the full mesh's lines lie within about an edge of it).
+    // Clustering leaves a closed mesh nearly closed (the igea's first level:
+    // 0.6 % of its edges without their twin): culled as the full mesh is, a
+    // moving frame may show the background through a pinhole of a few
+    // pixels, for half the triangles drawn.
     drawn.closed_outward = s.mesh->closed_outward;
     m.mesh = std::make_shared<render::RenderMesh>(std::move(drawn));
     s.moving_levels.push_back(std::move(m));
@@ -212,27 +212,6 @@ LoadedStructure Loader::build(TriangleMesh mesh, const std::string& name) {
     source = &level;
   }
   return s;
-}
-
-int moving_level(const render::RenderMesh& full, const std::vector<MovingLevel>& levels,
-                 const Camera& camera) {
-  if (levels.empty() || camera.height <= 0) return -1;
-  const double t = std::tan(camera.fov_deg * M_PI / 360.0);
-  double half_mm = 0.0;  // half the picture's height in mm at the mesh's centre
-  if (camera.projection == Projection::orthographic) {
-    half_mm = (camera.center - camera.eye).norm() * t;
-  } else {
-    const double depth = (full.center - camera.eye).dot(camera.forward());
-    if (depth <= full.radius) return -1;  // near or around the eye
-    half_mm = depth * t;
-  }
-  if (!(half_mm > 0.0)) return -1;
-  const double px_per_mm = 0.5 * camera.height / half_mm;
-  int chosen = -1;
-  for (std::size_t i = 0; i < levels.size(); ++i)
-    if (levels[i].lines->surface->mean_edge_length() * px_per_mm <= kMovingEdgePx)
-      chosen = static_cast<int>(i);
-  return chosen;
 }
 
 LoadedFile Loader::load(const std::filesystem::path& path) {

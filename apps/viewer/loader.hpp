@@ -22,14 +22,6 @@
 
 namespace fabrica::viewer {
 
-/// A coarse copy of a mesh with its own line precomputation: while the
-/// camera moves, an opaque structure is drawn from it and its lines are
-/// extracted from it (docs/algorithms.md §16).
-struct MovingLevel {
-  std::shared_ptr<const render::RenderMesh> mesh;
-  std::shared_ptr<LineSource> lines;
-};
-
 struct LoadedStructure {
   std::string name;
   std::filesystem::path mesh_file;  ///< the mesh file; empty for a label of a volume
@@ -53,18 +45,6 @@ struct LoadedStructure {
 
 /// Coarse levels stop at this many faces (moving_levels).
 constexpr std::size_t kMovingLevelMinFaces = 8000;
-/// While the camera moves an opaque structure is drawn from its coarsest
-/// level whose mean edge is at most this many pixels long at the mesh's
-/// centre (the full mesh when no level is that fine; moving_level).
-constexpr double kMovingEdgePx = 5.0;
-
-/// The level an opaque structure is drawn with (and its lines extracted
-/// from) while the camera moves: the index of the coarsest of `levels`
-/// whose mean edge length, seen at the distance of `full`'s centre by
-/// `camera`, is at most kMovingEdgePx pixels; -1 (the full mesh) when none
-/// is, or when the eye is within the mesh's bounding sphere.
-int moving_level(const render::RenderMesh& full, const std::vector<MovingLevel>& levels,
-                 const Camera& camera);
 
 /// Faces of a ghosted structure's level of detail; meshes of more than
 /// kLodMinFaces faces (one and a half times as many) get one.

@@ -424,8 +424,9 @@ std::uint64_t Viewer::post_lines(const Camera& camera, bool force, bool lod) {
   for (const auto& s : structures_) {
     if (!s.visible) continue;
     // Only structures without hybrid ridges (which need the full mesh's
-    // curvature) are drawn coarse: ghosted ones from their level of detail,
-    // opaque ones from the level that fits the camera.
+    // curvature) are drawn coarse: ghosted ones from their level of detail
+    // (their lines too), opaque ones from the level that fits the camera
+    // (their lines from the full mesh unless coarse_lines_while_moving).
     LinesJob::Item item{s.id,    s.lines,      nullptr,    nullptr,
                         s.style, s.thresholds, s.hatching, s.hatching_width};
     if (lod && !s.style.hybrid_apparent_ridges) {
@@ -435,8 +436,9 @@ std::uint64_t Viewer::post_lines(const Camera& camera, bool force, bool lod) {
           item.lod_mesh = s.mesh_lod;
         }
       } else if (const int level = moving_level(*s.mesh, s.moving_levels, camera); level >= 0) {
-        item.lod = s.moving_levels[static_cast<std::size_t>(level)].lines;
-        item.lod_mesh = s.moving_levels[static_cast<std::size_t>(level)].mesh;
+        const MovingLevel& m = s.moving_levels[static_cast<std::size_t>(level)];
+        item.lod_mesh = m.mesh;
+        if (coarse_lines_while_moving_) item.lod = m.lines;
       }
     }
     job.items.push_back(std::move(item));
