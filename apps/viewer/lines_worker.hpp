@@ -26,7 +26,8 @@
 namespace fabrica::viewer {
 
 /// A structure's geometry as the worker needs it. The drawer (with the
-/// view-independent precomputation, built once per mesh by the loader) is
+/// view-independent precomputation, built once per mesh by the loader, or
+/// by the worker when it first needs it where the loader left it null) is
 /// used by the worker thread only.
 struct LineSource {
   std::shared_ptr<const Surface> surface;

@@ -196,8 +196,14 @@ LoadedStructure Loader::build(TriangleMesh mesh, const std::string& name) {
   while (source->face_count() / 4 >= kMovingLevelMinFaces) {
     TriangleMesh next = render::cluster_simplify(*source, source->face_count() / 4);
     if (next.face_count() >= source->face_count()) break;
+    // The level's line precomputation is left to the lines worker, which
+    // makes it the first time it draws the level's lines (only with
+    // coarse lines while moving; LineSource::drawer).
+    TriangleMesh prepared = next;
+    io::prepare_for_lines(prepared);
     MovingLevel m;
-    m.lines = line_source(next);
+    m.lines = std::make_shared<LineSource>();
+    m.lines->surface = std::make_shared<Surface>(std::move(prepared));
     render::RenderMesh drawn = render::make_render_mesh(*m.lines->surface, false);
     // Its own edge length: the lines' depth tolerance grows with it while
     // moving (the full mesh's lines lie within about an edge of it).

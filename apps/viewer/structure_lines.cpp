@@ -145,8 +145,7 @@ int moving_level(const render::RenderMesh& full, const std::vector<MovingLevel>&
   const double px_per_mm = 0.5 * camera.height / half_mm;
   int chosen = -1;
   for (std::size_t i = 0; i < levels.size(); ++i)
-    if (levels[i].lines->surface->mean_edge_length() * px_per_mm <= kMovingEdgePx)
-      chosen = static_cast<int>(i);
+    if (levels[i].mesh->mean_edge_length * px_per_mm <= kMovingEdgePx) chosen = static_cast<int>(i);
   return chosen;
 }
 

@@ -224,15 +224,13 @@ TEST(ViewerLines, MergeKeepsLoopsClosedAndPointsBehindTheEye) {
 
 namespace {
 
-// A level of a mesh for moving_level: a square of side `edge` mm split into
-// two triangles (its mean edge length is (4 + sqrt 2) / 5 edge).
-MovingLevel square_level(double edge) {
-  TriangleMesh m;
-  m.positions = {Vec3(0, 0, 0), Vec3(edge, 0, 0), Vec3(edge, edge, 0), Vec3(0, edge, 0)};
-  m.faces = {Face{0, 1, 2}, Face{0, 2, 3}};
+// A level of a mesh for moving_level: only its render mesh's mean edge
+// length counts.
+MovingLevel level_of_edge(double edge) {
+  auto mesh = std::make_shared<render::RenderMesh>();
+  mesh->mean_edge_length = edge;
   MovingLevel level;
-  level.lines = std::make_shared<viewer::LineSource>();
-  level.lines->surface = std::make_shared<Surface>(std::move(m));
+  level.mesh = std::move(mesh);
   return level;
 }
 
@@ -247,10 +245,8 @@ TEST(ViewerLines, MovingLevelFitsItsEdgesToThePixels) {
   full.center = Vec3::Zero();
   full.radius = 1.0;
   // Levels of mean edge 0.01, 0.04 and 0.16 mm.
-  const double unit = 5.0 / (4.0 + std::sqrt(2.0));
-  const std::vector<MovingLevel> levels = {square_level(0.01 * unit), square_level(0.04 * unit),
-                                           square_level(0.16 * unit)};
-  ASSERT_NEAR(levels[1].lines->surface->mean_edge_length(), 0.04, 1e-12);
+  const std::vector<MovingLevel> levels = {level_of_edge(0.01), level_of_edge(0.04),
+                                           level_of_edge(0.16)};
   Camera c = test_camera();  // 800 pixels high, 40 degrees
   auto at_px_per_mm = [&](double px_per_mm) {
     c.eye = Vec3(0.0, 0.0, 400.0 / (px_per_mm * std::tan(20.0 * M_PI / 180.0)));
