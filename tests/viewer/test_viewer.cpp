@@ -112,6 +112,21 @@ fs::path work_dir() {
   return dir;
 }
 
+/// Two 800x600 window pictures compared right of the Structures panel and
+/// above the HUD: the largest channel difference, and the fraction of
+/// pixels differing by more than 8.
+std::pair<int, double> differ(const render::Image& a, const render::Image& b) {
+  int most = 0, over = 0, count = 0;
+  for (int y = 40; y < 520; ++y)
+    for (int x = 380; x < 800; ++x, ++count) {
+      int m = 0;
+      for (int c = 0; c < 3; ++c) m = std::max(m, std::abs(a.pixel(x, y)[c] - b.pixel(x, y)[c]));
+      most = std::max(most, m);
+      over += m > 8;
+    }
+  return {most, double(over) / count};
+}
+
 }  // namespace
 
 // Focus one label of the bundled label volume, anterior view: the focus is
@@ -502,19 +517,6 @@ TEST(Viewer, GhostedContextIsCoarseOnlyWhileTheCameraMoves) {
   const render::Image still0 = render::read_png(dir / "still0.png");
   const render::Image moving = render::read_png(dir / "moving.png");
   const render::Image still = render::read_png(dir / "still.png");
-  // The picture right of the Structures panel and above the HUD: largest
-  // channel difference, and the fraction of pixels differing by more than 8.
-  auto differ = [](const render::Image& a, const render::Image& b) {
-    int most = 0, over = 0, count = 0;
-    for (int y = 40; y < 520; ++y)
-      for (int x = 380; x < 800; ++x, ++count) {
-        int m = 0;
-        for (int c = 0; c < 3; ++c) m = std::max(m, std::abs(a.pixel(x, y)[c] - b.pixel(x, y)[c]));
-        most = std::max(most, m);
-        over += m > 8;
-      }
-    return std::make_pair(most, double(over) / count);
-  };
   // A full turn: the same camera before and after, the same still picture.
   EXPECT_EQ(differ(still0, still).first, 0);
   const auto [most, fraction] = differ(moving, still);
@@ -554,19 +556,6 @@ TEST(Viewer, OpaqueFocusIsCoarseOnlyWhileTheCameraMoves) {
   ASSERT_EQ(r.code, 0) << r.err;
   auto png = [&](const std::string& name) { return render::read_png(dir / name); };
   const render::Image still = png("still.png");
-  // The picture right of the Structures panel and above the HUD: largest
-  // channel difference, and the fraction of pixels differing by more than 8.
-  auto differ = [](const render::Image& a, const render::Image& b) {
-    int most = 0, over = 0, count = 0;
-    for (int y = 40; y < 520; ++y)
-      for (int x = 380; x < 800; ++x, ++count) {
-        int m = 0;
-        for (int c = 0; c < 3; ++c) m = std::max(m, std::abs(a.pixel(x, y)[c] - b.pixel(x, y)[c]));
-        most = std::max(most, m);
-        over += m > 8;
-      }
-    return std::make_pair(most, double(over) / count);
-  };
   EXPECT_EQ(differ(png("still0.png"), still).first, 0);
   EXPECT_EQ(differ(png("still2.png"), still).first, 0);
   const auto [most, fraction] = differ(png("moving.png"), still);
