@@ -15,13 +15,19 @@
 # clock), and the load average. Not a
 # timed test: record the figures in docs/PERFORMANCE.md.
 #
-#   bench/viewer_orbit.sh [BUILD_DIR] [FRAMES] [object|hybrid|both] [none|300k|1m|all]
+#   bench/viewer_orbit.sh [BUILD_DIR] [FRAMES] [object|hybrid|both] [none|300k|1m|all] [full|coarse]
 #
+# The last argument (default full): while the camera moves the focus is drawn
+# from a coarser copy and its lines come from the full mesh (full) or from
+# that copy (coarse: the viewer's `moving-lines coarse`).
 # Defaults: build 120 both all (the issue's figures: 300k and 1m contexts,
 # object-space and hybrid GPU apparent ridges, and the igea alone).
 # Without a display the viewer runs under xvfb-run.
 set -euo pipefail
 build="${1:-build}" frames="${2:-120}" modes="${3:-both}" contexts="${4:-all}"
+moving_lines="${5:-full}"
+case "$moving_lines" in full | coarse) ;;
+*) echo "viewer_orbit: moving lines must be full or coarse (got '$moving_lines')" >&2; exit 2 ;; esac
 if ! [[ "$frames" =~ ^[1-9][0-9]*$ ]]; then
   echo "viewer_orbit: FRAMES must be a positive integer (got '$frames')" >&2
   exit 2
@@ -63,7 +69,7 @@ run_viewer() {  # script, log -> prints the orbit's CPU ms per frame
   sed -n 's/^orbit: .*cpu \([0-9.]*\) ms per frame.*/\1/p' "$work/stdout.txt" | tail -1
 }
 cpu="$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')"
-echo "fabrica-viewer orbit: $frames frames at 1280x800 around the igea (focus), contour+suggestive+apparent"
+echo "fabrica-viewer orbit: $frames frames at 1280x800 around the igea (focus), contour+suggestive+apparent, focus lines while moving: $moving_lines"
 echo "cpu: $cpu ($(nproc) cores); GL: llvmpipe, LP_NUM_THREADS=${LP_NUM_THREADS:-default}"
 for context in $contexts; do
   for mode in $modes; do
@@ -74,8 +80,10 @@ for context in $contexts; do
       300k) opens+=$'\n'"open \"$work/skin.ply\""$'\n'"open \"$work/shell.ply\"" ;;
       1m) opens+=$'\n'"open \"$work/skin_fine.ply\"" ;;
     esac
+    setting=""
+    [ "$moving_lines" = coarse ] && setting=$'\n'"moving-lines coarse"
     cat >"$work/orbit.txt" <<SCRIPT
-$opens
+$opens$setting
 wait
 focus c3d_igea
 set c3d_igea lines=contour,suggestive,apparent hybrid=$hybrid

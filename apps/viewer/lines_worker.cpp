@@ -58,8 +58,12 @@ void LinesWorker::run() {
     const auto t0 = std::chrono::steady_clock::now();
     for (auto& item : job->items) {
       try {
-        const LineSource& source = item.lod ? *item.lod : *item.source;
-        if (item.lod) result->lod.push_back(item.id);
+        LineSource& source = item.lod ? *item.lod : *item.source;
+        if (!source.drawer) {  // a moving level's, the first time
+          source.surface->precompute();
+          source.drawer = std::make_unique<LineDrawer>(*source.surface);
+        }
+        if (item.lod_mesh) result->lod[item.id] = item.lod_mesh;
         LineSet& lines = result->lines[item.id] =
             structure_lines(*source.drawer, item.style, item.thresholds, job->camera);
         if (job->merge_px > 0.0)

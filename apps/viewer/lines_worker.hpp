@@ -20,16 +20,26 @@
 #include "fabrica/core/surface.hpp"
 #include "fabrica/lines/draw.hpp"
 #include "fabrica/lines/line_set.hpp"
+#include "fabrica/render/render_mesh.hpp"
 #include "fabrica/render/scene.hpp"
 
 namespace fabrica::viewer {
 
 /// A structure's geometry as the worker needs it. The drawer (with the
-/// view-independent precomputation, built once per mesh by the loader) is
+/// view-independent precomputation, built once per mesh by the loader, or
+/// by the worker when it first needs it where the loader left it null) is
 /// used by the worker thread only.
 struct LineSource {
   std::shared_ptr<const Surface> surface;
   std::unique_ptr<LineDrawer> drawer;
+};
+
+/// A coarse copy of a mesh with its own line precomputation: while the
+/// camera moves, an opaque structure is drawn from it (and its lines
+/// extracted from it with Viewer::coarse_lines_while_moving; docs/algorithms.md §16).
+struct MovingLevel {
+  std::shared_ptr<const render::RenderMesh> mesh;
+  std::shared_ptr<LineSource> lines;
 };
 
 struct LinesJob {
@@ -38,10 +48,12 @@ struct LinesJob {
   struct Item {
     int id = 0;
     std::shared_ptr<LineSource> source;
-    /// When set, the lines come from this coarse copy of the surface (the
-    /// level of detail a ghosted structure is drawn with while the camera
-    /// moves) instead of `source`; hatching always uses `source`.
+    /// When set, the lines come from this coarse copy of the surface
+    /// instead of `source`; hatching always uses `source`.
     std::shared_ptr<LineSource> lod;
+    /// When set, the structure is drawn with this coarse mesh (the level of
+    /// detail of a moving camera; `lod`'s mesh when that is set).
+    std::shared_ptr<const render::RenderMesh> lod_mesh;
     render::StructureStyle style;
     LineOptions thresholds;
     bool hatching = false;
@@ -60,7 +72,9 @@ struct LinesResult {
   Camera camera;
   std::map<int, LineSet> lines;                   ///< by structure id
   std::map<int, render::PolylineLayer> hatching;  ///< by structure id, where asked for
-  std::vector<int> lod;    ///< ids whose lines come from the level of detail (Item::lod)
+  /// By structure id, the mesh to draw where the lines come from a level of
+  /// detail (Item::lod_mesh); the others are drawn from their full mesh.
+  std::map<int, std::shared_ptr<const render::RenderMesh>> lod;
   std::size_t merged = 0;  ///< vertices removed by merge_collinear (LinesJob::merge_px)
   double ms = 0.0;         ///< wall time of the extraction
   std::string error;       ///< empty unless a structure's lines failed

@@ -181,13 +181,41 @@ LoadedStructure Loader::build(TriangleMesh mesh, const std::string& name) {
   s.lines = line_source(std::move(mesh));
   s.surface = s.lines->surface;
   s.mesh = std::make_shared<render::RenderMesh>(render::make_render_mesh(*s.surface, false));
-  if (s.surface->mesh().face_count() > 2 * kLodFaces) {
+  if (s.surface->mesh().face_count() > kLodMinFaces) {
     s.lines_lod = line_source(render::cluster_simplify(s.surface->mesh(), kLodFaces));
     auto lod_mesh = render::make_render_mesh(*s.lines_lod->surface, false);
     // The full mesh's edge length: the renderer's depth tolerance for lines
     // stays what the still picture uses.
     lod_mesh.mean_edge_length = s.mesh->mean_edge_length;
     s.mesh_lod = std::make_shared<render::RenderMesh>(std::move(lod_mesh));
+  }
+  // Levels for an opaque structure while moving, each clustered from the
+  // one before, with their own line precomputation.
+  const TriangleMesh* source = &s.surface->mesh();
+  TriangleMesh level;
+  while (source->face_count() / 4 >= kMovingLevelMinFaces) {
+    TriangleMesh next = render::cluster_simplify(*source, source->face_count() / 4);
+    if (next.face_count() >= source->face_count()) break;
+    // The level's line precomputation is left to the lines worker, which
+    // makes it the first time it draws the level's lines (only with
+    // coarse lines while moving; LineSource::drawer).
+    TriangleMesh prepared = next;
+    io::prepare_for_lines(prepared);
+    MovingLevel m;
+    m.lines = std::make_shared<LineSource>();
+    m.lines->surface = std::make_shared<Surface>(std::move(prepared));
+    render::RenderMesh drawn = render::make_render_mesh(*m.lines->surface, false);
+    // Its own edge length: the lines' depth tolerance grows with it while
+    // moving (the full mesh's lines lie within about an edge of it).
+    // Clustering leaves a closed mesh nearly closed (the igea's first level:
+    // 0.6 % of its edges without their twin): culled as the full mesh is, a
+    // moving frame may show the background through a pinhole of a few
+    // pixels, for half the triangles drawn.
+    drawn.closed_outward = s.mesh->closed_outward;
+    m.mesh = std::make_shared<render::RenderMesh>(std::move(drawn));
+    s.moving_levels.push_back(std::move(m));
+    level = std::move(next);
+    source = &level;
   }
   return s;
 }

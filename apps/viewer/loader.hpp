@@ -37,11 +37,19 @@ struct LoadedStructure {
   /// (render::cluster_simplify) with its own line source.
   std::shared_ptr<const render::RenderMesh> mesh_lod;
   std::shared_ptr<LineSource> lines_lod;
+  /// Coarser copies for drawing the structure opaque while the camera
+  /// moves, each about a quarter of the faces of the one before, finest
+  /// first (empty for small meshes); see moving_level.
+  std::vector<MovingLevel> moving_levels;
 };
 
+/// Coarse levels stop at this many faces (moving_levels).
+constexpr std::size_t kMovingLevelMinFaces = 8000;
+
 /// Faces of a ghosted structure's level of detail; meshes of more than
-/// twice as many faces get one.
+/// kLodMinFaces faces (one and a half times as many) get one.
 constexpr std::size_t kLodFaces = 12000;
+constexpr std::size_t kLodMinFaces = kLodFaces + kLodFaces / 2;
 
 /// Everything one `open` produced.
 struct LoadedFile {

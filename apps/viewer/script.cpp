@@ -242,6 +242,11 @@ int run_script(Viewer& v, const std::filesystem::path& path) {
         v.find(w[1]);
         set_panel_open(w[1], w[2] == "open");
         v.frame();
+      } else if (cmd == "moving-lines") {
+        expect_args(w, 1, 1, "moving-lines full|coarse");
+        if (w[1] != "full" && w[1] != "coarse") throw InputError("usage: moving-lines full|coarse");
+        v.coarse_lines_while_moving() = w[1] == "coarse";
+        v.style_changed();
       } else if (cmd == "export-svg") {
         expect_args(w, 1, 1, "export-svg PATH.svg|PATH.pdf");
         loaded();

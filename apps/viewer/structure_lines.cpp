@@ -129,4 +129,24 @@ render::PolylineLayer structure_hatching(const Surface& surface, const Camera& c
   return layer;
 }
 
+int moving_level(const render::RenderMesh& full, const std::vector<MovingLevel>& levels,
+                 const Camera& camera) {
+  if (levels.empty() || camera.height <= 0) return -1;
+  const double t = std::tan(camera.fov_deg * M_PI / 360.0);
+  double half_mm = 0.0;  // half the picture's height in mm at the mesh's centre
+  if (camera.projection == Projection::orthographic) {
+    half_mm = (camera.center - camera.eye).norm() * t;
+  } else {
+    const double depth = (full.center - camera.eye).dot(camera.forward());
+    if (depth <= full.radius) return -1;  // near or around the eye
+    half_mm = depth * t;
+  }
+  if (!(half_mm > 0.0)) return -1;
+  const double px_per_mm = 0.5 * camera.height / half_mm;
+  int chosen = -1;
+  for (std::size_t i = 0; i < levels.size(); ++i)
+    if (levels[i].mesh->mean_edge_length * px_per_mm <= kMovingEdgePx) chosen = static_cast<int>(i);
+  return chosen;
+}
+
 }  // namespace fabrica::viewer

@@ -10,6 +10,7 @@
 #include "fabrica/lines/draw.hpp"
 #include "fabrica/lines/line_set.hpp"
 #include "fabrica/render/scene.hpp"
+#include "lines_worker.hpp"
 
 namespace fabrica::viewer {
 
@@ -30,6 +31,19 @@ LineSet structure_lines(LineDrawer& drawer, const render::StructureStyle& style,
 /// go. Returns the number of vertices removed.
 std::size_t merge_collinear(LineSet& lines, const Camera& camera, double tolerance_px,
                             double strength_tolerance);
+
+/// While the camera moves an opaque structure is drawn from its coarsest
+/// level whose mean edge is at most this many pixels long at the mesh's
+/// centre (the full mesh when no level is that fine; moving_level).
+constexpr double kMovingEdgePx = 5.0;
+
+/// The level an opaque structure is drawn with (and its lines extracted
+/// from) while the camera moves: the index of the coarsest of `levels`
+/// whose mean edge length, seen at the distance of `full`'s centre by
+/// `camera`, is at most kMovingEdgePx pixels; -1 (the full mesh) when none
+/// is, or when the eye is within the mesh's bounding sphere.
+int moving_level(const render::RenderMesh& full, const std::vector<MovingLevel>& levels,
+                 const Camera& camera);
 
 /// Shading strokes of one structure for one camera (fabrica::hatching,
 /// "Suggestive Hatching"), as a layer drawn under its lines; as

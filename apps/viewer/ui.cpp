@@ -93,6 +93,8 @@ void menu(Viewer& v) {
     ImGui::MenuItem("HUD", "H", &ui().show_hud);
     ImGui::SliderFloat("Resolution while moving", &v.moving_scale(), 0.25f, 1.0f, "%.2f");
     if (ImGui::Checkbox("Simplified while moving", &v.simplify_while_moving())) v.style_changed();
+    if (ImGui::Checkbox("Coarse focus lines while moving", &v.coarse_lines_while_moving()))
+      v.style_changed();
     if (ImGui::ColorEdit3("Background", &v.background().r, ImGuiColorEditFlags_NoInputs))
       v.style_changed();
     if (ImGui::Checkbox("Transparent export", &v.transparent())) v.style_changed();

@@ -56,6 +56,14 @@ std::pair<Vec3, Vec3> pixel_ray(const Camera& c, double x, double y) {
   return {c.eye, d.normalized()};
 }
 
+/// The mesh structure `id` is drawn with when its lines came from a level
+/// of detail (LinesResult::lod), else null.
+std::shared_ptr<const render::RenderMesh> lod_mesh(const LinesResult* lines, int id) {
+  if (lines == nullptr) return nullptr;
+  const auto it = lines->lod.find(id);
+  return it == lines->lod.end() ? nullptr : it->second;
+}
+
 }  // namespace
 
 Viewer::Viewer(const ViewerOptions& options) : options_(options) {
@@ -147,6 +155,7 @@ void Viewer::adopt_loaded() {
       s.lines = l.lines;
       s.mesh_lod = l.mesh_lod;
       s.lines_lod = l.lines_lod;
+      s.moving_levels = l.moving_levels;
       structures_.push_back(std::move(s));
     }
     if (f.scene) {
@@ -414,12 +423,25 @@ std::uint64_t Viewer::post_lines(const Camera& camera, bool force, bool lod) {
   job.camera = camera;
   for (const auto& s : structures_) {
     if (!s.visible) continue;
-    // Only ghosted structures without hybrid ridges (which need the full
-    // mesh's curvature) are drawn coarse.
-    const bool coarse = lod && s.lines_lod && s.mesh_lod && s.style.opacity < 0.999 &&
-                        !s.style.hybrid_apparent_ridges;
-    job.items.push_back({s.id, s.lines, coarse ? s.lines_lod : nullptr, s.style, s.thresholds,
-                         s.hatching, s.hatching_width});
+    // Only structures without hybrid ridges (which need the full mesh's
+    // curvature) are drawn coarse: ghosted ones from their level of detail
+    // (their lines too), opaque ones from the level that fits the camera
+    // (their lines from the full mesh unless coarse_lines_while_moving).
+    LinesJob::Item item{s.id,    s.lines,      nullptr,    nullptr,
+                        s.style, s.thresholds, s.hatching, s.hatching_width};
+    if (lod && !s.style.hybrid_apparent_ridges) {
+      if (s.style.opacity < 0.999) {
+        if (s.lines_lod && s.mesh_lod) {
+          item.lod = s.lines_lod;
+          item.lod_mesh = s.mesh_lod;
+        }
+      } else if (const int level = moving_level(*s.mesh, s.moving_levels, camera); level >= 0) {
+        const MovingLevel& m = s.moving_levels[static_cast<std::size_t>(level)];
+        item.lod_mesh = m.mesh;
+        if (coarse_lines_while_moving_) item.lod = m.lines;
+      }
+    }
+    job.items.push_back(std::move(item));
   }
   if (lod) {  // while the camera moves: fewer line quads, the same picture to half a pixel
     job.merge_px = kMovingMergePx;
@@ -452,9 +474,8 @@ render::Scene Viewer::build_scene(const LinesResult* lines, bool fading) {
         s.mesh_curvature =
             std::make_shared<render::RenderMesh>(render::make_render_mesh(*s.surface, true));
       st.mesh = s.mesh_curvature;
-    } else if (lines != nullptr &&
-               std::find(lines->lod.begin(), lines->lod.end(), s.id) != lines->lod.end()) {
-      st.mesh = s.mesh_lod;  // its lines come from the same coarse mesh
+    } else if (const auto lod = lod_mesh(lines, s.id)) {
+      st.mesh = lod;  // its lines come from the same coarse mesh
     } else {
       st.mesh = s.mesh;
     }

@@ -40,6 +40,7 @@ struct ViewerStructure {
   std::shared_ptr<LineSource> lines;
   std::shared_ptr<const render::RenderMesh> mesh_lod;  ///< see LoadedStructure
   std::shared_ptr<LineSource> lines_lod;
+  std::vector<MovingLevel> moving_levels;  ///< see LoadedStructure
 };
 
 /// A point picked on a surface.
@@ -165,10 +166,17 @@ class Viewer {
   /// (1 = full; the still picture is always full resolution).
   float& moving_scale() { return moving_scale_; }
   /// While the camera moves: ghosted structures drawn with their level of
-  /// detail (a coarse copy of the mesh, and lines from it), and every
+  /// detail (a coarse copy of the mesh, and lines from it), opaque ones
+  /// from the coarser copy whose triangles fit the pixels (moving_level;
+  /// their lines from the full mesh), and every
   /// structure's lines with near-collinear vertices merged (within half a
   /// pixel); the still picture and every export use the full meshes and lines.
   bool& simplify_while_moving() { return simplify_while_moving_; }
+  /// With simplify_while_moving: the opaque structures' lines, too, come
+  /// from the coarse copy they are drawn with while the camera moves (off
+  /// by default: fewer suggestive contours and ridges in motion, about
+  /// half the CPU of a frame of the orbit benchmark).
+  bool& coarse_lines_while_moving() { return coarse_lines_while_moving_; }
 
  private:
   BoundingBox scene_box(bool focus_only) const;
@@ -178,6 +186,7 @@ class Viewer {
   void adopt_loaded();
   /// Posts a lines job for `camera` when anything changed; returns its
   /// version. `lod`: ghosted structures' lines from their level of detail,
+  /// opaque ones drawn from the level that fits the camera (moving_level),
   /// and all lines merged (LinesJob::merge_px), for a moving camera.
   std::uint64_t post_lines(const Camera& camera, bool force, bool lod = false);
   /// `fading`: opacities on their way after a role change (the window only;
@@ -220,6 +229,7 @@ class Viewer {
   std::pair<std::uint64_t, std::uint64_t> drawn_{0, 0};
   float moving_scale_ = 0.5f;
   bool simplify_while_moving_ = true;
+  bool coarse_lines_while_moving_ = false;
   bool posted_lod_ = false;
   std::uint64_t last_frame_revision_ = 0;
   bool drawn_scaled_ = false;

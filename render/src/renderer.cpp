@@ -246,6 +246,10 @@ struct Renderer::Impl {
   // ghosts_half_resolution): its own accumulation targets (filtered
   // linearly by the composite) and a copy of depth A, half_w x half_h.
   GLuint half_fbo = 0, half_accum = 0, half_reveal = 0, half_depth = 0;
+  // True while half_depth holds depth A copied down by this tile's
+  // transparency pass (which tests it without writing): the ghosts' depth
+  // pass then draws into it without copying it again.
+  bool half_depth_is_a = false;
   int half_w = 0, half_h = 0;
   GLuint depthb_fbo = 0, depth_b = 0;
   // Hybrid apparent ridges: stage 1 draws (q, t1) into ar_color with the
@@ -1075,6 +1079,7 @@ struct Renderer::Impl {
 
   // Ghosted structures: weighted blended OIT, then composite.
   void pass_transparent(const FrameState& F, const Tile& t) {
+    half_depth_is_a = false;
     if (!F.any_transparent) return;
     // Only where a ghosted structure can be: clear, accumulate and composite
     // scissored to that rectangle (outside it the composite would discard).
@@ -1093,6 +1098,7 @@ struct Renderer::Impl {
       g.BindFramebuffer(GL_DRAW_FRAMEBUFFER, half_fbo);
       g.BlitFramebuffer(0, 0, t.render_w, t.render_h, 0, 0, (t.render_w + 1) / 2,
                         (t.render_h + 1) / 2, GL_DEPTH_BUFFER_BIT, GL_NEAREST);
+      half_depth_is_a = true;
       g.BindFramebuffer(GL_FRAMEBUFFER, half_fbo);
       g.Viewport(0, 0, (t.render_w + 1) / 2, (t.render_h + 1) / 2);
       area = {std::max(0, r.x0 / 2 - 1), std::max(0, r.y0 / 2 - 1),
@@ -1231,8 +1237,8 @@ struct Renderer::Impl {
 
   // Depth of every surface, for lines of ghosted structures.
   // With F.ghost_half at half resolution, into half_depth (depth A copied
-  // down again: the lines of ghosted structures sample it at half their
-  // pixel coordinates, pass_lines).
+  // down, unless the transparency pass left it there: the lines of ghosted
+  // structures sample it at half their pixel coordinates, pass_lines).
   void pass_depth_b(const FrameState& F, const Tile& t) {
     if (!F.lines_need_depth_b) return;
     const GlFunctions& g = gl();
@@ -1243,9 +1249,12 @@ struct Renderer::Impl {
     else
       ensure_depth_b();
     const GLuint fbo = F.ghost_half ? half_fbo : depthb_fbo;
-    g.BindFramebuffer(GL_READ_FRAMEBUFFER, main_fbo);
-    g.BindFramebuffer(GL_DRAW_FRAMEBUFFER, fbo);
-    g.BlitFramebuffer(0, 0, t.render_w, t.render_h, 0, 0, w, h, GL_DEPTH_BUFFER_BIT, GL_NEAREST);
+    if (!(F.ghost_half && half_depth_is_a)) {
+      g.BindFramebuffer(GL_READ_FRAMEBUFFER, main_fbo);
+      g.BindFramebuffer(GL_DRAW_FRAMEBUFFER, fbo);
+      g.BlitFramebuffer(0, 0, t.render_w, t.render_h, 0, 0, w, h, GL_DEPTH_BUFFER_BIT, GL_NEAREST);
+    }
+    half_depth_is_a = false;
     g.BindFramebuffer(GL_FRAMEBUFFER, fbo);
     g.Viewport(0, 0, w, h);
     set_state_opaque();

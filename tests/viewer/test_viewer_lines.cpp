@@ -14,6 +14,8 @@
 
 using namespace fabrica;
 using fabrica::viewer::merge_collinear;
+using fabrica::viewer::moving_level;
+using fabrica::viewer::MovingLevel;
 
 namespace {
 
@@ -218,4 +220,47 @@ TEST(ViewerLines, MergeKeepsLoopsClosedAndPointsBehindTheEye) {
   same.polylines.push_back(loop);
   EXPECT_EQ(merge_collinear(same, c, 0.0, 0.1), 0u);
   EXPECT_EQ(same.polylines.front().vertices.size(), loop.vertices.size());
+}
+
+namespace {
+
+// A level of a mesh for moving_level: only its render mesh's mean edge
+// length counts.
+MovingLevel level_of_edge(double edge) {
+  auto mesh = std::make_shared<render::RenderMesh>();
+  mesh->mean_edge_length = edge;
+  MovingLevel level;
+  level.mesh = std::move(mesh);
+  return level;
+}
+
+}  // namespace
+
+// While the camera moves an opaque structure is drawn from the coarsest
+// level whose edges are at most kMovingEdgePx pixels long at its centre:
+// a finer one as the camera comes closer, the full mesh when none fits or
+// the eye is inside the mesh's sphere.
+TEST(ViewerLines, MovingLevelFitsItsEdgesToThePixels) {
+  render::RenderMesh full;
+  full.center = Vec3::Zero();
+  full.radius = 1.0;
+  // Levels of mean edge 0.01, 0.04 and 0.16 mm.
+  const std::vector<MovingLevel> levels = {level_of_edge(0.01), level_of_edge(0.04),
+                                           level_of_edge(0.16)};
+  Camera c = test_camera();  // 800 pixels high, 40 degrees
+  auto at_px_per_mm = [&](double px_per_mm) {
+    c.eye = Vec3(0.0, 0.0, 400.0 / (px_per_mm * std::tan(20.0 * M_PI / 180.0)));
+    return moving_level(full, levels, c);
+  };
+  EXPECT_EQ(at_px_per_mm(20.0), 2);     // 0.16 mm: 3.2 px
+  EXPECT_EQ(at_px_per_mm(40.0), 1);     // 0.16 mm: 6.4 px; 0.04 mm: 1.6 px
+  EXPECT_EQ(at_px_per_mm(124.0), 1);    // 0.04 mm: 4.96 px
+  EXPECT_EQ(at_px_per_mm(126.0), 0);    // 0.04 mm: 5.04 px
+  EXPECT_EQ(at_px_per_mm(1000.0), -1);  // 0.01 mm: 10 px
+  EXPECT_EQ(moving_level(full, {}, c), -1);
+  c.eye = Vec3(0.0, 0.0, 0.5);  // inside the bounding sphere
+  EXPECT_EQ(moving_level(full, levels, c), -1);
+  c.projection = Projection::orthographic;  // the height seen at the centre
+  c.eye = Vec3(0.0, 0.0, 400.0 / (20.0 * std::tan(20.0 * M_PI / 180.0)));
+  EXPECT_EQ(moving_level(full, levels, c), 2);
 }
