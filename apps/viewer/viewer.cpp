@@ -546,11 +546,17 @@ void Viewer::frame() {
   stats_.ms_gpu_submit = 0.0;
   // While the camera moves ghosted structures may be drawn coarse (their
   // lines too); once it stops, the full meshes and their lines come back.
-  const bool moving = camera_revision_ != last_frame_revision_ || dragging_ || to_.has_value();
+  // `screenshot-window` right after the camera stopped shows what the
+  // window shows, the moving picture, with the lines of its camera (waited
+  // for, so that the capture does not race the lines worker).
+  const bool capturing = !capture_.empty();
+  const bool moving = camera_revision_ != last_frame_revision_ || dragging_ || to_.has_value() ||
+                      (capturing && last_frame_moving_);
   last_frame_revision_ = camera_revision_;
+  last_frame_moving_ = moving;
   if (any && camera_set_) {
     const std::uint64_t version = post_lines(camera_, false, moving && simplify_while_moving_);
-    lines = lines_worker_.wait_for(version > 1 ? version - 1 : version);
+    lines = lines_worker_.wait_for(version > 1 && !capturing ? version - 1 : version);
     if (!lines->error.empty() && (errors_.empty() || errors_.back() != lines->error))
       report_error(lines->error);
     const auto t1 = Clock::now();

@@ -232,6 +232,7 @@ class Viewer {
   bool coarse_lines_while_moving_ = false;
   bool posted_lod_ = false;
   std::uint64_t last_frame_revision_ = 0;
+  bool last_frame_moving_ = false;
   bool drawn_scaled_ = false;
   std::filesystem::path capture_;
   // camera transition (animated views)
