@@ -2,6 +2,10 @@
 
 #include <CLI/CLI.hpp>
 
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
+
 #include <algorithm>
 #include <atomic>
 #include <cctype>
@@ -297,5 +301,12 @@ void keep_headless_renderer(bool keep) {
   if (!keep) kept_renderer().renderer.reset();
 }
 #endif
+
+void keep_freed_memory_for_reuse() {
+#if defined(__GLIBC__) && defined(M_MMAP_THRESHOLD) && defined(M_TRIM_THRESHOLD)
+  mallopt(M_MMAP_THRESHOLD, 32 << 20);
+  mallopt(M_TRIM_THRESHOLD, 256 << 20);
+#endif
+}
 
 }  // namespace fabrica::cli

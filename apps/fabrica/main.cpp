@@ -4,10 +4,6 @@
 //   5 a batch finished but some items failed.
 #include <tbb/global_control.h>
 
-#if defined(__GLIBC__) || defined(__linux__)
-#include <malloc.h>
-#endif
-
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
@@ -58,24 +54,10 @@ void add_common_options(CLI::App& app, int& threads) {
   }
 }
 
-/// The allocator keeps freed blocks of up to 32 MiB for reuse instead of
-/// handing them back to the system and faulting in fresh zeroed pages for
-/// the next phase's arrays (the Surface's construction scratch, the view
-/// fields, the segment soups, the depth buffer, a batch's items): ~8 % less
-/// CPU time for `fabrica lines` on a 270k-face mesh with the same peak
-/// resident set (docs/PERFORMANCE.md, "Idle machine, after session 14's
-/// merges"). Only where a program, not the library, decides it.
-void keep_freed_memory_for_reuse() {
-#if defined(__GLIBC__) && defined(M_MMAP_THRESHOLD) && defined(M_TRIM_THRESHOLD)
-  mallopt(M_MMAP_THRESHOLD, 32 << 20);
-  mallopt(M_TRIM_THRESHOLD, 256 << 20);
-#endif
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
-  keep_freed_memory_for_reuse();
+  fabrica::cli::keep_freed_memory_for_reuse();
   CLI::App app{
       "fabrica: feature lines, hatching and focus-and-context illustrations of anatomy meshes"};
   app.require_subcommand(1);

@@ -16,6 +16,7 @@
 
 int main(int argc, char** argv) {
   using namespace fabrica;
+  cli::keep_freed_memory_for_reuse();
   CLI::App app("fabrica-viewer: focus-and-context viewer for anatomy surfaces", "fabrica-viewer");
   std::vector<std::string> inputs;
   std::string script, size, frame_log;

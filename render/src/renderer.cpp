@@ -236,6 +236,12 @@ struct Renderer::Impl {
   std::map<std::string, ShaderProgram, std::less<>> programs;
   GLuint empty_vao = 0;
   GLuint line_vao = 0, line_vbo = 0, line_ebo = 0;
+  // Capacity of line_vbo / line_ebo in bytes, and the CPU-side arrays of
+  // upload_lines: kept between draws, so a viewer's frames reuse them.
+  std::size_t line_vbo_bytes = 0, line_ebo_bytes = 0;
+  std::vector<float> line_vertex_scratch;
+  std::vector<std::uint32_t> line_index_scratch;
+  std::vector<double> arc_scratch;
 
   // Render targets, (re)allocated for the largest tile.
   int target_w = 0, target_h = 0;
@@ -1374,16 +1380,33 @@ struct Renderer::Impl {
   // The line geometry: one strip per polyline, batched per structure and
   // style: the polyline layers first (under), then the feature lines per
   // width class; uploaded into line_vbo/line_ebo.
+  // Writes `bytes` into the buffer bound to `target`, whose store has
+  // `capacity` bytes: a new store (half as large again) only when it does
+  // not fit, else into the one it has, so a viewer's every frame does not
+  // allocate (and the driver fault in) a fresh one.
+  void upload_growing(GLenum target, const void* data, std::size_t bytes, std::size_t& capacity) {
+    const GlFunctions& g = gl();
+    if (bytes > capacity) {
+      capacity = bytes + bytes / 2;
+      g.BufferData(target, static_cast<GLsizeiptr>(capacity), nullptr, GL_DYNAMIC_DRAW);
+    }
+    g.BufferSubData(target, 0, static_cast<GLsizeiptr>(bytes), data);
+  }
+
   std::vector<LineBatch> upload_lines(const Scene& scene) {
     const GlFunctions& g = gl();
-    std::vector<float> line_vertices;
-    std::vector<std::uint32_t> line_indices;
+    // Kept between frames (a viewer uploads every frame): cleared, not freed.
+    std::vector<float>& line_vertices = line_vertex_scratch;
+    std::vector<std::uint32_t>& line_indices = line_index_scratch;
+    std::vector<double>& arc = arc_scratch;
+    line_vertices.clear();
+    line_indices.clear();
     std::vector<LineBatch> batches;
     // Appends polyline `n` vertices long; position(i) and strength(i) give its vertices.
     auto append_polyline = [&](std::size_t n, bool closed, auto position, auto strength) {
       if (n < 2) return;
       closed = closed && n >= 3;
-      std::vector<double> arc(n, 0.0);
+      arc.assign(n, 0.0);
       for (std::size_t i = 1; i < n; ++i)
         arc[i] = arc[i - 1] + (position(i) - position(i - 1)).norm();
       const double total = closed ? 0.0 : arc.back();
@@ -1442,8 +1465,8 @@ struct Renderer::Impl {
     if (!batches.empty()) {
       g.BindVertexArray(line_vao);
       g.BindBuffer(GL_ARRAY_BUFFER, line_vbo);
-      g.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(line_vertices.size() * sizeof(float)),
-                   line_vertices.data(), GL_DYNAMIC_DRAW);
+      upload_growing(GL_ARRAY_BUFFER, line_vertices.data(), line_vertices.size() * sizeof(float),
+                     line_vbo_bytes);
       const GLsizei stride = 13 * sizeof(float);
       for (GLuint loc = 0; loc < 4; ++loc) {
         g.EnableVertexAttribArray(loc);
@@ -1451,9 +1474,8 @@ struct Renderer::Impl {
                               reinterpret_cast<const void*>(std::size_t(loc) * 3 * sizeof(float)));
       }
       g.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, line_ebo);
-      g.BufferData(GL_ELEMENT_ARRAY_BUFFER,
-                   static_cast<GLsizeiptr>(line_indices.size() * sizeof(std::uint32_t)),
-                   line_indices.data(), GL_DYNAMIC_DRAW);
+      upload_growing(GL_ELEMENT_ARRAY_BUFFER, line_indices.data(),
+                     line_indices.size() * sizeof(std::uint32_t), line_ebo_bytes);
       g.BindVertexArray(0);
     }
     return batches;

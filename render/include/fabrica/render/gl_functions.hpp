@@ -69,6 +69,7 @@ namespace fabrica::render {
   X(PFNGLDELETEBUFFERSPROC, DeleteBuffers)                       \
   X(PFNGLBINDBUFFERPROC, BindBuffer)                             \
   X(PFNGLBUFFERDATAPROC, BufferData)                             \
+  X(PFNGLBUFFERSUBDATAPROC, BufferSubData)                       \
   X(PFNGLVERTEXATTRIBPOINTERPROC, VertexAttribPointer)           \
   X(PFNGLENABLEVERTEXATTRIBARRAYPROC, EnableVertexAttribArray)   \
   X(PFNGLDISABLEVERTEXATTRIBARRAYPROC, DisableVertexAttribArray) \
