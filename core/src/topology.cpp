@@ -261,6 +261,22 @@ Topology::Topology(const TriangleMesh& mesh) {
     edge_pass(std::false_type{});
 }
 
+void Topology::reverse_face(std::size_t f, const Face& corners) {
+  auto& fe = face_edges_[f];
+  std::swap(fe[1], fe[2]);  // (b, a) was opposite corner 2, (a, c) opposite corner 1
+  for (int c = 0; c < 3; ++c) {
+    const auto v = static_cast<std::size_t>(corners[c]);
+    const auto first = vertex_faces_.begin() + vertex_face_offsets_[v];
+    const auto last = vertex_faces_.begin() + vertex_face_offsets_[v + 1];
+    const auto j = static_cast<std::size_t>(
+        std::lower_bound(first, last, static_cast<std::int32_t>(f)) - vertex_faces_.begin());
+    // Corner 1 becomes corner 2 and 2 becomes 1; the two other corners
+    // after v change places for every corner.
+    vertex_face_corners_[j] = static_cast<std::uint8_t>((3 - c) % 3);
+    std::swap(vertex_face_opposite_[j][0], vertex_face_opposite_[j][1]);
+  }
+}
+
 std::int32_t Topology::face_neighbor(std::size_t f, int k) const {
   const auto e = face_edges_[f][k];
   if (e < 0) return -1;
