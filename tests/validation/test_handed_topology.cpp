@@ -270,6 +270,29 @@ TEST(HandedTopology, TurnedFacesAreTurnedInTheTopology) {
   expect_same_topology(*topology, Topology(inward));
 }
 
+TEST(HandedTopology, ReverseFaceEqualsARebuild) {
+  // Open, with a non-manifold edge, a duplicate face and an isolated vertex.
+  TriangleMesh mesh = bundled("anatomy/vessels/sofa_aneurysm3D_1.off");
+  const auto n = static_cast<std::int32_t>(mesh.positions.size());
+  const Face first = mesh.faces[0];
+  mesh.positions.push_back(mesh.positions[0] + Vec3(0.0, 0.0, 1.0));
+  mesh.positions.push_back(Vec3::Zero());
+  mesh.faces.push_back({first[0], first[1], n});
+  mesh.faces.push_back(first);
+  Topology turned(mesh);
+  for (std::size_t f = 0; f < mesh.faces.size(); f += 3) {
+    turned.reverse_face(f, mesh.faces[f]);
+    std::swap(mesh.faces[f][1], mesh.faces[f][2]);
+  }
+  expect_same_topology(turned, Topology(mesh));
+  // Turned back: the topology it started from.
+  for (std::size_t f = 0; f < mesh.faces.size(); f += 3) {
+    turned.reverse_face(f, mesh.faces[f]);
+    std::swap(mesh.faces[f][1], mesh.faces[f][2]);
+  }
+  expect_same_topology(turned, Topology(mesh));
+}
+
 TEST(HandedTopology, RealMeshesThatPreparationTurns) {
   // A closed piece turned outward, open pieces turned outward (capped
   // volume), a few faces of open pieces.
