@@ -291,6 +291,16 @@ TEST(HandedTopology, ReverseFaceEqualsARebuild) {
     std::swap(mesh.faces[f][1], mesh.faces[f][2]);
   }
   expect_same_topology(turned, Topology(mesh));
+  // A face that is not the topology's: InputError, nothing changed.
+  const Face f1 = mesh.faces[1];
+  const Face bad[] = {{f1[0], f1[2], f1[1]},
+                      {f1[0], f1[0], f1[1]},
+                      {f1[0], f1[1], n + 1},
+                      {f1[0], f1[1], -1},
+                      {f1[0], f1[1], n + 2}};
+  for (const Face& corners : bad) EXPECT_THROW(turned.reverse_face(1, corners), InputError);
+  EXPECT_THROW(turned.reverse_face(mesh.faces.size(), f1), InputError);
+  expect_same_topology(turned, Topology(mesh));
 }
 
 TEST(HandedTopology, RealMeshesThatPreparationTurns) {

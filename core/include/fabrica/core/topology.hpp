@@ -149,7 +149,8 @@ class Topology {
   /// this is Topology(mesh) of the mesh with that face turned, bit for bit
   /// (only the corner order of f changes: its face edges, and its corner and
   /// opposite entries at its three vertices; O(log degree)). `corners` must
-  /// be face f as this topology was built for it, three distinct vertices.
+  /// be face f as this topology has it, three distinct vertices; otherwise
+  /// throws InputError and changes nothing.
   void reverse_face(std::size_t f, const Face& corners);
 
  private:
