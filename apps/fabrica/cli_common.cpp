@@ -178,7 +178,8 @@ std::shared_ptr<const LoadedSurface> load_prepared_surface(const std::filesystem
   auto loaded = std::make_shared<LoadedSurface>();
   loaded->messages = prepared.messages();
   loaded->info = std::move(prepared.info);
-  loaded->surface = std::make_shared<const Surface>(std::move(prepared.mesh));
+  // With the topology the preparation built: the Surface does not build it again.
+  loaded->surface = std::make_shared<const Surface>(to_surface(std::move(prepared)));
   if (cacheable) {
     const std::lock_guard<std::mutex> lock(cache.mutex);
     cache.entries.emplace_front(key, loaded);

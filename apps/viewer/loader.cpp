@@ -7,6 +7,7 @@
 #include "fabrica/core/error.hpp"
 #include "fabrica/io/label_volume.hpp"
 #include "fabrica/io/mesh_io.hpp"
+#include "fabrica/io/prepare.hpp"
 #include "fabrica/io/repair.hpp"
 
 namespace fabrica::viewer {
@@ -35,6 +36,16 @@ std::vector<io::LabelInfo> label_table_beside(const std::filesystem::path& path)
     if (std::filesystem::is_regular_file(p)) return io::read_label_names(p);
   }
   return {};
+}
+
+/// `mesh` prepared for lines (io::prepare_for_lines) as a Surface, handed the
+/// topology the preparation built (fabrica::to_surface) instead of building
+/// it again.
+std::shared_ptr<Surface> prepared_surface(TriangleMesh mesh) {
+  PreparedMesh prepared;
+  prepared.mesh = std::move(mesh);
+  prepared.repair = io::prepare_for_lines(prepared.mesh, {}, prepared.topology);
+  return std::make_shared<Surface>(to_surface(std::move(prepared)));
 }
 
 }  // namespace
@@ -164,9 +175,8 @@ void Loader::run() {
 
 // A prepared surface of `mesh` with its line precomputation.
 std::shared_ptr<LineSource> Loader::line_source(TriangleMesh mesh) {
-  io::prepare_for_lines(mesh);
   auto source = std::make_shared<LineSource>();
-  auto surface = std::make_shared<Surface>(std::move(mesh));
+  auto surface = prepared_surface(std::move(mesh));
   surface->precompute();
   if (cancelled()) throw Cancelled{};
   source->drawer = std::make_unique<LineDrawer>(*surface);
@@ -199,11 +209,9 @@ LoadedStructure Loader::build(TriangleMesh mesh, const std::string& name) {
     // The level's line precomputation is left to the lines worker, which
     // makes it the first time it draws the level's lines (only with
     // coarse lines while moving; LineSource::drawer).
-    TriangleMesh prepared = next;
-    io::prepare_for_lines(prepared);
     MovingLevel m;
     m.lines = std::make_shared<LineSource>();
-    m.lines->surface = std::make_shared<Surface>(std::move(prepared));
+    m.lines->surface = prepared_surface(next);
     render::RenderMesh drawn = render::make_render_mesh(*m.lines->surface, false);
     // Its own edge length: the lines' depth tolerance grows with it while
     // moving (the full mesh's lines lie within about an edge of it).

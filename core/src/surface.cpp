@@ -9,12 +9,15 @@
 #include <tbb/parallel_invoke.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <mutex>
+#include <string>
 
 #include "curvature_internal.hpp"
 #include "fabrica/core/curvature.hpp"
+#include "fabrica/core/error.hpp"
 #include "fabrica/core/geometry.hpp"
 #include "geometry_kernels.hpp"
 
@@ -75,6 +78,48 @@ constexpr std::size_t kVertexGrain = 2048;
 Surface::Surface(TriangleMesh mesh, SurfaceOptions options)
     : mesh_(std::move(mesh)), options_(options), cache_(std::make_unique<Cache>()) {
   check_mesh_indices_and_values(mesh_, "surface mesh");
+}
+
+namespace {
+
+// The cheap checks that a handed topology was built for `mesh`: the counts,
+// and the face edges of up to kSampledFaces faces spread over the mesh.
+void check_handed_topology(const Topology& topology, const TriangleMesh& mesh) {
+  const std::size_t nv = mesh.positions.size(), nf = mesh.faces.size();
+  if (topology.vertex_count() != nv || topology.face_count() != nf)
+    throw InputError("surface mesh: the topology given was built for a mesh of " +
+                     std::to_string(topology.vertex_count()) + " vertices and " +
+                     std::to_string(topology.face_count()) + " faces, not this one of " +
+                     std::to_string(nv) + " vertices and " + std::to_string(nf) + " faces");
+  constexpr std::size_t kSampledFaces = 64;
+  const std::size_t samples = std::min(nf, kSampledFaces);
+  for (std::size_t i = 0; i < samples; ++i) {
+    // Evenly spaced, first and last face included.
+    const std::size_t f = samples == 1 ? 0 : i * (nf - 1) / (samples - 1);
+    const Face& face = mesh.faces[f];
+    for (int k = 0; k < 3; ++k) {
+      const std::int32_t a = face[(k + 1) % 3], b = face[(k + 2) % 3];
+      const std::int32_t e = topology.face_edge(f, k);
+      const bool ok = a == b ? e == -1
+                             : e >= 0 && static_cast<std::size_t>(e) < topology.edge_count() &&
+                                   topology.edge(static_cast<std::size_t>(e)) ==
+                                       std::array<std::int32_t, 2>{std::min(a, b), std::max(a, b)};
+      if (!ok)
+        throw InputError("surface mesh: the topology given does not match face " +
+                         std::to_string(f) + " (" + std::to_string(face[0]) + ", " +
+                         std::to_string(face[1]) + ", " + std::to_string(face[2]) +
+                         "): it was built for another mesh or before the faces changed");
+    }
+  }
+}
+
+}  // namespace
+
+Surface::Surface(TriangleMesh mesh, Topology topology, SurfaceOptions options)
+    : Surface(std::move(mesh), options) {
+  check_handed_topology(topology, mesh_);
+  Cache& c = *cache_;
+  std::call_once(c.topology_once, [&] { c.topology = std::move(topology); });
 }
 
 Surface::~Surface() = default;

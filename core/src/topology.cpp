@@ -10,9 +10,11 @@
 #endif
 #include <memory>
 #include <numeric>
+#include <string>
 #include <type_traits>
 #include <utility>
 
+#include "fabrica/core/error.hpp"
 #include "fabrica/core/mesh.hpp"
 
 namespace fabrica {
@@ -259,6 +261,39 @@ Topology::Topology(const TriangleMesh& mesh) {
     edge_pass(std::true_type{});
   else
     edge_pass(std::false_type{});
+}
+
+void Topology::reverse_face(std::size_t f, const Face& corners) {
+  // The entry of f in each corner's face list, checked: f lists that
+  // vertex at that corner.
+  std::array<std::size_t, 3> entry{};
+  bool ok = f < face_count() && corners[0] != corners[1] && corners[1] != corners[2] &&
+            corners[2] != corners[0];
+  for (int c = 0; ok && c < 3; ++c) {
+    const auto v = static_cast<std::size_t>(corners[c]);
+    if (corners[c] < 0 || v >= vertex_count()) {
+      ok = false;
+      break;
+    }
+    const auto first = vertex_faces_.begin() + vertex_face_offsets_[v];
+    const auto last = vertex_faces_.begin() + vertex_face_offsets_[v + 1];
+    const auto it = std::lower_bound(first, last, static_cast<std::int32_t>(f));
+    entry[c] = static_cast<std::size_t>(it - vertex_faces_.begin());
+    ok = it != last && *it == static_cast<std::int32_t>(f) && vertex_face_corners_[entry[c]] == c;
+  }
+  if (!ok)
+    throw InputError("Topology::reverse_face: face " + std::to_string(f) + " is not (" +
+                     std::to_string(corners[0]) + ", " + std::to_string(corners[1]) + ", " +
+                     std::to_string(corners[2]) +
+                     ") with three distinct vertices in this topology");
+  auto& fe = face_edges_[f];
+  std::swap(fe[1], fe[2]);  // (b, a) was opposite corner 2, (a, c) opposite corner 1
+  for (int c = 0; c < 3; ++c) {
+    // Corner 1 becomes corner 2 and 2 becomes 1; the two other corners
+    // after v change places for every corner.
+    vertex_face_corners_[entry[c]] = static_cast<std::uint8_t>((3 - c) % 3);
+    std::swap(vertex_face_opposite_[entry[c]][0], vertex_face_opposite_[entry[c]][1]);
+  }
 }
 
 std::int32_t Topology::face_neighbor(std::size_t f, int k) const {

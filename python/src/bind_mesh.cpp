@@ -67,7 +67,7 @@ std::shared_ptr<PySurface> as_surface(const py::object& obj) {
   py::gil_scoped_release release;
   PreparedMesh prepared = prepare_mesh(mesh, PrepareOptions{}, "mesh");
   out->notes = prepared.messages();
-  out->surface = std::make_shared<const Surface>(std::move(prepared.mesh));
+  out->surface = std::make_shared<const Surface>(to_surface(std::move(prepared)));
   return out;
 }
 
@@ -157,7 +157,8 @@ void bind_mesh(py::module_& m) {
                  prepare.orient = orient;
                  PreparedMesh prepared = prepare_mesh(mesh, prepare, "mesh");
                  out->notes = prepared.messages();
-                 out->surface = std::make_shared<const Surface>(std::move(prepared.mesh), options);
+                 out->surface =
+                     std::make_shared<const Surface>(to_surface(std::move(prepared), options));
                  return out;
                }),
            py::arg("mesh"), py::arg("orient") = true, py::arg("normals") = "max",

@@ -50,7 +50,7 @@ SceneSurfaces load_scene(SceneSpec spec) {
   return load_scene(std::move(spec), [](const StructureSpec& s) {
     PrepareOptions options;
     options.space = s.space;
-    return std::make_shared<const Surface>(prepare_mesh(s.mesh, options).mesh);
+    return std::make_shared<const Surface>(to_surface(prepare_mesh(s.mesh, options)));
   });
 }
 

@@ -16,9 +16,16 @@ std::vector<std::string> PreparedMesh::messages() const {
 namespace {
 // Welds exact duplicates always; orients only when options.orient (docs/validation.md).
 void prepare(PreparedMesh& prepared, const PrepareOptions& options) {
-  prepared.repair = io::prepare_for_lines(prepared.mesh, options);
+  prepared.repair = io::prepare_for_lines(prepared.mesh, options, prepared.topology);
 }
 }  // namespace
+
+Surface to_surface(PreparedMesh&& prepared, const SurfaceOptions& options) {
+  std::optional<Topology> topology = std::move(prepared.topology);
+  prepared.topology.reset();
+  if (topology) return Surface(std::move(prepared.mesh), std::move(*topology), options);
+  return Surface(std::move(prepared.mesh), options);
+}
 
 PreparedMesh prepare_mesh(const std::filesystem::path& path, const PrepareOptions& options) {
   io::ReadOptions read_options;

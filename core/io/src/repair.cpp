@@ -230,7 +230,8 @@ std::size_t split_vertices(TriangleMesh& mesh, const detail::ProperTopology& pro
 // then each closed piece faces out of the solid (positive volume, negative
 // for a cavity wall nested inside an odd number of other closed pieces), and
 // every other piece keeps the orientation of the majority of its faces.
-void orient(TriangleMesh& mesh, const detail::ProperTopology& proper, bool outward,
+// The topology follows the faces turned (`proper` describes the mesh after).
+void orient(TriangleMesh& mesh, detail::ProperTopology& proper, bool outward,
             RepairReport& report) {
   const Topology& topo = proper.topology();
   const auto& faces = proper.faces();
@@ -324,23 +325,29 @@ void orient(TriangleMesh& mesh, const detail::ProperTopology& proper, bool outwa
   }
   for (std::size_t f = 0; f < nf; ++f)
     if (flip[f]) {
+      const Face before = faces[f];  // (faces may be mesh.faces)
+      proper.reverse_face(f, before);
       Face& t = mesh.faces[proper.original_face(f)];
       std::swap(t[1], t[2]);
       ++report.flipped_faces;
     }
 }
 
-}  // namespace
-
-RepairReport repair_mesh(TriangleMesh& mesh, const RepairOptions& o) {
+// repair_mesh; with `topology_out`, also the Topology of the repaired mesh
+// when the last one a step built still describes it (else nullopt).
+RepairReport run_repair(TriangleMesh& mesh, const RepairOptions& o,
+                        std::optional<Topology>* topology_out) {
+  if (topology_out) topology_out->reset();
   check_mesh_indices_and_values(mesh, "mesh");
   RepairReport report;
   report.face_origin.resize(mesh.faces.size());
   std::iota(report.face_origin.begin(), report.face_origin.end(), 0);
 
-  // Adjacency is rebuilt only after a step changed the faces.
+  // Adjacency is rebuilt only after a step changed the faces: every step
+  // that changes the mesh resets it, except the orientation, which updates
+  // it for the faces it turns; so when set, it describes the mesh.
   std::optional<detail::ProperTopology> proper;
-  auto topology = [&]() -> const detail::ProperTopology& {
+  auto topology = [&]() -> detail::ProperTopology& {
     if (!proper) proper.emplace(mesh);
     return *proper;
   };
@@ -405,10 +412,23 @@ RepairReport repair_mesh(TriangleMesh& mesh, const RepairOptions& o) {
                                 plural(report.nonorientable_pieces, "piece", "pieces") +
                                 " consistently: the surface is not orientable (Moebius-like)");
   }
+  if (topology_out && proper) *topology_out = proper->release_mesh_topology();
   return report;
 }
 
-RepairReport prepare_for_lines(TriangleMesh& mesh, const fabrica::PrepareOptions& options) {
+}  // namespace
+
+RepairReport repair_mesh(TriangleMesh& mesh, const RepairOptions& options) {
+  return run_repair(mesh, options, nullptr);
+}
+
+RepairReport repair_mesh(TriangleMesh& mesh, const RepairOptions& options,
+                         std::optional<Topology>& topology_out) {
+  return run_repair(mesh, options, &topology_out);
+}
+
+namespace {
+RepairOptions lines_repair_options(const fabrica::PrepareOptions& options) {
   RepairOptions o;
   o.weld = true;
   o.weld_tolerance = 0.0;
@@ -418,7 +438,17 @@ RepairReport prepare_for_lines(TriangleMesh& mesh, const fabrica::PrepareOptions
   o.split_nonmanifold_edges = false;
   o.orient = options.orient;
   o.outward = options.orient;
-  return repair_mesh(mesh, o);
+  return o;
+}
+}  // namespace
+
+RepairReport prepare_for_lines(TriangleMesh& mesh, const fabrica::PrepareOptions& options) {
+  return run_repair(mesh, lines_repair_options(options), nullptr);
+}
+
+RepairReport prepare_for_lines(TriangleMesh& mesh, const fabrica::PrepareOptions& options,
+                               std::optional<Topology>& topology_out) {
+  return run_repair(mesh, lines_repair_options(options), &topology_out);
 }
 
 nlohmann::json to_json(const RepairReport& r) {

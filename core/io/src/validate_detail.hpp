@@ -51,6 +51,18 @@ class ProperTopology {
   }
   std::size_t repeated_index_faces() const { return repeated_index_faces_; }
   const Topology& topology() const { return topology_; }
+  /// Follows proper face f turned from `corners` (a, b, c) to (a, c, b)
+  /// (Topology::reverse_face), so this still describes the mesh.
+  void reverse_face(std::size_t f, const Face& corners) {
+    topology_.reverse_face(f, corners);
+    if (filtered_) std::swap(filtered_faces_[f][1], filtered_faces_[f][2]);
+  }
+  /// Topology(mesh) of the mesh this was built from, when no face was left
+  /// out (no repeated-index face); moved out, so this object is spent.
+  std::optional<Topology> release_mesh_topology() {
+    if (filtered_) return std::nullopt;
+    return std::move(topology_);
+  }
 
  private:
   const std::vector<Face>* mesh_faces_;

@@ -83,6 +83,16 @@ class Surface {
   /// Takes the mesh as is (validate and repair it first if needed). Throws
   /// InputError if indices are out of range or coordinates are not finite.
   explicit Surface(TriangleMesh mesh, SurfaceOptions options = {});
+  /// The same Surface, given the mesh's Topology already built, so that it is
+  /// not built again (the preparation builds it: PreparedMesh::topology,
+  /// fabrica::to_surface, io::prepare_for_lines with a topology_out). It must
+  /// be Topology(mesh) of this very mesh (same vertices, same faces in the
+  /// same corner order); everything computed is then bit-identical to the
+  /// Surface that builds its own. Throws InputError, as the constructor above
+  /// does, and when the topology's vertex or face count differs from the
+  /// mesh's or, at a sample of faces (up to 64, evenly spaced), its face
+  /// edges do not join the face's corners (a cheap check, not a full one).
+  Surface(TriangleMesh mesh, Topology topology, SurfaceOptions options = {});
   ~Surface();
   /// A moved-from Surface may only be destroyed or assigned to.
   Surface(Surface&&) noexcept;

@@ -144,6 +144,15 @@ class Topology {
   /// A vertex referenced by no face.
   bool is_isolated_vertex(std::size_t v) const { return vertex_faces(v).empty(); }
 
+  /// Follows face f turned over from `corners` (a, b, c) to (a, c, b), as
+  /// io::repair_mesh orients faces (corner 0 keeps its vertex): afterwards
+  /// this is Topology(mesh) of the mesh with that face turned, bit for bit
+  /// (only the corner order of f changes: its face edges, and its corner and
+  /// opposite entries at its three vertices; O(log degree)). `corners` must
+  /// be face f as this topology has it, three distinct vertices; otherwise
+  /// throws InputError and changes nothing.
+  void reverse_face(std::size_t f, const Face& corners);
+
  private:
   /// How many of v's higher neighbours are below b (a handful: a plain count).
   std::int32_t upper_rank(std::size_t v, std::int32_t b) const {

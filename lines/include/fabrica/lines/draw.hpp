@@ -4,7 +4,7 @@
 // the viewer, the batch runner and the Python module all draw lines through
 // this, so the same options give the same lines everywhere.
 //
-//   fabrica::Surface surface(fabrica::prepare_mesh("veins.stl").mesh);
+//   fabrica::Surface surface = fabrica::to_surface(fabrica::prepare_mesh("veins.stl"));
 //   fabrica::DrawLinesOptions options;
 //   options.lines.families = {fabrica::LineFamily::contour, fabrica::LineFamily::apparent};
 //   const fabrica::LineDrawing drawing = fabrica::draw_lines(surface, camera, options);

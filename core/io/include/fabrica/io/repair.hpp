@@ -43,6 +43,7 @@
 #include <vector>
 
 #include "fabrica/core/mesh.hpp"
+#include "fabrica/core/topology.hpp"
 
 namespace fabrica {
 
@@ -107,6 +108,17 @@ struct RepairReport {
 /// Throws InputError when a face index is out of range or a coordinate is not
 /// finite.
 RepairReport repair_mesh(TriangleMesh& mesh, const RepairOptions& options = {});
+/// repair_mesh, also handing over the adjacency its steps built when it
+/// still describes the repaired mesh: `topology_out` is then Topology(mesh)
+/// of the mesh as returned, bit for bit (for Surface(mesh, topology), which
+/// then does not build it again). The orientation step turns faces in the
+/// topology too (Topology::reverse_face); the other steps that change the
+/// faces (weld, removal, split) build it again for the next step, and when
+/// none follows, or the mesh has a face with a repeated vertex (the steps'
+/// topology leaves those out), `topology_out` is nullopt. Set on return in
+/// every case; reset when this throws.
+RepairReport repair_mesh(TriangleMesh& mesh, const RepairOptions& options,
+                         std::optional<Topology>& topology_out);
 
 /// The former io::PrepareOptions (`keep_orientation = true` is now
 /// `orient = false`); the one options type is fabrica::PrepareOptions below.
@@ -119,6 +131,14 @@ using PrepareOptions = fabrica::PrepareOptions;
 /// face and adds no vertex, so face f stays face f and vertex i stays vertex
 /// i. The report's `changes` say what was flipped and why.
 RepairReport prepare_for_lines(TriangleMesh& mesh, const fabrica::PrepareOptions& options = {});
+/// prepare_for_lines, handing over the Topology it built, as repair_mesh
+/// above: Topology(mesh) of the prepared mesh, kept through the faces the
+/// orientation turns (and built again after a weld); nullopt when the mesh
+/// has a face with a repeated vertex, or when a weld changed it with
+/// `orient` off. Then `Surface(std::move(mesh), std::move(*topology_out))`
+/// does not build it a second time.
+RepairReport prepare_for_lines(TriangleMesh& mesh, const fabrica::PrepareOptions& options,
+                               std::optional<Topology>& topology_out);
 
 /// The report as a JSON object (without face_origin).
 nlohmann::json to_json(const RepairReport& report);
