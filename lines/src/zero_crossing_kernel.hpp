@@ -588,4 +588,21 @@ template <class Num>
                                                 std::vector<LineSegment>& out);
 #endif
 
+// The AVX-512 kernels (zero_crossing_avx512.cpp), eight faces at a time,
+// each giving the bits of the AVX2 one it replaces; call only when
+// detail::cpu_has_avx512().
+#if defined(FABRICA_LINES_AVX512)
+/// keep_crossed_avx2 (no room past the kept entries needed).
+[[gnu::target(FABRICA_AVX512_ISA)]] void keep_crossed_avx512(const Face* faces,
+                                                             const std::uint32_t* face, int n,
+                                                             const double* E, const Topology& topo,
+                                                             KeptFaces& kept);
+
+/// kept_segments_avx2.
+[[gnu::target(FABRICA_AVX512_ISA)]] void kept_segments_avx512(const VectorInputs& in,
+                                                              const double* field,
+                                                              const KeptFaces& kept,
+                                                              std::vector<LineSegment>& out);
+#endif
+
 }  // namespace fabrica::zc

@@ -13,6 +13,9 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
+#include <memory>
+#include <random>
 #include <string>
 
 #include "fabrica/core/camera.hpp"
@@ -25,6 +28,7 @@
 #include "test_support.hpp"
 #include "view_fields_light.hpp"
 #include "zero_crossing_internal.hpp"
+#include "zero_crossing_kernel.hpp"
 
 using namespace fabrica;
 
@@ -527,4 +531,200 @@ TEST(LinesViewFields, Dt1q1FromTheTangentRingMatchesTheTopologyWalk) {
     for (int kind = 0; kind < 2; ++kind)
       EXPECT_GE(static_cast<double>(close[kind]), 0.97 * static_cast<double>(nonzero[kind]));
   }
+}
+
+// The AVX-512 apparent-ridge kernels (keep_crossed and kept_segments, eight
+// faces at a time, where the CPU has AVX-512) against the AVX2 ones and
+// the portable ones: every family's segments, every field, the same bits,
+// on three meshes (igea: the reference mesh, 268k faces), with and without
+// the maximum test and the threshold, in perspective and orthographic views.
+TEST(LinesViewFields, Avx512Avx2AndPortableKernelsGiveTheSameSegments) {
+#if !defined(FABRICA_LINES_AVX512)
+  GTEST_SKIP() << "no AVX-512 kernels in this build";
+#else
+  if (!detail::cpu_has_avx512()) GTEST_SKIP() << "this CPU has no AVX-512 (F, VL, DQ, BW)";
+  std::size_t centroid_ends = 0, apparent = 0;
+  for (const char* rel : {"meshes/classic/c3d_cow.obj", "meshes/classic/libigl_camelhead.off",
+                          "meshes/classic/c3d_igea.ply"}) {
+    SCOPED_TRACE(rel);
+    const Surface surface = load(rel, false);
+    for (int variant = 0; variant < 4; ++variant) {
+      SCOPED_TRACE(variant);
+      Camera c = camera_towards(surface, Vec3(0.5, -0.2, 1.0));
+      LineOptions o;
+      o.families = all_families();
+      if (variant == 1) o.apparent.maximum_test = false;
+      if (variant == 2) o.apparent.threshold = 0.0;
+      if (variant == 3) c.projection = Projection::orthographic;
+      LineExtractor x512(surface, o), x2(surface, o), xp(surface, o);
+      const auto wide = x512.extract(c);
+      const bool had512 = detail::avx512_enabled().exchange(false);
+      const auto avx2 = x2.extract(c);
+      const bool had2 = detail::avx2_enabled().exchange(false);
+      const auto portable = xp.extract(c);
+      detail::avx2_enabled() = had2;
+      detail::avx512_enabled() = had512;
+      ASSERT_EQ(wide.size(), avx2.size());
+      ASSERT_EQ(wide.size(), portable.size());
+      for (std::size_t k = 0; k < wide.size(); ++k) {
+        SCOPED_TRACE(family_name(wide[k].family));
+        EXPECT_EQ(differing_segments(wide[k].segments, avx2[k].segments), 0u);
+        EXPECT_EQ(differing_segments(wide[k].segments, portable[k].segments), 0u);
+        if (wide[k].family != LineFamily::apparent) continue;
+        apparent += wide[k].segments.size();
+        for (const auto& seg : wide[k].segments) centroid_ends += seg.kind[1] == EndKind::centroid;
+      }
+    }
+  }
+  // Enough segments for every lane pattern, and the centroid branch.
+  EXPECT_GT(apparent, 10000u);
+  EXPECT_GT(centroid_ends, 0u);
+#endif
+}
+
+#if defined(FABRICA_LINES_AVX512)
+namespace {
+
+// Random apparent-ridge records for every vertex of `surface` (its real
+// positions): E, D_t1 q1 and q1 of either sign, with exact zeros (both
+// ends of a cut at D_t1 q1 = 0: t = 1/2), signed zeros, subnormals and
+// values near the overflow of a product; with `special`, also infinities
+// and NaNs.
+std::vector<ApparentVertex> random_records(const Surface& surface, std::uint64_t seed,
+                                           bool special) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::uniform_int_distribution<int> pick(0, 99);
+  auto value = [&] {
+    const int p = pick(rng);
+    if (p < 8) return 0.0;
+    if (p < 12) return -0.0;
+    if (p < 14) return normal(rng) * 1e-310;
+    if (p < 16) return normal(rng) * 1e150;
+    if (special && p < 18)
+      return p == 16 ? std::numeric_limits<double>::infinity()
+                     : -std::numeric_limits<double>::infinity();
+    if (special && p < 20) return std::numeric_limits<double>::quiet_NaN();
+    return normal(rng);
+  };
+  std::vector<ApparentVertex> r(surface.vertex_count());
+  for (std::size_t i = 0; i < r.size(); ++i) {
+    for (int k = 0; k < 3; ++k) r[i].field[k] = value();
+    r[i].dt1q1 = value();
+    r[i].q1 = value();
+    r[i].position = surface.positions()[i];
+  }
+  return r;
+}
+
+struct KernelRun {
+  std::unique_ptr<zc::KeptFaces> kept = std::make_unique<zc::KeptFaces>();
+  std::vector<LineSegment> segments;
+};
+
+enum class KernelPath { portable, avx2, avx512 };
+
+// packed_chunk's kernel calls for the listed faces, on one path: the kept
+// faces in batches of `batch`, then their segments.
+KernelRun run_kernels(const Surface& surface, const std::vector<ApparentVertex>& records,
+                      const std::vector<std::uint32_t>& list, int batch,
+                      const VectorCrossingOptions& o, KernelPath path) {
+  zc::VectorInputs in{zc::MeshArrays(surface), &records[0].dt1q1, nullptr, &records[0].q1, o};
+  in.pos = records[0].position.data();
+  in.ds = in.ps = zc::kApparentStride;
+  const double* field = records[0].field.data();
+  const Face* faces = surface.faces().data();
+  const Topology& topo = surface.topology();
+  KernelRun r;
+  zc::KeptFaces& kept = *r.kept;
+  for (std::size_t j = 0; j < list.size(); j += std::size_t(batch)) {
+    const int n = static_cast<int>(std::min(list.size() - j, std::size_t(batch)));
+    if (path == KernelPath::avx512)
+      zc::keep_crossed_avx512(faces, list.data() + j, n, field, topo, kept);
+    else if (path == KernelPath::avx2)
+      zc::keep_crossed_avx2(faces, list.data() + j, n, field, topo, kept);
+    else
+      for (int k = 0; k < n; ++k)
+        zc::keep_if_crossed(list[j + k], zc::crossing_bits_of(faces[list[j + k]], field), topo,
+                            kept);
+  }
+  if (path == KernelPath::avx512) {
+    zc::kept_segments_avx512(in, field, kept, r.segments);
+  } else if (path == KernelPath::avx2) {
+    zc::kept_segments_avx2(in, field, kept, r.segments);
+  } else {
+    for (std::size_t j = 0; j < kept.n; ++j) {
+      const Face& fg = faces[kept.f[j]];
+      const int v[3] = {fg[0], fg[1], fg[2]};
+      const Vec3 E[3] = {zc::field_at(field, fg[0]), zc::field_at(field, fg[1]),
+                         zc::field_at(field, fg[2])};
+      zc::vector_face_segments(in, kept.f[j], v, E, kept.z[j], r.segments);
+    }
+  }
+  return r;
+}
+
+// Kept faces (and their crossing bits) that differ between two runs.
+std::size_t differing_kept(const zc::KeptFaces& a, const zc::KeptFaces& b) {
+  if (a.n != b.n) return std::max(a.n, b.n) + 1;
+  std::size_t n = 0;
+  for (std::size_t j = 0; j < a.n; ++j) n += a.f[j] != b.f[j] || a.z[j] != b.z[j];
+  return n;
+}
+
+}  // namespace
+#endif
+
+// The kernels alone on random records with the awkward values (exact and
+// signed zeros, subnormals, huge products; infinities and NaNs against the
+// AVX2 kernels), lists of every length mod 8 and batches of 16 (as the
+// packed path calls them) and of 13: the AVX-512 ones give the AVX2 and
+// portable kernels' kept faces, crossing bits and segments, bit for bit,
+// with and without the maximum test, the threshold and the raw magnitude.
+TEST(LinesViewFields, Avx512KernelsMatchOnAwkwardRecords) {
+#if !defined(FABRICA_LINES_AVX512)
+  GTEST_SKIP() << "no AVX-512 kernels in this build";
+#else
+  if (!detail::cpu_has_avx512()) GTEST_SKIP() << "this CPU has no AVX-512 (F, VL, DQ, BW)";
+  const Surface surface = load("meshes/classic/c3d_cow.obj", false);
+  const std::size_t nf = std::min<std::size_t>(surface.face_count(), detail::kFaceChunk);
+  std::size_t segments = 0, centroid = 0, compared = 0;
+  for (int special = 0; special < 2; ++special) {
+    const auto records = random_records(surface, 0x5eed + std::uint64_t(special), special != 0);
+    for (std::size_t len : {nf, nf - 1, nf - 3, std::size_t{7}, std::size_t{9}, std::size_t{1}}) {
+      // A chunk's candidates: ascending, every face or every other one.
+      for (int stride = 1; stride <= 2; ++stride) {
+        std::vector<std::uint32_t> list;
+        for (std::size_t f = 0; f < nf && list.size() < len; f += std::size_t(stride))
+          list.push_back(static_cast<std::uint32_t>(f));
+        for (int batch : {16, 13}) {
+          for (int variant = 0; variant < 4; ++variant) {
+            SCOPED_TRACE(testing::Message() << "special " << special << " length " << list.size()
+                                            << " batch " << batch << " variant " << variant);
+            VectorCrossingOptions o;
+            o.test = variant == 1 ? ExtremumTest::none : ExtremumTest::perpendicular;
+            o.threshold = variant == 2 ? 0.0 : 0.3;
+            o.keep_raw_magnitude = variant == 3;
+            const KernelRun w = run_kernels(surface, records, list, batch, o, KernelPath::avx512);
+            const KernelRun a = run_kernels(surface, records, list, batch, o, KernelPath::avx2);
+            EXPECT_EQ(differing_kept(*w.kept, *a.kept), 0u);
+            EXPECT_EQ(differing_segments(w.segments, a.segments), 0u);
+            if (!special) {
+              const KernelRun p =
+                  run_kernels(surface, records, list, batch, o, KernelPath::portable);
+              EXPECT_EQ(differing_kept(*w.kept, *p.kept), 0u);
+              EXPECT_EQ(differing_segments(w.segments, p.segments), 0u);
+            }
+            ++compared;
+            segments += w.segments.size();
+            for (const auto& seg : w.segments) centroid += seg.kind[1] == EndKind::centroid;
+          }
+        }
+      }
+    }
+  }
+  std::printf("%zu runs, %zu segments, %zu ends at a centroid\n", compared, segments, centroid);
+  EXPECT_GT(segments, 10000u);
+  EXPECT_GT(centroid, 100u);
+#endif
 }
