@@ -104,8 +104,8 @@ namespace {
 // keep_if_crossed for n listed faces, eight at a time: the crossing bits
 // from the eight faces' records in lanes (the last group's missing lanes
 // repeat its first face and are masked off), and the faces with two
-// crossings compressed onto the end of `kept`, in order, with masked
-// stores (nothing written past the kept entries).
+// crossings compressed onto the end of `kept`, in order (writing eight
+// indices and eight bytes: KeptFaces has room for them).
 [[gnu::target(FABRICA_AVX512_ISA)]] void keep_crossed_avx512(const Face* faces,
                                                              const std::uint32_t* face, int n,
                                                              const double* E, const Topology& topo,
@@ -115,15 +115,15 @@ namespace {
   for (int k = 0; k < n; k += 8) {
     const int lanes = std::min(8, n - k);
     const auto live = static_cast<__mmask8>((1u << lanes) - 1);
-    const double* r[3][8];
-    for (int l = 0; l < 8; ++l) {
-      const std::uint32_t f = face[k + (l < lanes ? l : 0)];
-      const Face& fc = faces[f];
-      for (int c = 0; c < 3; ++c) r[c][l] = E + std::size_t(fc[c]) * kApparentStride;
-      if (l < lanes) __builtin_prefetch(topo.face_edge_row(f));
-    }
+    for (int l = 0; l < lanes; ++l) __builtin_prefetch(topo.face_edge_row(face[k + l]));
+    const Face* fc[8];
+    for (int l = 0; l < 8; ++l) fc[l] = &faces[face[k + (l < lanes ? l : 0)]];
     __m512d e[3][3];
-    for (int c = 0; c < 3; ++c) columns8x3(r[c], e[c]);
+    for (int c = 0; c < 3; ++c) {
+      const double* r[8];
+      for (int l = 0; l < 8; ++l) r[l] = E + std::size_t((*fc[l])[c]) * kApparentStride;
+      columns8x3(r, e[c]);
+    }
     const __mmask8 c01 = crossing8(e[0], e[1]), c12 = crossing8(e[1], e[2]),
                    c20 = crossing8(e[2], e[0]);
     const auto two = static_cast<__mmask8>(((c01 & c12) | (c12 & c20) | (c20 & c01)) & live);
@@ -133,10 +133,10 @@ namespace {
         _mm256_maskz_mov_epi32(c20, bit2));
     const __m256i idx = _mm256_maskz_loadu_epi32(live, face + k);
     const int m = std::popcount(static_cast<unsigned>(two));
-    const auto first_m = static_cast<__mmask8>((1u << m) - 1);
-    _mm_mask_storeu_epi8(kept.z + kept.n, first_m,
-                         _mm256_cvtepi32_epi8(_mm256_maskz_compress_epi32(two, z)));
-    _mm256_mask_storeu_epi32(kept.f + kept.n, first_m, _mm256_maskz_compress_epi32(two, idx));
+    _mm_storel_epi64(reinterpret_cast<__m128i*>(kept.z + kept.n),
+                     _mm256_cvtepi32_epi8(_mm256_maskz_compress_epi32(two, z)));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(kept.f + kept.n),
+                        _mm256_maskz_compress_epi32(two, idx));
     kept.n += static_cast<std::size_t>(m);
   }
 }

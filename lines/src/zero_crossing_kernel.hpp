@@ -353,8 +353,10 @@ inline bool two_crossings(unsigned z) {
 // The kept faces of a packed chunk (at least two crossing edges) and
 // their crossing bits.
 struct KeptFaces {
-  std::uint32_t f[detail::kFaceChunk + 8];  // + 8: keep_crossed_avx2 writes eight lanes
-  std::uint8_t z[detail::kFaceChunk];
+  // + 8: keep_crossed_avx2 writes eight indices, keep_crossed_avx512 eight
+  // indices and eight bytes past the kept entries.
+  std::uint32_t f[detail::kFaceChunk + 8];
+  std::uint8_t z[detail::kFaceChunk + 8];
   std::size_t n = 0;
 };
 
@@ -592,7 +594,8 @@ template <class Num>
 // each giving the bits of the AVX2 one it replaces; call only when
 // detail::cpu_has_avx512().
 #if defined(FABRICA_LINES_AVX512)
-/// keep_crossed_avx2 (no room past the kept entries needed).
+/// keep_crossed_avx2 (the last group masked: n need not be a multiple of
+/// eight).
 [[gnu::target(FABRICA_AVX512_ISA)]] void keep_crossed_avx512(const Face* faces,
                                                              const std::uint32_t* face, int n,
                                                              const double* E, const Topology& topo,
