@@ -537,7 +537,8 @@ TEST(LinesViewFields, Dt1q1FromTheTangentRingMatchesTheTopologyWalk) {
 // faces at a time, where the CPU has AVX-512) against the AVX2 ones and
 // the portable ones: every family's segments, every field, the same bits,
 // on three meshes (igea: the reference mesh, 268k faces), with and without
-// the maximum test and the threshold, in perspective and orthographic views.
+// the maximum test and the threshold, in perspective and orthographic views
+// (igea with the default options only).
 TEST(LinesViewFields, Avx512Avx2AndPortableKernelsGiveTheSameSegments) {
 #if !defined(FABRICA_LINES_AVX512)
   GTEST_SKIP() << "no AVX-512 kernels in this build";
