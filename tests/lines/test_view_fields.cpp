@@ -567,6 +567,13 @@ TEST(LinesViewFields, Avx512Avx2AndPortableKernelsGiveTheSameSegments) {
       const auto portable = xp.extract(c);
       detail::avx2_enabled() = had2;
       detail::avx512_enabled() = had512;
+      // The fields the kernels read (D_t1 q1 at every vertex, and the
+      // records) are the same on every path.
+      EXPECT_SAME_FIELD(x512.fields(), x2.fields(), dt1q1);
+      EXPECT_SAME_FIELD(x512.fields(), xp.fields(), dt1q1);
+      std::size_t records = 0;
+      EXPECT_EQ(differing_records(surface, x512.fields(), x2.fields(), records), 0u);
+      EXPECT_GT(records, 0u);
       ASSERT_EQ(wide.size(), avx2.size());
       ASSERT_EQ(wide.size(), portable.size());
       for (std::size_t k = 0; k < wide.size(); ++k) {
