@@ -157,7 +157,9 @@ struct Corner8 {
   Corner8 c;
   c.e[0] = col[0], c.e[1] = col[1], c.e[2] = col[2], c.d = col[3];
   c.q = col[4], c.p[0] = col[5], c.p[1] = col[6], c.p[2] = col[7];
-  c.id = _mm512_cvtepi32_pd(_mm256_load_si256(reinterpret_cast<const __m256i*>(v)));
+  // (built in registers: a vector load of the indices just stored one by
+  // one would wait for the stores, store forwarding failing)
+  c.id = _mm512_cvtepi32_pd(_mm256_setr_epi32(v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]));
   return c;
 }
 
