@@ -1,12 +1,15 @@
-// The AVX-512 apparent-ridge kernels (docs/algorithms.md §0 "ZC-vec"):
-// keep_crossed and kept_segments eight faces per register, each lane
-// evaluating the scalar kernel's operations in the same order (no FMA), so
-// the same bits as the AVX2 kernels (zero_crossing_avx2.cpp) and the
-// portable ones. Compiled for AVX-512 F, VL, DQ and BW by target attributes
-// (the inline helpers this file shares with the others stay x86-64
-// baseline, so the linker can never hand an AVX-512 copy of one to the
-// portable code), with -ffp-contract=off; called by zero_crossing_scalar.cpp
-// only when detail::cpu_has_avx512().
+// The AVX-512 apparent-ridge kernel (docs/algorithms.md §0 "ZC-vec"):
+// kept_segments eight faces per register, each lane evaluating the scalar
+// kernel's operations in the same order (no FMA), so the same bits as the
+// AVX2 kernel (zero_crossing_avx2.cpp) and the portable one. Compiled for
+// AVX-512 F, VL, DQ and BW by target attributes, not by flags for the whole
+// file: the inline helpers it shares with the other files (the headers'
+// and the standard library's) stay x86-64 baseline code, so the linker can
+// never keep an AVX-512 copy of one for the portable callers. Also
+// -ffp-contract=off (its targets have no FMA anyway). Called by
+// zero_crossing_scalar.cpp only when detail::cpu_has_avx512(). (An AVX-512
+// keep_crossed was no faster than the AVX2 one, and a four-vertex D_t1 q1
+// batch slower than the two-vertex one: docs/PERFORMANCE.md.)
 // GCC 12's AVX-512 intrinsics start from _mm512_undefined_pd(), which it
 // then reports as maybe uninitialized (GCC bug 105593, fixed in 13).
 #if defined(__GNUC__) && !defined(__clang__)
@@ -25,26 +28,6 @@
 namespace fabrica::zc {
 
 namespace {
-
-// Rows r[0..7] (four doubles each, from offset `off` of 32-byte aligned
-// records) as their first three columns, lane l from row l.
-[[gnu::target(FABRICA_AVX512_ISA), gnu::always_inline]] inline void columns8x3(
-    const double* const r[8], __m512d col[3]) {
-  __m512d pair[4];  // rows a and a + 4
-  for (int a = 0; a < 4; ++a)
-    pair[a] = _mm512_insertf64x4(_mm512_castpd256_pd512(_mm256_load_pd(r[a])),
-                                 _mm256_load_pd(r[a + 4]), 1);
-  const __m512d a0 = pair[0], a1 = pair[1], a2 = pair[2], a3 = pair[3];
-  // Per 128-bit lane: (r_a[0], r_b[0]) and (r_a[1], r_b[1]) etc.
-  const __m512d t0 = _mm512_unpacklo_pd(a0, a1), t1 = _mm512_unpackhi_pd(a0, a1);
-  const __m512d t2 = _mm512_unpacklo_pd(a2, a3);
-  const __m512i even = _mm512_setr_epi64(0, 1, 8, 9, 4, 5, 12, 13);
-  const __m512i odd = _mm512_setr_epi64(2, 3, 10, 11, 6, 7, 14, 15);
-  const __m512d t3 = _mm512_unpackhi_pd(a2, a3);
-  col[0] = _mm512_permutex2var_pd(t0, even, t2);
-  col[1] = _mm512_permutex2var_pd(t1, even, t3);
-  col[2] = _mm512_permutex2var_pd(t0, odd, t2);
-}
 
 // Eight 64-byte records (rows) as their eight columns, lane l from row l.
 [[gnu::target(FABRICA_AVX512_ISA), gnu::always_inline]] inline void transpose8x8(
@@ -92,56 +75,6 @@ namespace {
   return _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(a[0], bx), _mm512_mul_pd(a[1], by)),
                        _mm512_mul_pd(a[2], bz));
 }
-
-// Lanes where E_a·E_b <= 0.
-[[gnu::target(FABRICA_AVX512_ISA), gnu::always_inline]] inline __mmask8 crossing8(
-    const __m512d a[3], const __m512d b[3]) {
-  return _mm512_cmp_pd_mask(dot8(a, b[0], b[1], b[2]), _mm512_setzero_pd(), _CMP_LE_OQ);
-}
-
-}  // namespace
-
-// keep_if_crossed for n listed faces, eight at a time: the crossing bits
-// from the eight faces' records in lanes (the last group's missing lanes
-// repeat its first face and are masked off), and the faces with two
-// crossings compressed onto the end of `kept`, in order (writing eight
-// indices and eight bytes: KeptFaces has room for them).
-[[gnu::target(FABRICA_AVX512_ISA)]] void keep_crossed_avx512(const Face* faces,
-                                                             const std::uint32_t* face, int n,
-                                                             const double* E, const Topology& topo,
-                                                             KeptFaces& kept) {
-  const __m256i bit0 = _mm256_set1_epi32(1), bit1 = _mm256_set1_epi32(2),
-                bit2 = _mm256_set1_epi32(4);
-  for (int k = 0; k < n; k += 8) {
-    const int lanes = std::min(8, n - k);
-    const auto live = static_cast<__mmask8>((1u << lanes) - 1);
-    for (int l = 0; l < lanes; ++l) __builtin_prefetch(topo.face_edge_row(face[k + l]));
-    const Face* fc[8];
-    for (int l = 0; l < 8; ++l) fc[l] = &faces[face[k + (l < lanes ? l : 0)]];
-    __m512d e[3][3];
-    for (int c = 0; c < 3; ++c) {
-      const double* r[8];
-      for (int l = 0; l < 8; ++l) r[l] = E + std::size_t((*fc[l])[c]) * kApparentStride;
-      columns8x3(r, e[c]);
-    }
-    const __mmask8 c01 = crossing8(e[0], e[1]), c12 = crossing8(e[1], e[2]),
-                   c20 = crossing8(e[2], e[0]);
-    const auto two = static_cast<__mmask8>(((c01 & c12) | (c12 & c20) | (c20 & c01)) & live);
-    if (!two) continue;
-    const __m256i z = _mm256_or_si256(
-        _mm256_or_si256(_mm256_maskz_mov_epi32(c01, bit0), _mm256_maskz_mov_epi32(c12, bit1)),
-        _mm256_maskz_mov_epi32(c20, bit2));
-    const __m256i idx = _mm256_maskz_loadu_epi32(live, face + k);
-    const int m = std::popcount(static_cast<unsigned>(two));
-    _mm_storel_epi64(reinterpret_cast<__m128i*>(kept.z + kept.n),
-                     _mm256_cvtepi32_epi8(_mm256_maskz_compress_epi32(two, z)));
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(kept.f + kept.n),
-                        _mm256_maskz_compress_epi32(two, idx));
-    kept.n += static_cast<std::size_t>(m);
-  }
-}
-
-namespace {
 
 // One face corner's record (ApparentVertex) for eight faces, one lane
 // each: E (x, y, z), D_t1 q1, q1, position (x, y, z), and the vertex index.

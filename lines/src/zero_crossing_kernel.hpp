@@ -353,10 +353,8 @@ inline bool two_crossings(unsigned z) {
 // The kept faces of a packed chunk (at least two crossing edges) and
 // their crossing bits.
 struct KeptFaces {
-  // + 8: keep_crossed_avx2 writes eight indices, keep_crossed_avx512 eight
-  // indices and eight bytes past the kept entries.
-  std::uint32_t f[detail::kFaceChunk + 8];
-  std::uint8_t z[detail::kFaceChunk + 8];
+  std::uint32_t f[detail::kFaceChunk + 8];  // + 8: keep_crossed_avx2 writes eight lanes
+  std::uint8_t z[detail::kFaceChunk];
   std::size_t n = 0;
 };
 
@@ -590,17 +588,10 @@ template <class Num>
                                                 std::vector<LineSegment>& out);
 #endif
 
-// The AVX-512 kernels (zero_crossing_avx512.cpp), eight faces at a time,
-// each giving the bits of the AVX2 one it replaces; call only when
+// The AVX-512 kernel (zero_crossing_avx512.cpp), eight faces at a time,
+// giving the bits of the AVX2 one it replaces; call only when
 // detail::cpu_has_avx512().
 #if defined(FABRICA_LINES_AVX512)
-/// keep_crossed_avx2 (the last group masked: n need not be a multiple of
-/// eight).
-[[gnu::target(FABRICA_AVX512_ISA)]] void keep_crossed_avx512(const Face* faces,
-                                                             const std::uint32_t* face, int n,
-                                                             const double* E, const Topology& topo,
-                                                             KeptFaces& kept);
-
 /// kept_segments_avx2.
 [[gnu::target(FABRICA_AVX512_ISA)]] void kept_segments_avx512(const VectorInputs& in,
                                                               const double* field,

@@ -235,12 +235,6 @@ void packed_chunk(const VectorInputs& in, const double* field, const std::uint8_
   for (std::size_t j = 0; j < nc; j += kb) {
     const std::size_t je = std::min(nc, j + kb);
     prefetch(je, std::min(nc, je + kb));
-#if defined(FABRICA_LINES_AVX512)
-    if (detail::cpu_has_avx512()) {
-      keep_crossed_avx512(faces, cand + j, static_cast<int>(je - j), field, topo, kept);
-      continue;
-    }
-#endif
 #if defined(FABRICA_LINES_AVX2)
     if (detail::cpu_has_avx2()) {
       keep_crossed_avx2(faces, cand + j, static_cast<int>(je - j), field, topo, kept);

@@ -533,12 +533,12 @@ TEST(LinesViewFields, Dt1q1FromTheTangentRingMatchesTheTopologyWalk) {
   }
 }
 
-// The AVX-512 apparent-ridge kernels (keep_crossed and kept_segments, eight
-// faces at a time, where the CPU has AVX-512) against the AVX2 ones and
-// the portable ones: every family's segments, every field, the same bits,
-// on three meshes (igea: the reference mesh, 268k faces), with and without
-// the maximum test and the threshold, in perspective and orthographic views
-// (igea with the default options only).
+// The AVX-512 apparent-ridge kernel (kept_segments, eight faces at a time,
+// where the CPU has AVX-512) against the AVX2 and the portable ones: every
+// family's segments, every field, the same bits, on three meshes (igea: the
+// reference mesh, 268k faces), with and without the maximum test and the
+// threshold, in perspective and orthographic views (igea with the default
+// options only).
 TEST(LinesViewFields, Avx512Avx2AndPortableKernelsGiveTheSameSegments) {
 #if !defined(FABRICA_LINES_AVX512)
   GTEST_SKIP() << "no AVX-512 kernels in this build";
@@ -649,9 +649,7 @@ KernelRun run_kernels(const Surface& surface, const std::vector<ApparentVertex>&
   zc::KeptFaces& kept = *r.kept;
   for (std::size_t j = 0; j < list.size(); j += std::size_t(batch)) {
     const int n = static_cast<int>(std::min(list.size() - j, std::size_t(batch)));
-    if (path == KernelPath::avx512)
-      zc::keep_crossed_avx512(faces, list.data() + j, n, field, topo, kept);
-    else if (path == KernelPath::avx2)
+    if (path != KernelPath::portable)
       zc::keep_crossed_avx2(faces, list.data() + j, n, field, topo, kept);
     else
       for (int k = 0; k < n; ++k)
@@ -685,13 +683,15 @@ std::size_t differing_kept(const zc::KeptFaces& a, const zc::KeptFaces& b) {
 }  // namespace
 #endif
 
-// The kernels alone on random records with the awkward values (exact and
-// signed zeros, subnormals, huge products; infinities and NaNs against the
-// AVX2 kernels), lists of every length mod 8 and batches of 16 (as the
-// packed path calls them) and of 13: the AVX-512 ones give the AVX2 and
-// portable kernels' kept faces, crossing bits and segments, bit for bit,
-// with and without the maximum test, the threshold and the raw magnitude.
-TEST(LinesViewFields, Avx512KernelsMatchOnAwkwardRecords) {
+// The segment kernel alone on random records with the awkward values
+// (exact and signed zeros, subnormals, huge products; infinities and NaNs
+// against the AVX2 kernel), lists of every length mod 8 and batches of 16
+// (as the packed path calls keep_crossed) and of 13: the AVX-512 kernel
+// gives the AVX2 and portable kernels' segments, bit for bit (from the same
+// kept faces, whose AVX2 and portable lists and crossing bits are compared
+// too), with and without the maximum test, the threshold and the raw
+// magnitude; every count of kept faces mod 8 occurs.
+TEST(LinesViewFields, Avx512KernelMatchesOnAwkwardRecords) {
 #if !defined(FABRICA_LINES_AVX512)
   GTEST_SKIP() << "no AVX-512 kernels in this build";
 #else
@@ -699,9 +699,11 @@ TEST(LinesViewFields, Avx512KernelsMatchOnAwkwardRecords) {
   const Surface surface = load("meshes/classic/c3d_cow.obj", false);
   const std::size_t nf = std::min<std::size_t>(surface.face_count(), detail::kFaceChunk);
   std::size_t segments = 0, centroid = 0, compared = 0;
+  unsigned tails = 0;  // bit r: a run kept r faces mod 8
   for (int special = 0; special < 2; ++special) {
     const auto records = random_records(surface, 0x5eed + std::uint64_t(special), special != 0);
-    for (std::size_t len : {nf, nf - 1, nf - 3, std::size_t{7}, std::size_t{9}, std::size_t{1}}) {
+    for (std::size_t len : {nf, nf - 1, nf - 3, std::size_t{1}, std::size_t{7}, std::size_t{9},
+                            std::size_t{30}, std::size_t{61}, std::size_t{200}}) {
       // A chunk's candidates: ascending, every face or every other one.
       for (int stride = 1; stride <= 2; ++stride) {
         std::vector<std::uint32_t> list;
@@ -726,6 +728,7 @@ TEST(LinesViewFields, Avx512KernelsMatchOnAwkwardRecords) {
               EXPECT_EQ(differing_segments(w.segments, p.segments), 0u);
             }
             ++compared;
+            tails |= 1u << (w.kept->n % 8);
             segments += w.segments.size();
             for (const auto& seg : w.segments) centroid += seg.kind[1] == EndKind::centroid;
           }
@@ -736,5 +739,6 @@ TEST(LinesViewFields, Avx512KernelsMatchOnAwkwardRecords) {
   std::printf("%zu runs, %zu segments, %zu ends at a centroid\n", compared, segments, centroid);
   EXPECT_GT(segments, 10000u);
   EXPECT_GT(centroid, 100u);
+  EXPECT_EQ(tails, 0xFFu);
 #endif
 }
