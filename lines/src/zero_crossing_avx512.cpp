@@ -140,7 +140,297 @@ struct RidgeLanes8 {
   alignas(32) std::int32_t slot_a[8], slot_b[8];
 };
 
+// a[v[l]] in lane l.
+[[gnu::target(FABRICA_AVX512_ISA), gnu::always_inline]] inline __m512d gather8(const double* a,
+                                                                               const int v[8]) {
+  return _mm512_set_pd(a[v[7]], a[v[6]], a[v[5]], a[v[4]], a[v[3]], a[v[2]], a[v[1]], a[v[0]]);
+}
+
+// The test numerator at the lanes' vertices, as Num computes it.
+[[gnu::target(FABRICA_AVX512_ISA), gnu::always_inline]] inline __m512d num8(const StoredNum& n,
+                                                                            const int v[8]) {
+  return gather8(n.n, v);
+}
+[[gnu::target(FABRICA_AVX512_ISA), gnu::always_inline]] inline __m512d num8(const ShiftedNum& n,
+                                                                            const int v[8]) {
+  __m512d sc = gather8(n.sc, v);
+  if (n.negate) sc = _mm512_xor_pd(sc, _mm512_set1_pd(-0.0));
+  return _mm512_sub_pd(sc, _mm512_mul_pd(_mm512_set1_pd(n.shift), gather8(n.den, v)));
+}
+
+// fade_strength per lane (fade > 0), as floats.
+[[gnu::target(FABRICA_AVX512_ISA), gnu::always_inline]] inline __m256 fade_strength8(__m512d num,
+                                                                                     __m512d den,
+                                                                                     __m512d fade) {
+  const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0);
+  const __m512d d = _mm512_add_pd(_mm512_mul_pd(den, fade), num);
+  const __m512d q = _mm512_div_pd(num, d);
+  __m512d r =
+      when8(_mm512_cmp_pd_mask(_mm512_abs_pd(q), _mm512_set1_pd(HUGE_VAL), _CMP_LT_OQ), q, zero);
+  r = when8(_mm512_cmp_pd_mask(r, zero, _CMP_LT_OQ), zero, r);
+  r = when8(_mm512_cmp_pd_mask(one, r, _CMP_LT_OQ), one, r);
+  r = when8(_mm512_cmp_pd_mask(d, zero, _CMP_EQ_OQ), zero, r);
+  return _mm512_cvtpd_ps(r);
+}
+
+// lone_sign per lane.
+[[gnu::target(FABRICA_AVX512_ISA), gnu::always_inline]] inline __mmask8 lone_sign8(__m512d a,
+                                                                                   __m512d b,
+                                                                                   __m512d c) {
+  const __m512d zero = _mm512_setzero_pd();
+  const __mmask8 lo = _mm512_cmp_pd_mask(a, zero, _CMP_LT_OQ) &
+                      _mm512_cmp_pd_mask(b, zero, _CMP_GE_OQ) &
+                      _mm512_cmp_pd_mask(c, zero, _CMP_GE_OQ);
+  const __mmask8 hi = _mm512_cmp_pd_mask(a, zero, _CMP_GT_OQ) &
+                      _mm512_cmp_pd_mask(b, zero, _CMP_LE_OQ) &
+                      _mm512_cmp_pd_mask(c, zero, _CMP_LE_OQ);
+  return lo | hi;
+}
+
+// x rotated by k per lane (r1: k = 1, r2: k = 2, else 0).
+[[gnu::target(FABRICA_AVX512_ISA), gnu::always_inline]] inline void rotate8(__mmask8 r1,
+                                                                            __mmask8 r2,
+                                                                            const __m512d x[3],
+                                                                            __m512d out[3]) {
+  for (int o = 0; o < 3; ++o) out[o] = select8(r1, r2, x[o], x[(o + 1) % 3], x[(o + 2) % 3]);
+}
+
+// Eight faces' corners in lanes, rotated so that corner o is corner k + o
+// (mod 3) of the face, k its first lone-sign corner: the value, vertex
+// index, corner number, test numerator and denominator.
+struct Corners8 {
+  __m512d s[3], id[3], corner[3], na[3], da[3];
+};
+
+// scalar_edge from corner 0 to corner o (of the rotated corners): the ends
+// ordered by vertex index (corners lo, hi), t from the lower (u = 1 - t),
+// the ends' test numerators and denominators.
+struct Edge8 {
+  __m512d lo, hi, t, u, n_lo, n_hi, d_lo, d_hi;
+};
+[[gnu::target(FABRICA_AVX512_ISA), gnu::always_inline]] inline Edge8 edge8(const Corners8& c,
+                                                                           int o) {
+  const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0);
+  const __mmask8 sw = _mm512_cmp_pd_mask(c.id[0], c.id[o], _CMP_GT_OQ);
+  const __m512d va = when8(sw, c.s[o], c.s[0]), vb = when8(sw, c.s[0], c.s[o]);
+  Edge8 e;
+  e.lo = when8(sw, c.corner[o], c.corner[0]);
+  e.hi = when8(sw, c.corner[0], c.corner[o]);
+  const __m512d d = _mm512_sub_pd(va, vb);
+  __m512d t =
+      _mm512_mask_div_pd(_mm512_set1_pd(0.5), _mm512_cmp_pd_mask(d, zero, _CMP_NEQ_UQ), va, d);
+  t = when8(_mm512_cmp_pd_mask(t, zero, _CMP_LT_OQ), zero, t);
+  t = when8(_mm512_cmp_pd_mask(one, t, _CMP_LT_OQ), one, t);
+  e.t = t;
+  e.u = _mm512_sub_pd(one, t);
+  e.n_lo = when8(sw, c.na[o], c.na[0]);
+  e.n_hi = when8(sw, c.na[0], c.na[o]);
+  e.d_lo = when8(sw, c.da[o], c.da[0]);
+  e.d_hi = when8(sw, c.da[0], c.da[o]);
+  return e;
+}
+
+// An edge end's first two barycentrics per lane (u at corner lo, t at
+// corner hi, 0 at the third; the third is never stored).
+[[gnu::target(FABRICA_AVX512_ISA), gnu::always_inline]] inline void edge_bary8(const Edge8& e,
+                                                                               __m512d bary[2]) {
+  const __m512d zero = _mm512_setzero_pd();
+  for (int k = 0; k < 2; ++k) {
+    const __m512d ck = _mm512_set1_pd(double(k));
+    bary[k] = when8(_mm512_cmp_pd_mask(e.lo, ck, _CMP_EQ_OQ), e.u,
+                    when8(_mm512_cmp_pd_mask(e.hi, ck, _CMP_EQ_OQ), e.t, zero));
+  }
+}
+
+// The four points of scalar_faces_avx512's lanes (p1, the clips at z1 and
+// z2, p2): the edge ends' fractions t (points 0 and 3) and elements (of
+// the lane being written), the clip points' first two barycentrics per
+// lane (points 1 and 2), strengths.
+struct ScalarLanes8 {
+  alignas(64) double t[4][8], bary[4][2][8];
+  alignas(32) float st[4][8];
+  std::int32_t el[4] = {-1, -1, -1, -1};
+  bool fade;
+};
+
+// Segment (points a, b) of lane l of face `face`, converted into the lean
+// LineSegment in place by emplace_back, as emit_segment writes it.
+struct LaneSegment8 {
+  const ScalarLanes8& lp;
+  std::int32_t face;
+  int l, a, b;
+  static bool on_edge(int i) { return i == 0 || i == 3; }
+  SegmentEnd end(int i) const {
+    SegmentEnd e;
+    if (on_edge(i)) {
+      e.t = lp.t[i][l];
+      e.element = lp.el[i];
+    } else {
+      e.bary[0] = static_cast<float>(lp.bary[i][0][l]);
+      e.bary[1] = static_cast<float>(lp.bary[i][1][l]);
+      e.element = -1;
+    }
+    e.strength = lp.fade ? lp.st[i][l] : 1.0f;
+    return e;
+  }
+  static EndKind kind(int i) { return on_edge(i) ? EndKind::edge : EndKind::interior; }
+  operator LineSegment() const { return LineSegment{face, {kind(a), kind(b)}, {end(a), end(b)}}; }
+};
+
 }  // namespace
+
+// scalar_faces_avx2 eight faces at a time: each lane evaluates
+// scalar_face_body's expressions in the same operations (so the same
+// bits); the segments are then written lane by lane, in face order.
+template <class Num>
+[[gnu::target(FABRICA_AVX512_ISA)]] void scalar_faces_avx512(const ScalarInputs& in, const Num& num,
+                                                             const std::size_t* list, int n,
+                                                             std::vector<LineSegment>& out) {
+  const Face* faces = in.m.faces;
+  const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0);
+  const bool test = in.test, fade = in.fade > 0.0;
+  const __m512d vfade = _mm512_set1_pd(in.fade);
+  const Topology& topo = *in.m.topo;
+  for (int j = 0; j < n; j += 8) {
+    const int lanes = std::min(8, n - j);
+    const auto in_group = static_cast<__mmask8>((1u << lanes) - 1);
+    int v[3][8];  // unused lanes repeat lane 0
+    for (int l = 0; l < 8; ++l) {
+      const Face& fc = faces[list[j + (l < lanes ? l : 0)]];
+      for (int c = 0; c < 3; ++c) v[c][l] = fc[c];
+    }
+    __m512d s[3], id[3];
+    for (int c = 0; c < 3; ++c) {
+      s[c] = gather8(in.val, v[c]);
+      id[c] = _mm512_cvtepi32_pd(_mm256_setr_epi32(v[c][0], v[c][1], v[c][2], v[c][3], v[c][4],
+                                                   v[c][5], v[c][6], v[c][7]));
+    }
+    // lone_sign at corner 0, 1, 2; the first one is k.
+    const __mmask8 l0 = lone_sign8(s[0], s[1], s[2]), l1 = lone_sign8(s[1], s[2], s[0]);
+    const __mmask8 l2 = lone_sign8(s[2], s[0], s[1]);
+    __mmask8 live = (l0 | l1 | l2) & in_group;
+    const auto r1 = static_cast<__mmask8>(~l0 & l1);         // k = 1
+    const auto r2 = static_cast<__mmask8>(~(l0 | l1) & l2);  // k = 2
+    if (in.cull) {
+      __mmask8 culled = 0xFF;
+      for (int c = 0; c < 3; ++c)
+        culled &= _mm512_cmp_pd_mask(gather8(in.cull, v[c]), zero, _CMP_LE_OQ);
+      live &= static_cast<__mmask8>(~culled);
+    }
+    __m512d na[3] = {one, one, one}, da[3] = {one, one, one};
+    if (test) {
+      for (int c = 0; c < 3; ++c) na[c] = num8(num, v[c]);
+      __mmask8 reject;
+      if (!in.den) {
+        reject = 0xFF;
+        for (int c = 0; c < 3; ++c) reject &= _mm512_cmp_pd_mask(na[c], zero, _CMP_LE_OQ);
+      } else {
+        __mmask8 below = 0xFF, above = 0xFF;
+        for (int c = 0; c < 3; ++c) {
+          da[c] = gather8(in.den, v[c]);
+          below &= _mm512_cmp_pd_mask(na[c], zero, _CMP_LE_OQ) &
+                   _mm512_cmp_pd_mask(da[c], zero, _CMP_GE_OQ);
+          above &= _mm512_cmp_pd_mask(na[c], zero, _CMP_GE_OQ) &
+                   _mm512_cmp_pd_mask(da[c], zero, _CMP_LE_OQ);
+        }
+        reject = below | above;
+      }
+      live &= static_cast<__mmask8>(~reject);
+    }
+    if (!live) continue;
+    Corners8 cs;
+    rotate8(r1, r2, s, cs.s);
+    rotate8(r1, r2, id, cs.id);
+    const __m512d corner[3] = {zero, one, _mm512_set1_pd(2.0)};
+    rotate8(r1, r2, corner, cs.corner);
+    // (ones, not rotated, without a test function or denominator)
+    for (int o = 0; o < 3; ++o) cs.na[o] = cs.da[o] = one;
+    if (test) rotate8(r1, r2, na, cs.na);
+    if (test && in.den) rotate8(r1, r2, da, cs.da);
+    const Edge8 e1 = edge8(cs, 1), e2 = edge8(cs, 2);
+    __m512d num1 = one, num2 = one, den1 = one, den2 = one, z1 = zero, z2 = zero;
+    __mmask8 valid1 = 0xFF;
+    if (test) {
+      num1 = _mm512_add_pd(_mm512_mul_pd(e1.u, e1.n_lo), _mm512_mul_pd(e1.t, e1.n_hi));
+      num2 = _mm512_add_pd(_mm512_mul_pd(e2.u, e2.n_lo), _mm512_mul_pd(e2.t, e2.n_hi));
+      if (in.den) {
+        den1 = _mm512_add_pd(_mm512_mul_pd(e1.u, e1.d_lo), _mm512_mul_pd(e1.t, e1.d_hi));
+        den2 = _mm512_add_pd(_mm512_mul_pd(e2.u, e2.d_lo), _mm512_mul_pd(e2.t, e2.d_hi));
+      }
+      const __mmask8 n1p = _mm512_cmp_pd_mask(num1, zero, _CMP_GE_OQ);
+      const __mmask8 n2p = _mm512_cmp_pd_mask(num2, zero, _CMP_GE_OQ);
+      const __mmask8 d1p = _mm512_cmp_pd_mask(den1, zero, _CMP_GE_OQ);
+      const __mmask8 d2p = _mm512_cmp_pd_mask(den2, zero, _CMP_GE_OQ);
+      valid1 = static_cast<__mmask8>(~(n1p ^ d1p));
+      const __m512d a = _mm512_maskz_div_pd(n1p ^ n2p, num1, _mm512_sub_pd(num1, num2));
+      const __m512d b = _mm512_maskz_div_pd(d1p ^ d2p, den1, _mm512_sub_pd(den1, den2));
+      const __mmask8 a_zero = _mm512_cmp_pd_mask(a, zero, _CMP_EQ_OQ);
+      const __mmask8 b_first = _mm512_cmp_pd_mask(b, a, _CMP_LT_OQ);
+      z1 = when8(a_zero, b, when8(b_first, b, a));
+      z2 = when8(a_zero, zero, when8(b_first, a, b));
+      const __mmask8 none = static_cast<__mmask8>(~valid1) &
+                            _mm512_cmp_pd_mask(z1, zero, _CMP_EQ_OQ) &
+                            _mm512_cmp_pd_mask(z2, zero, _CMP_EQ_OQ);
+      live &= static_cast<__mmask8>(~none);
+    }
+    if (!live) continue;
+    // The ends' barycentrics (u at lo, t at hi, 0 at the third corner),
+    // the clip points at z1 and z2, and the strengths.
+    __m512d b1[2], b2[2];
+    edge_bary8(e1, b1);
+    edge_bary8(e2, b2);
+    ScalarLanes8 lp;
+    alignas(64) double zv[2][8];
+    alignas(32) std::int32_t slot[2][8];
+    _mm256_store_si256(
+        reinterpret_cast<__m256i*>(slot[0]),
+        _mm512_cvtpd_epi32(_mm512_sub_pd(_mm512_sub_pd(_mm512_set1_pd(3.0), e1.lo), e1.hi)));
+    _mm256_store_si256(
+        reinterpret_cast<__m256i*>(slot[1]),
+        _mm512_cvtpd_epi32(_mm512_sub_pd(_mm512_sub_pd(_mm512_set1_pd(3.0), e2.lo), e2.hi)));
+    lp.fade = fade;
+    _mm512_store_pd(lp.t[0], e1.t);
+    _mm512_store_pd(lp.t[3], e2.t);
+    const __m512d zs[2] = {z1, z2};
+    for (int i = 0; i < 2; ++i) {
+      const __m512d z = zs[i], u = _mm512_sub_pd(one, z);
+      for (int k = 0; k < 2; ++k)  // the third is 1 - the others (segments.hpp)
+        _mm512_store_pd(lp.bary[1 + i][k],
+                        _mm512_add_pd(_mm512_mul_pd(u, b1[k]), _mm512_mul_pd(z, b2[k])));
+      _mm512_store_pd(zv[i], z);
+      if (fade)
+        _mm256_store_ps(
+            lp.st[1 + i],
+            fade_strength8(_mm512_add_pd(_mm512_mul_pd(u, num1), _mm512_mul_pd(z, num2)),
+                           _mm512_add_pd(_mm512_mul_pd(u, den1), _mm512_mul_pd(z, den2)), vfade));
+    }
+    if (fade) {
+      _mm256_store_ps(lp.st[0], fade_strength8(num1, den1, vfade));
+      _mm256_store_ps(lp.st[3], fade_strength8(num2, den2, vfade));
+    }
+    for (unsigned emit = live; emit; emit &= emit - 1) {
+      const int l = std::countr_zero(emit);
+      const std::size_t f = list[j + l];
+      lp.el[0] = topo.face_edge(f, slot[0][l]);
+      lp.el[3] = topo.face_edge(f, slot[1][l]);
+      // emit_points' order: p1 when valid, the clip points at the nonzero
+      // ones of z1, z2, p2 when the count is odd; consumed in pairs.
+      int pts[4], npts = 0;
+      if (valid1 >> l & 1) pts[npts++] = 0;
+      if (zv[0][l] != 0.0) pts[npts++] = 1;
+      if (zv[1][l] != 0.0) pts[npts++] = 2;
+      if (npts != 2) pts[npts++] = 3;
+      const auto fi = static_cast<std::int32_t>(f);
+      for (int i = 0; i + 1 < npts; i += 2)
+        out.emplace_back(LaneSegment8{lp, fi, l, pts[i], pts[i + 1]});
+    }
+  }
+}
+
+template void scalar_faces_avx512<StoredNum>(const ScalarInputs&, const StoredNum&,
+                                             const std::size_t*, int, std::vector<LineSegment>&);
+template void scalar_faces_avx512<ShiftedNum>(const ScalarInputs&, const ShiftedNum&,
+                                              const std::size_t*, int, std::vector<LineSegment>&);
 
 // kept_segments_avx2 eight faces at a time: each lane evaluates
 // vector_segment<false>'s expressions in the same operations (so the same

@@ -588,10 +588,16 @@ template <class Num>
                                                 std::vector<LineSegment>& out);
 #endif
 
-// The AVX-512 kernel (zero_crossing_avx512.cpp), eight faces at a time,
-// giving the bits of the AVX2 one it replaces; call only when
+// The AVX-512 kernels (zero_crossing_avx512.cpp), eight faces at a time,
+// each giving the bits of the AVX2 one it replaces; call only when
 // detail::cpu_has_avx512().
 #if defined(FABRICA_LINES_AVX512)
+/// scalar_faces_avx2 (Num: StoredNum or ShiftedNum).
+template <class Num>
+[[gnu::target(FABRICA_AVX512_ISA)]] void scalar_faces_avx512(const ScalarInputs& in, const Num& num,
+                                                             const std::size_t* list, int n,
+                                                             std::vector<LineSegment>& out);
+
 /// kept_segments_avx2.
 [[gnu::target(FABRICA_AVX512_ISA)]] void kept_segments_avx512(const VectorInputs& in,
                                                               const double* field,

@@ -66,7 +66,12 @@ struct ScalarBatch {
 #if defined(FABRICA_LINES_AVX2)
     // The SIMD kernel tests every face itself, the test function included.
     if (!in.mag && detail::cpu_has_avx2()) {
-      scalar_faces_avx2(in, num, batch.face, batch.n, part);
+#if defined(FABRICA_LINES_AVX512)
+      if (detail::cpu_has_avx512())
+        scalar_faces_avx512(in, num, batch.face, batch.n, part);
+      else
+#endif
+        scalar_faces_avx2(in, num, batch.face, batch.n, part);
       batch.n = 0;
       return;
     }
