@@ -1,7 +1,9 @@
-// The AVX-512 apparent-ridge kernel (docs/algorithms.md §0 "ZC-vec"):
-// kept_segments eight faces per register, each lane evaluating the scalar
-// kernel's operations in the same order (no FMA), so the same bits as the
-// AVX2 kernel (zero_crossing_avx2.cpp) and the portable one. Compiled for
+// The AVX-512 zero-crossing kernels (docs/algorithms.md §0 "ZC" and
+// "ZC-vec"): the scalar kernel's listed faces (scalar_faces: contours,
+// suggestive contours, highlights) and the apparent ridges' segments
+// (kept_segments), eight faces per register, each lane evaluating the
+// scalar kernel's operations in the same order (no FMA), so the same bits
+// as the AVX2 kernels (zero_crossing_avx2.cpp) and the portable ones. Compiled for
 // AVX-512 F, VL, DQ and BW by target attributes, not by flags for the whole
 // file: the inline helpers it shares with the other files (the headers'
 // and the standard library's) stay x86-64 baseline code, so the linker can

@@ -5,7 +5,9 @@
 // (zero_crossing_scalar.cpp: sign-byte scans, batches, the fused contour +
 // suggestive scan, the packed apparent-ridge path) and the AVX2 kernels
 // (zero_crossing_avx2.cpp: four faces per register, same operations in the
-// same order, so the same bits; called only when the CPU has AVX2).
+// same order, so the same bits; called only when the CPU has AVX2), and two
+// of them for AVX-512 (zero_crossing_avx512.cpp: eight faces per register,
+// the same bits again; called only when the CPU has AVX-512).
 #pragma once
 
 #include <algorithm>

@@ -818,9 +818,9 @@ TEST(LinesViewFields, Avx512ScalarKernelMatchesOnAwkwardValues) {
       };
       const zc::StoredNum stored{num.data()};
       const zc::ShiftedNum shifted{sc.data(), den.data(), variant == 3, 0.375};
-      for (std::size_t len :
-           {list.size(), list.size() - 1, list.size() - 5, std::size_t{3}, std::size_t{21},
-            std::size_t{46}, std::size_t{71}, std::size_t{100}}) {
+      for (std::size_t len : {list.size(), list.size() - 1, list.size() - 5, std::size_t{3},
+                              std::size_t{8}, std::size_t{17}, std::size_t{21}, std::size_t{26},
+                              std::size_t{46}, std::size_t{71}, std::size_t{100}}) {
         for (int which = 0; which < 2; ++which) {
           const auto w = which ? run(shifted, 2, len) : run(stored, 2, len);
           const auto a = which ? run(shifted, 1, len) : run(stored, 1, len);
