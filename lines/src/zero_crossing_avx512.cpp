@@ -244,41 +244,6 @@ struct Edge8 {
   }
 }
 
-// The four points of scalar_faces_avx512's lanes (p1, the clips at z1 and
-// z2, p2): the edge ends' fractions t (points 0 and 3) and elements (of
-// the lane being written), the clip points' first two barycentrics per
-// lane (points 1 and 2), strengths.
-struct ScalarLanes8 {
-  alignas(64) double t[4][8], bary[4][2][8];
-  alignas(32) float st[4][8];
-  std::int32_t el[4] = {-1, -1, -1, -1};
-  bool fade;
-};
-
-// Segment (points a, b) of lane l of face `face`, converted into the lean
-// LineSegment in place by emplace_back, as emit_segment writes it.
-struct LaneSegment8 {
-  const ScalarLanes8& lp;
-  std::int32_t face;
-  int l, a, b;
-  static bool on_edge(int i) { return i == 0 || i == 3; }
-  SegmentEnd end(int i) const {
-    SegmentEnd e;
-    if (on_edge(i)) {
-      e.t = lp.t[i][l];
-      e.element = lp.el[i];
-    } else {
-      e.bary[0] = static_cast<float>(lp.bary[i][0][l]);
-      e.bary[1] = static_cast<float>(lp.bary[i][1][l]);
-      e.element = -1;
-    }
-    e.strength = lp.fade ? lp.st[i][l] : 1.0f;
-    return e;
-  }
-  static EndKind kind(int i) { return on_edge(i) ? EndKind::edge : EndKind::interior; }
-  operator LineSegment() const { return LineSegment{face, {kind(a), kind(b)}, {end(a), end(b)}}; }
-};
-
 }  // namespace
 
 // scalar_faces_avx2 eight faces at a time: each lane evaluates
@@ -381,7 +346,7 @@ template <class Num>
     __m512d b1[2], b2[2];
     edge_bary8(e1, b1);
     edge_bary8(e2, b2);
-    ScalarLanes8 lp;
+    LanePoints<8> lp;
     alignas(64) double zv[2][8];
     alignas(32) std::int32_t slot[2][8];
     _mm256_store_si256(
@@ -410,22 +375,7 @@ template <class Num>
       _mm256_store_ps(lp.st[0], fade_strength8(num1, den1, vfade));
       _mm256_store_ps(lp.st[3], fade_strength8(num2, den2, vfade));
     }
-    for (unsigned emit = live; emit; emit &= emit - 1) {
-      const int l = std::countr_zero(emit);
-      const std::size_t f = list[j + l];
-      lp.el[0] = topo.face_edge(f, slot[0][l]);
-      lp.el[3] = topo.face_edge(f, slot[1][l]);
-      // emit_points' order: p1 when valid, the clip points at the nonzero
-      // ones of z1, z2, p2 when the count is odd; consumed in pairs.
-      int pts[4], npts = 0;
-      if (valid1 >> l & 1) pts[npts++] = 0;
-      if (zv[0][l] != 0.0) pts[npts++] = 1;
-      if (zv[1][l] != 0.0) pts[npts++] = 2;
-      if (npts != 2) pts[npts++] = 3;
-      const auto fi = static_cast<std::int32_t>(f);
-      for (int i = 0; i + 1 < npts; i += 2)
-        out.emplace_back(LaneSegment8{lp, fi, l, pts[i], pts[i + 1]});
-    }
+    emit_lanes(lp, live, valid1, zv, slot, list + j, topo, out);
   }
 }
 

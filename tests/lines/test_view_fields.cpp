@@ -171,6 +171,22 @@ void expect_same_light_pass(const Surface& surface, const LinePrecompute& pre, c
 Surface load(const char* rel, bool degenerate) {
   return test::load_for_lines(rel, degenerate);
 }
+
+// Every family, for the kernels' comparisons: with the defaults (variant
+// 0); without the maximum test, and the scalar kernel without test
+// function, fade or culling (1); without the apparent-ridge threshold (2).
+LineOptions kernel_variant(int variant) {
+  LineOptions o;
+  o.families = all_families();
+  if (variant == 1) {
+    o.apparent.maximum_test = false;
+    o.contour.trim_concave = false;
+    o.suggestive.fade = o.highlight.fade = 0.0;
+    o.suggestive.cull_backfaces = o.highlight.cull_backfaces = false;
+  }
+  if (variant == 2) o.apparent.threshold = 0.0;
+  return o;
+}
 using test::camera_towards;
 
 }  // namespace
@@ -285,16 +301,7 @@ TEST(LinesViewFields, SimdAndPortableKernelsGiveTheSameSegments) {
     const Surface surface = load(rel, true);
     Camera c = camera_towards(surface, Vec3(-0.4, 0.3, 1.0));
     for (int variant = 0; variant < 3; ++variant) {
-      LineOptions o;
-      o.families = all_families();
-      if (variant == 1) {
-        o.apparent.maximum_test = false;
-        // The scalar kernel without test function, fade or culling.
-        o.contour.trim_concave = false;
-        o.suggestive.fade = o.highlight.fade = 0.0;
-        o.suggestive.cull_backfaces = o.highlight.cull_backfaces = false;
-      }
-      if (variant == 2) o.apparent.threshold = 0.0;
+      const LineOptions o = kernel_variant(variant);
       LineExtractor simd_x(surface, o), portable_x(surface, o);
       const auto simd = simd_x.extract(c);
       const bool had = detail::avx2_enabled().exchange(false);
@@ -563,16 +570,7 @@ TEST(LinesViewFields, Avx512Avx2AndPortableKernelsGiveTheSameSegments) {
     for (int variant = 0; variant < (big ? 1 : 4); ++variant) {
       SCOPED_TRACE(variant);
       Camera c = camera_towards(surface, Vec3(0.5, -0.2, 1.0));
-      LineOptions o;
-      o.families = all_families();
-      if (variant == 1) {
-        o.apparent.maximum_test = false;
-        // The scalar kernel without test function, fade or culling.
-        o.contour.trim_concave = false;
-        o.suggestive.fade = o.highlight.fade = 0.0;
-        o.suggestive.cull_backfaces = o.highlight.cull_backfaces = false;
-      }
-      if (variant == 2) o.apparent.threshold = 0.0;
+      const LineOptions o = kernel_variant(variant);
       if (variant == 3) c.projection = Projection::orthographic;
       LineExtractor x512(surface, o), x2(surface, o), xp(surface, o);
       const auto wide = x512.extract(c);
