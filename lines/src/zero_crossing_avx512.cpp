@@ -13,8 +13,10 @@
 // keep_crossed was no faster than the AVX2 one, and a four-vertex D_t1 q1
 // batch slower than the two-vertex one: docs/PERFORMANCE.md.)
 // GCC 12's AVX-512 intrinsics start from _mm512_undefined_pd(), which it
-// then reports as maybe uninitialized (GCC bug 105593, fixed in 13).
+// then reports as maybe uninitialized (GCC bug 105593, fixed in 13); only
+// in this file (popped at its end, for unity builds).
 #if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #endif
 
@@ -516,4 +518,8 @@ template void scalar_faces_avx512<ShiftedNum>(const ScalarInputs&, const Shifted
 
 }  // namespace fabrica::zc
 
+#endif
+
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic pop
 #endif
