@@ -11,20 +11,51 @@
 #include <immintrin.h>
 
 #include <atomic>
+#include <cstdlib>
+#include <cstring>
 
 #include "fabrica/core/camera.hpp"
 #define FABRICA_LINES_AVX2 1
+// The AVX-512 kernels (zero_crossing_avx512.cpp): compiled for these
+// extensions by target attributes, called only when cpu_has_avx512().
+#define FABRICA_LINES_AVX512 1
+#define FABRICA_AVX512_ISA "avx512f,avx512vl,avx512dq,avx512bw"
 
 namespace fabrica::detail {
+
+/// The widest SIMD passes the environment allows: FABRICA_LINES_SIMD=portable
+/// (none), avx2 (no AVX-512) or avx512; unset or anything else: no cap
+/// (A/B timings of one binary; the CPU still decides what it has).
+inline int lines_simd_cap() {
+  const char* s = std::getenv("FABRICA_LINES_SIMD");
+  if (s && std::strcmp(s, "portable") == 0) return 0;
+  if (s && std::strcmp(s, "avx2") == 0) return 1;
+  return 2;
+}
 
 /// Whether the AVX2 passes run: whether the CPU has AVX2, unless set to
 /// false (tests compare the AVX2 passes with the portable ones this way).
 inline std::atomic<bool>& avx2_enabled() {
-  static std::atomic<bool> on{__builtin_cpu_supports("avx2") != 0};
+  static std::atomic<bool> on{__builtin_cpu_supports("avx2") != 0 && lines_simd_cap() >= 1};
   return on;
 }
 inline bool cpu_has_avx2() {
   return avx2_enabled().load(std::memory_order_relaxed);
+}
+
+/// Whether the AVX-512 kernels run (with the AVX2 passes: cpu_has_avx512()
+/// needs both): whether the CPU has AVX-512 F, VL, DQ and BW (libgcc's
+/// check includes the OS's saving of the zmm and mask state, XCR0), unless
+/// set to false (tests compare them with the AVX2 and portable ones).
+inline std::atomic<bool>& avx512_enabled() {
+  static std::atomic<bool> on{__builtin_cpu_supports("avx512f") != 0 &&
+                              __builtin_cpu_supports("avx512vl") != 0 &&
+                              __builtin_cpu_supports("avx512dq") != 0 &&
+                              __builtin_cpu_supports("avx512bw") != 0 && lines_simd_cap() >= 2};
+  return on;
+}
+inline bool cpu_has_avx512() {
+  return avx512_enabled().load(std::memory_order_relaxed) && cpu_has_avx2();
 }
 
 /// Eigen's Vec3 dot, (x x' + y y') + z z', for four vertices.

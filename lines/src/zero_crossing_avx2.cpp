@@ -46,6 +46,13 @@ namespace fabrica::zc {
   return _mm256_set_pd(a[v[3]], a[v[2]], a[v[1]], a[v[0]]);
 }
 
+// v[0..3] in the lanes, built in registers: a vector load of indices just
+// stored one by one would wait for those stores (store forwarding fails;
+// kept_segments_avx2 -8 % on igea).
+[[gnu::target("avx2"), gnu::always_inline]] inline __m128i index4(const int v[4]) {
+  return _mm_setr_epi32(v[0], v[1], v[2], v[3]);
+}
+
 // The test numerator at the lanes' vertices, as Num computes it.
 [[gnu::target("avx2"), gnu::always_inline]] inline __m256d num4(const StoredNum& n,
                                                                 const int v[4]) {
@@ -148,42 +155,6 @@ struct Edge4 {
                    _mm256_cvtpd_epi32(_mm256_sub_pd(_mm256_sub_pd(_mm256_set1_pd(3.0), lo), hi)));
 }
 
-// The four points of scalar_faces_avx2's lanes (p1, the clips at z1 and
-// z2, p2): the edge ends' fractions t (points 0 and 3) and elements (of
-// the lane being written), the clip points' barycentrics per component and
-// lane (points 1 and 2), strengths.
-struct LanePoints {
-  alignas(32) double t[4][4], bary[4][3][4];
-  alignas(16) float st[4][4];
-  std::int32_t el[4] = {-1, -1, -1, -1};
-  bool fade;
-};
-
-// Segment (points a, b) of lane l of face `face`, converted into the lean
-// LineSegment in place by emplace_back (each field written once), as
-// emit_segment writes it.
-struct LaneSegment {
-  const LanePoints& lp;
-  std::int32_t face;
-  int l, a, b;
-  static bool on_edge(int i) { return i == 0 || i == 3; }
-  SegmentEnd end(int i) const {
-    SegmentEnd e;
-    if (on_edge(i)) {
-      e.t = lp.t[i][l];
-      e.element = lp.el[i];
-    } else {
-      e.bary[0] = static_cast<float>(lp.bary[i][0][l]);
-      e.bary[1] = static_cast<float>(lp.bary[i][1][l]);
-      e.element = -1;
-    }
-    e.strength = lp.fade ? lp.st[i][l] : 1.0f;
-    return e;
-  }
-  static EndKind kind(int i) { return on_edge(i) ? EndKind::edge : EndKind::interior; }
-  operator LineSegment() const { return LineSegment{face, {kind(a), kind(b)}, {end(a), end(b)}}; }
-};
-
 // scalar_face_body for the listed faces (no magnitude threshold), four at
 // a time: each lane evaluates its expressions in the same operations (so
 // the same bits), the points
@@ -210,7 +181,7 @@ template <class Num>
     __m256d s[3], id[3];
     for (int c = 0; c < 3; ++c) {
       s[c] = gather4(in.val, v[c]);
-      id[c] = _mm256_cvtepi32_pd(_mm_load_si128(reinterpret_cast<const __m128i*>(v[c])));
+      id[c] = _mm256_cvtepi32_pd(index4(v[c]));
     }
     // lone_sign at corner 0, 1, 2; the first one is k.
     const __m256d l0 = lone_sign4(s[0], s[1], s[2]), l1 = lone_sign4(s[1], s[2], s[0]);
@@ -304,7 +275,7 @@ template <class Num>
     __m256d b1[3], b2[3];
     edge_bary4(e1.lo, e1.hi, e1.t, e1.u, b1);
     edge_bary4(e2.lo, e2.hi, e2.t, e2.u, b2);
-    LanePoints lp;
+    LanePoints<4> lp;
     alignas(32) double zv[2][4];
     std::int32_t slot[2][4];
     edge_slot4(e1.lo, e1.hi, slot[0]);
@@ -329,24 +300,8 @@ template <class Num>
       _mm_store_ps(lp.st[0], fade_strength4(num1, den1, vfade));
       _mm_store_ps(lp.st[3], fade_strength4(num2, den2, vfade));
     }
-    const int valid_bits = _mm256_movemask_pd(valid1);
-    const Topology& topo = *in.m.topo;
-    for (; emit; emit &= emit - 1) {
-      const int l = std::countr_zero(static_cast<unsigned>(emit));
-      const std::size_t f = list[j + l];
-      lp.el[0] = topo.face_edge(f, slot[0][l]);
-      lp.el[3] = topo.face_edge(f, slot[1][l]);
-      // emit_points' order: p1 when valid, the clip points at the nonzero
-      // ones of z1, z2, p2 when the count is odd; consumed in pairs.
-      int pts[4], npts = 0;
-      if (valid_bits >> l & 1) pts[npts++] = 0;
-      if (zv[0][l] != 0.0) pts[npts++] = 1;
-      if (zv[1][l] != 0.0) pts[npts++] = 2;
-      if (npts != 2) pts[npts++] = 3;
-      const auto fi = static_cast<std::int32_t>(f);
-      for (int i = 0; i + 1 < npts; i += 2)
-        out.emplace_back(LaneSegment{lp, fi, l, pts[i], pts[i + 1]});
-    }
+    emit_lanes(lp, static_cast<unsigned>(emit), static_cast<unsigned>(_mm256_movemask_pd(valid1)),
+               zv, slot, list + j, *in.m.topo, out);
   }
 }
 
@@ -528,7 +483,7 @@ struct Corner4 {
   Corner4 c;
   c.e[0] = lo[0], c.e[1] = lo[1], c.e[2] = lo[2], c.d = lo[3];
   c.q = hi[0], c.p[0] = hi[1], c.p[1] = hi[2], c.p[2] = hi[3];
-  c.id = _mm256_cvtepi32_pd(_mm_loadu_si128(reinterpret_cast<const __m128i*>(v)));
+  c.id = _mm256_cvtepi32_pd(index4(v));
   return c;
 }
 
@@ -586,7 +541,7 @@ struct Cut4 {
     const int lanes = static_cast<int>(std::min<std::size_t>(4, kept.n - j));
     // Unused lanes repeat lane 0.
     alignas(16) int v[3][4];
-    alignas(32) std::int64_t rot[2][4];
+    std::int64_t rot[2][4];
     for (int l = 0; l < 4; ++l) {
       const int src = l < lanes ? l : 0;
       const Face& fg = faces[kept.f[j + src]];
@@ -595,8 +550,11 @@ struct Cut4 {
       rot[0][l] = -std::int64_t(c0 == 1);
       rot[1][l] = -std::int64_t(c0 == 2);
     }
-    const __m256d r1 = _mm256_load_pd(reinterpret_cast<const double*>(rot[0]));
-    const __m256d r2 = _mm256_load_pd(reinterpret_cast<const double*>(rot[1]));
+    // (the masks built in registers, as index4)
+    const __m256d r1 =
+        _mm256_castsi256_pd(_mm256_setr_epi64x(rot[0][0], rot[0][1], rot[0][2], rot[0][3]));
+    const __m256d r2 =
+        _mm256_castsi256_pd(_mm256_setr_epi64x(rot[1][0], rot[1][1], rot[1][2], rot[1][3]));
     const Corner4 C[3] = {load_corner4(field, v[0]), load_corner4(field, v[1]),
                           load_corner4(field, v[2])};
     // The corners c0, c1, c2 of the segment (rotations of 0, 1, 2).
@@ -651,7 +609,7 @@ struct Cut4 {
     // The ends as LanePoints 0 (a) and 3 (b): their fractions t from the
     // lower corner (the barycentrics and points are recomputed from them,
     // segments.hpp), and ridge_strength.
-    LanePoints lp;
+    LanePoints<4> lp;
     lp.fade = sp.raw || sp.threshold > 0.0;
     if (sp.raw) {
       _mm_store_ps(lp.st[0], _mm256_cvtpd_ps(a.m));
@@ -682,7 +640,7 @@ struct Cut4 {
       }
       lp.el[0] = topo.face_edge(f, slot[0][l]);
       lp.el[3] = topo.face_edge(f, slot[1][l]);
-      out.emplace_back(LaneSegment{lp, static_cast<std::int32_t>(f), l, 0, 3});
+      out.emplace_back(LaneSegment<4>{lp, static_cast<std::int32_t>(f), l, 0, 3});
     }
   }
 }

@@ -5,10 +5,13 @@
 // (zero_crossing_scalar.cpp: sign-byte scans, batches, the fused contour +
 // suggestive scan, the packed apparent-ridge path) and the AVX2 kernels
 // (zero_crossing_avx2.cpp: four faces per register, same operations in the
-// same order, so the same bits; called only when the CPU has AVX2).
+// same order, so the same bits; called only when the CPU has AVX2), and two
+// of them for AVX-512 (zero_crossing_avx512.cpp: eight faces per register,
+// the same bits again; called only when the CPU has AVX-512).
 #pragma once
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -300,6 +303,73 @@ template <class Num>
   emit_points(in, f, v, valid1, p1, q, nq, p2, out);
 }
 
+// The four points of the SIMD scalar kernels' N lanes (p1, the clips at z1
+// and z2, p2; kept_segments uses points 0 and 3): the edge ends' fractions
+// t (points 0 and 3) and elements (of the lane being written), the clip
+// points' first two barycentrics per lane (points 1 and 2; the third is
+// never stored), strengths. Plain code: the AVX2 and AVX-512 kernels fill
+// it with stores of N lanes.
+template <int N>
+struct LanePoints {
+  alignas(64) double t[4][N], bary[4][2][N];
+  alignas(32) float st[4][N];
+  std::int32_t el[4] = {-1, -1, -1, -1};
+  bool fade;
+};
+
+// Segment (points a, b) of lane l of face `face`, converted into the lean
+// LineSegment in place by emplace_back (each field written once), as
+// emit_segment writes it.
+template <int N>
+struct LaneSegment {
+  const LanePoints<N>& lp;
+  std::int32_t face;
+  int l, a, b;
+  static bool on_edge(int i) { return i == 0 || i == 3; }
+  SegmentEnd end(int i) const {
+    SegmentEnd e;
+    if (on_edge(i)) {
+      e.t = lp.t[i][l];
+      e.element = lp.el[i];
+    } else {
+      e.bary[0] = static_cast<float>(lp.bary[i][0][l]);
+      e.bary[1] = static_cast<float>(lp.bary[i][1][l]);
+      e.element = -1;
+    }
+    e.strength = lp.fade ? lp.st[i][l] : 1.0f;
+    return e;
+  }
+  static EndKind kind(int i) { return on_edge(i) ? EndKind::edge : EndKind::interior; }
+  operator LineSegment() const { return LineSegment{face, {kind(a), kind(b)}, {end(a), end(b)}}; }
+};
+
+// The segments of a SIMD scalar kernel group's emitted lanes (bits of
+// `emit`, in lane, so face, order) of the faces list[0..N): each lane's
+// edge elements from its edges' slots in the face, then emit_points'
+// order: p1 when valid (bit of `valid`), the clip points at the nonzero
+// ones of z1, z2, p2 when the count is odd; consumed in pairs.
+template <int N>
+[[gnu::always_inline]] inline void emit_lanes(LanePoints<N>& lp, unsigned emit, unsigned valid,
+                                              const double (&zv)[2][N],
+                                              const std::int32_t (&slot)[2][N],
+                                              const std::size_t* list, const Topology& topo,
+                                              std::vector<LineSegment>& out) {
+  for (; emit; emit &= emit - 1) {
+    const int l = std::countr_zero(emit);
+    const std::size_t f = list[l];
+    lp.el[0] = topo.face_edge(f, slot[0][l]);
+    lp.el[3] = topo.face_edge(f, slot[1][l]);
+    int pts[4], npts = 0;
+    if (valid >> l & 1) pts[npts++] = 0;
+    if (zv[0][l] != 0.0) pts[npts++] = 1;
+    if (zv[1][l] != 0.0) pts[npts++] = 2;
+    if (npts != 2) pts[npts++] = 3;
+    const auto fi = static_cast<std::int32_t>(f);
+    for (int i = 0; i + 1 < npts; i += 2)
+      out.emplace_back(LaneSegment<N>{lp, fi, l, pts[i], pts[i + 1]});
+  }
+}
+
 // The quick rejection from the sign bytes: with bits (negative, positive)
 // of one value, which no vertex has both of, a face can have a lone sign
 // only if one of them is set at some corner but not at all three:
@@ -586,6 +656,23 @@ template <class Num>
 [[gnu::target("avx2")]] void kept_segments_avx2(const VectorInputs& in, const double* field,
                                                 const KeptFaces& kept,
                                                 std::vector<LineSegment>& out);
+#endif
+
+// The AVX-512 kernels (zero_crossing_avx512.cpp), eight faces at a time,
+// each giving the bits of the AVX2 one it replaces; call only when
+// detail::cpu_has_avx512().
+#if defined(FABRICA_LINES_AVX512)
+/// scalar_faces_avx2 (Num: StoredNum or ShiftedNum).
+template <class Num>
+[[gnu::target(FABRICA_AVX512_ISA)]] void scalar_faces_avx512(const ScalarInputs& in, const Num& num,
+                                                             const std::size_t* list, int n,
+                                                             std::vector<LineSegment>& out);
+
+/// kept_segments_avx2.
+[[gnu::target(FABRICA_AVX512_ISA)]] void kept_segments_avx512(const VectorInputs& in,
+                                                              const double* field,
+                                                              const KeptFaces& kept,
+                                                              std::vector<LineSegment>& out);
 #endif
 
 }  // namespace fabrica::zc

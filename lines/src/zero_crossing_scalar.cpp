@@ -66,7 +66,12 @@ struct ScalarBatch {
 #if defined(FABRICA_LINES_AVX2)
     // The SIMD kernel tests every face itself, the test function included.
     if (!in.mag && detail::cpu_has_avx2()) {
-      scalar_faces_avx2(in, num, batch.face, batch.n, part);
+#if defined(FABRICA_LINES_AVX512)
+      if (detail::cpu_has_avx512())
+        scalar_faces_avx512(in, num, batch.face, batch.n, part);
+      else
+#endif
+        scalar_faces_avx2(in, num, batch.face, batch.n, part);
       batch.n = 0;
       return;
     }
@@ -244,6 +249,12 @@ void packed_chunk(const VectorInputs& in, const double* field, const std::uint8_
     for (std::size_t k = j; k < je; ++k)
       keep_if_crossed(cand[k], crossing_bits_of(faces[cand[k]], field), topo, kept);
   }
+#if defined(FABRICA_LINES_AVX512)
+  if (detail::cpu_has_avx512()) {
+    kept_segments_avx512(in, field, kept, out);
+    return;
+  }
+#endif
 #if defined(FABRICA_LINES_AVX2)
   if (detail::cpu_has_avx2()) {
     kept_segments_avx2(in, field, kept, out);

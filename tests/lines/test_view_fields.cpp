@@ -13,6 +13,9 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
+#include <memory>
+#include <random>
 #include <string>
 
 #include "fabrica/core/camera.hpp"
@@ -25,6 +28,7 @@
 #include "test_support.hpp"
 #include "view_fields_light.hpp"
 #include "zero_crossing_internal.hpp"
+#include "zero_crossing_kernel.hpp"
 
 using namespace fabrica;
 
@@ -40,18 +44,25 @@ std::size_t differing_bits(const std::vector<T>& a, const std::vector<T>& b) {
 
 // Segments whose fields differ in any bit (field by field: LineSegment
 // has padding bytes, which need not agree; an end's t, or its float
-// barycentrics inside the face, as their 8 bytes).
-std::size_t differing_segments(const std::vector<LineSegment>& a,
-                               const std::vector<LineSegment>& b) {
+// barycentrics inside the face, as their 8 bytes). With `nan_equal`, a NaN
+// equals any NaN (for NaN inputs: which operand's NaN an operation passes
+// on, and so its sign, depends on how the compiler ordered the operands of
+// a commutative operation, in any of the kernels).
+std::size_t differing_segments(const std::vector<LineSegment>& a, const std::vector<LineSegment>& b,
+                               bool nan_equal = false) {
   if (a.size() != b.size()) return std::max(a.size(), b.size()) + 1;
-  auto same = [](const auto& x, const auto& y) { return std::memcmp(&x, &y, sizeof(x)) == 0; };
+  auto same = [nan_equal](const auto& x, const auto& y) {
+    return std::memcmp(&x, &y, sizeof(x)) == 0 || (nan_equal && std::isnan(x) && std::isnan(y));
+  };
   std::size_t n = 0;
   for (std::size_t i = 0; i < a.size(); ++i) {
     bool eq = a[i].face == b[i].face;
     for (int k = 0; k < 2; ++k) {
       const SegmentEnd &x = a[i].end[k], &y = b[i].end[k];
-      eq = eq && a[i].kind[k] == b[i].kind[k] && same(x.t, y.t) && x.element == y.element &&
-           same(x.strength, y.strength);
+      const bool inside = a[i].kind[k] == EndKind::interior;
+      eq = eq && a[i].kind[k] == b[i].kind[k] &&
+           (inside ? same(x.bary[0], y.bary[0]) && same(x.bary[1], y.bary[1]) : same(x.t, y.t)) &&
+           x.element == y.element && same(x.strength, y.strength);
     }
     n += !eq;
   }
@@ -159,6 +170,22 @@ void expect_same_light_pass(const Surface& surface, const LinePrecompute& pre, c
 
 Surface load(const char* rel, bool degenerate) {
   return test::load_for_lines(rel, degenerate);
+}
+
+// Every family, for the kernels' comparisons: with the defaults (variant
+// 0); without the maximum test, and the scalar kernel without test
+// function, fade or culling (1); without the apparent-ridge threshold (2).
+LineOptions kernel_variant(int variant) {
+  LineOptions o;
+  o.families = all_families();
+  if (variant == 1) {
+    o.apparent.maximum_test = false;
+    o.contour.trim_concave = false;
+    o.suggestive.fade = o.highlight.fade = 0.0;
+    o.suggestive.cull_backfaces = o.highlight.cull_backfaces = false;
+  }
+  if (variant == 2) o.apparent.threshold = 0.0;
+  return o;
 }
 using test::camera_towards;
 
@@ -274,16 +301,7 @@ TEST(LinesViewFields, SimdAndPortableKernelsGiveTheSameSegments) {
     const Surface surface = load(rel, true);
     Camera c = camera_towards(surface, Vec3(-0.4, 0.3, 1.0));
     for (int variant = 0; variant < 3; ++variant) {
-      LineOptions o;
-      o.families = all_families();
-      if (variant == 1) {
-        o.apparent.maximum_test = false;
-        // The scalar kernel without test function, fade or culling.
-        o.contour.trim_concave = false;
-        o.suggestive.fade = o.highlight.fade = 0.0;
-        o.suggestive.cull_backfaces = o.highlight.cull_backfaces = false;
-      }
-      if (variant == 2) o.apparent.threshold = 0.0;
+      const LineOptions o = kernel_variant(variant);
       LineExtractor simd_x(surface, o), portable_x(surface, o);
       const auto simd = simd_x.extract(c);
       const bool had = detail::avx2_enabled().exchange(false);
@@ -527,4 +545,298 @@ TEST(LinesViewFields, Dt1q1FromTheTangentRingMatchesTheTopologyWalk) {
     for (int kind = 0; kind < 2; ++kind)
       EXPECT_GE(static_cast<double>(close[kind]), 0.97 * static_cast<double>(nonzero[kind]));
   }
+}
+
+// The AVX-512 kernels (eight faces at a time, where the CPU has AVX-512:
+// the apparent ridges' segments, and the scalar kernel of contours,
+// suggestive contours and highlights) against the AVX2 and the portable
+// ones: every family's segments, every field, the same bits, on three
+// meshes (igea: the reference mesh, 268k faces), with and without the
+// maximum test and the threshold, the scalar kernel without test function,
+// fade or culling, in perspective and orthographic views (igea with the
+// default options only).
+TEST(LinesViewFields, Avx512Avx2AndPortableKernelsGiveTheSameSegments) {
+#if !defined(FABRICA_LINES_AVX512)
+  GTEST_SKIP() << "no AVX-512 kernels in this build";
+#else
+  if (!detail::cpu_has_avx512()) GTEST_SKIP() << "this CPU has no AVX-512 (F, VL, DQ, BW)";
+  std::size_t centroid_ends = 0, apparent = 0;
+  for (const char* rel : {"meshes/classic/c3d_cow.obj", "meshes/classic/libigl_camelhead.off",
+                          "meshes/classic/c3d_igea.ply"}) {
+    SCOPED_TRACE(rel);
+    const Surface surface = load(rel, false);
+    // (igea, 20× the others' faces: the default options only)
+    const bool big = surface.face_count() > 100000;
+    for (int variant = 0; variant < (big ? 1 : 4); ++variant) {
+      SCOPED_TRACE(variant);
+      Camera c = camera_towards(surface, Vec3(0.5, -0.2, 1.0));
+      const LineOptions o = kernel_variant(variant);
+      if (variant == 3) c.projection = Projection::orthographic;
+      LineExtractor x512(surface, o), x2(surface, o), xp(surface, o);
+      const auto wide = x512.extract(c);
+      const bool had512 = detail::avx512_enabled().exchange(false);
+      const auto avx2 = x2.extract(c);
+      const bool had2 = detail::avx2_enabled().exchange(false);
+      const auto portable = xp.extract(c);
+      detail::avx2_enabled() = had2;
+      detail::avx512_enabled() = had512;
+      // The fields the kernels read (D_t1 q1 at every vertex, and the
+      // records) are the same on every path.
+      EXPECT_SAME_FIELD(x512.fields(), x2.fields(), dt1q1);
+      EXPECT_SAME_FIELD(x512.fields(), xp.fields(), dt1q1);
+      std::size_t records = 0;
+      EXPECT_EQ(differing_records(surface, x512.fields(), x2.fields(), records), 0u);
+      EXPECT_GT(records, 0u);
+      ASSERT_EQ(wide.size(), avx2.size());
+      ASSERT_EQ(wide.size(), portable.size());
+      for (std::size_t k = 0; k < wide.size(); ++k) {
+        SCOPED_TRACE(family_name(wide[k].family));
+        EXPECT_EQ(differing_segments(wide[k].segments, avx2[k].segments), 0u);
+        EXPECT_EQ(differing_segments(wide[k].segments, portable[k].segments), 0u);
+        if (wide[k].family != LineFamily::apparent) continue;
+        apparent += wide[k].segments.size();
+        for (const auto& seg : wide[k].segments) centroid_ends += seg.kind[1] == EndKind::centroid;
+      }
+    }
+  }
+  // Enough segments for every lane pattern, and the centroid branch.
+  EXPECT_GT(apparent, 10000u);
+  EXPECT_GT(centroid_ends, 0u);
+#endif
+}
+
+#if defined(FABRICA_LINES_AVX512)
+namespace {
+
+// Random apparent-ridge records for every vertex of `surface` (its real
+// positions): E, D_t1 q1 and q1 of either sign, with exact zeros (both
+// ends of a cut at D_t1 q1 = 0: t = 1/2), signed zeros, subnormals and
+// values near the overflow of a product; with `special`, also infinities
+// and NaNs.
+std::vector<ApparentVertex> random_records(const Surface& surface, std::uint64_t seed,
+                                           bool special) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::uniform_int_distribution<int> pick(0, 99);
+  auto value = [&] {
+    const int p = pick(rng);
+    if (p < 8) return 0.0;
+    if (p < 12) return -0.0;
+    if (p < 14) return normal(rng) * 1e-310;
+    if (p < 16) return normal(rng) * 1e150;
+    if (special && p < 18)
+      return p == 16 ? std::numeric_limits<double>::infinity()
+                     : -std::numeric_limits<double>::infinity();
+    if (special && p < 20) return std::numeric_limits<double>::quiet_NaN();
+    return normal(rng);
+  };
+  std::vector<ApparentVertex> r(surface.vertex_count());
+  for (std::size_t i = 0; i < r.size(); ++i) {
+    for (int k = 0; k < 3; ++k) r[i].field[k] = value();
+    r[i].dt1q1 = value();
+    r[i].q1 = value();
+    r[i].position = surface.positions()[i];
+  }
+  return r;
+}
+
+struct KernelRun {
+  std::unique_ptr<zc::KeptFaces> kept = std::make_unique<zc::KeptFaces>();
+  std::vector<LineSegment> segments;
+};
+
+enum class KernelPath { portable, avx2, avx512 };
+
+// packed_chunk's kernel calls for the listed faces, on one path: the kept
+// faces in batches of `batch`, then their segments.
+KernelRun run_kernels(const Surface& surface, const std::vector<ApparentVertex>& records,
+                      const std::vector<std::uint32_t>& list, int batch,
+                      const VectorCrossingOptions& o, KernelPath path) {
+  zc::VectorInputs in{zc::MeshArrays(surface), &records[0].dt1q1, nullptr, &records[0].q1, o};
+  in.pos = records[0].position.data();
+  in.ds = in.ps = zc::kApparentStride;
+  const double* field = records[0].field.data();
+  const Face* faces = surface.faces().data();
+  const Topology& topo = surface.topology();
+  KernelRun r;
+  zc::KeptFaces& kept = *r.kept;
+  for (std::size_t j = 0; j < list.size(); j += std::size_t(batch)) {
+    const int n = static_cast<int>(std::min(list.size() - j, std::size_t(batch)));
+    if (path != KernelPath::portable)
+      zc::keep_crossed_avx2(faces, list.data() + j, n, field, topo, kept);
+    else
+      for (int k = 0; k < n; ++k)
+        zc::keep_if_crossed(list[j + k], zc::crossing_bits_of(faces[list[j + k]], field), topo,
+                            kept);
+  }
+  if (path == KernelPath::avx512) {
+    zc::kept_segments_avx512(in, field, kept, r.segments);
+  } else if (path == KernelPath::avx2) {
+    zc::kept_segments_avx2(in, field, kept, r.segments);
+  } else {
+    for (std::size_t j = 0; j < kept.n; ++j) {
+      const Face& fg = faces[kept.f[j]];
+      const int v[3] = {fg[0], fg[1], fg[2]};
+      const Vec3 E[3] = {zc::field_at(field, fg[0]), zc::field_at(field, fg[1]),
+                         zc::field_at(field, fg[2])};
+      zc::vector_face_segments(in, kept.f[j], v, E, kept.z[j], r.segments);
+    }
+  }
+  return r;
+}
+
+// Kept faces (and their crossing bits) that differ between two runs.
+std::size_t differing_kept(const zc::KeptFaces& a, const zc::KeptFaces& b) {
+  if (a.n != b.n) return std::max(a.n, b.n) + 1;
+  std::size_t n = 0;
+  for (std::size_t j = 0; j < a.n; ++j) n += a.f[j] != b.f[j] || a.z[j] != b.z[j];
+  return n;
+}
+
+}  // namespace
+#endif
+
+// The segment kernel alone on random records with the awkward values
+// (exact and signed zeros, subnormals, huge products; infinities and NaNs
+// against the AVX2 kernel, any NaN equal to any other), lists of every
+// length mod 8 and batches of 16 (as the packed path calls keep_crossed)
+// and of 13: the AVX-512 kernel gives the AVX2 and portable kernels'
+// segments, bit for bit (from the same kept faces, whose AVX2 and portable
+// lists and crossing bits are compared too), with and without the maximum
+// test, the threshold and the raw magnitude; every count of kept faces mod
+// 8 occurs.
+TEST(LinesViewFields, Avx512KernelMatchesOnAwkwardRecords) {
+#if !defined(FABRICA_LINES_AVX512)
+  GTEST_SKIP() << "no AVX-512 kernels in this build";
+#else
+  if (!detail::cpu_has_avx512()) GTEST_SKIP() << "this CPU has no AVX-512 (F, VL, DQ, BW)";
+  const Surface surface = load("meshes/classic/c3d_cow.obj", false);
+  const std::size_t nf = std::min<std::size_t>(surface.face_count(), detail::kFaceChunk);
+  std::size_t segments = 0, centroid = 0, compared = 0;
+  unsigned tails = 0;  // bit r: a run kept r faces mod 8
+  for (int special = 0; special < 2; ++special) {
+    const auto records = random_records(surface, 0x5eed + std::uint64_t(special), special != 0);
+    for (std::size_t len : {nf, nf - 1, nf - 3, std::size_t{1}, std::size_t{7}, std::size_t{9},
+                            std::size_t{30}, std::size_t{61}, std::size_t{200}}) {
+      // A chunk's candidates: ascending, every face or every other one.
+      for (int stride = 1; stride <= 2; ++stride) {
+        std::vector<std::uint32_t> list;
+        for (std::size_t f = 0; f < nf && list.size() < len; f += std::size_t(stride))
+          list.push_back(static_cast<std::uint32_t>(f));
+        for (int batch : {16, 13}) {
+          for (int variant = 0; variant < 4; ++variant) {
+            SCOPED_TRACE(testing::Message() << "special " << special << " length " << list.size()
+                                            << " batch " << batch << " variant " << variant);
+            VectorCrossingOptions o;
+            o.test = variant == 1 ? ExtremumTest::none : ExtremumTest::perpendicular;
+            o.threshold = variant == 2 ? 0.0 : 0.3;
+            o.keep_raw_magnitude = variant == 3;
+            const KernelRun w = run_kernels(surface, records, list, batch, o, KernelPath::avx512);
+            const KernelRun a = run_kernels(surface, records, list, batch, o, KernelPath::avx2);
+            EXPECT_EQ(differing_kept(*w.kept, *a.kept), 0u);
+            EXPECT_EQ(differing_segments(w.segments, a.segments, special != 0), 0u);
+            if (!special) {
+              const KernelRun p =
+                  run_kernels(surface, records, list, batch, o, KernelPath::portable);
+              EXPECT_EQ(differing_kept(*w.kept, *p.kept), 0u);
+              EXPECT_EQ(differing_segments(w.segments, p.segments), 0u);
+            }
+            ++compared;
+            tails |= 1u << (w.kept->n % 8);
+            segments += w.segments.size();
+            for (const auto& seg : w.segments) centroid += seg.kind[1] == EndKind::centroid;
+          }
+        }
+      }
+    }
+  }
+  std::printf("%zu runs, %zu segments, %zu ends at a centroid\n", compared, segments, centroid);
+  EXPECT_GT(segments, 10000u);
+  EXPECT_GT(centroid, 100u);
+  EXPECT_EQ(tails, 0xFFu);
+#endif
+}
+
+// The scalar kernel alone (contours, suggestive contours: scalar_face_body)
+// on random per-vertex values with the awkward ones (exact and signed
+// zeros, subnormals, huge values; infinities and NaNs against the AVX2
+// kernel, any NaN equal to any other), with a stored test numerator or the
+// shifted one (negated too), with and without denominator, culling and
+// fade, lists of every length mod 8: the AVX-512 kernel gives the AVX2
+// kernel's and scalar_face_body's segments, bit for bit.
+TEST(LinesViewFields, Avx512ScalarKernelMatchesOnAwkwardValues) {
+#if !defined(FABRICA_LINES_AVX512)
+  GTEST_SKIP() << "no AVX-512 kernels in this build";
+#else
+  if (!detail::cpu_has_avx512()) GTEST_SKIP() << "this CPU has no AVX-512 (F, VL, DQ, BW)";
+  const Surface surface = load("meshes/classic/c3d_cow.obj", false);
+  const std::size_t nv = surface.vertex_count();
+  std::size_t segments = 0, interior = 0, runs = 0;
+  for (int special = 0; special < 2; ++special) {
+    std::mt19937_64 rng(0xfab + std::uint64_t(special));
+    std::normal_distribution<double> normal(0.0, 1.0);
+    std::uniform_int_distribution<int> pick(0, 99);
+    auto value = [&] {
+      const int p = pick(rng);
+      if (p < 10) return 0.0;
+      if (p < 14) return -0.0;
+      if (p < 16) return normal(rng) * 1e-310;
+      if (p < 18) return normal(rng) * 1e300;
+      if (special && p < 20)
+        return p == 18 ? std::numeric_limits<double>::infinity()
+                       : std::numeric_limits<double>::quiet_NaN();
+      return normal(rng);
+    };
+    std::vector<double> val(nv), num(nv), den(nv), cull(nv), sc(nv);
+    for (std::size_t i = 0; i < nv; ++i) {
+      val[i] = value(), num[i] = value(), den[i] = value(), cull[i] = value(), sc[i] = value();
+    }
+    std::vector<std::size_t> list;
+    for (std::size_t f = 0; f < surface.face_count(); ++f) list.push_back(f);
+    for (int variant = 0; variant < 8; ++variant) {
+      SCOPED_TRACE(testing::Message() << "special " << special << " variant " << variant);
+      zc::ScalarInputs in{zc::MeshArrays(surface),
+                          val.data(),
+                          variant & 1 ? cull.data() : nullptr,
+                          variant & 2 ? den.data() : nullptr,
+                          variant != 4,
+                          variant & 4 ? 0.0 : 0.25};
+      auto run = [&](const auto& nm, int path, std::size_t len) {
+        std::vector<LineSegment> out;
+        for (std::size_t j = 0; j < len; j += zc::CandidateBatch::kSize) {
+          const int n = static_cast<int>(std::min<std::size_t>(zc::CandidateBatch::kSize, len - j));
+          if (path == 2)
+            zc::scalar_faces_avx512(in, nm, list.data() + j, n, out);
+          else if (path == 1)
+            zc::scalar_faces_avx2(in, nm, list.data() + j, n, out);
+          else
+            for (int k = 0; k < n; ++k) zc::scalar_face_body(in, nm, list[j + k], out);
+        }
+        return out;
+      };
+      const zc::StoredNum stored{num.data()};
+      const zc::ShiftedNum shifted{sc.data(), den.data(), variant == 3, 0.375};
+      for (std::size_t len : {list.size(), list.size() - 1, list.size() - 5, std::size_t{3},
+                              std::size_t{8}, std::size_t{17}, std::size_t{21}, std::size_t{26},
+                              std::size_t{46}, std::size_t{71}, std::size_t{100}}) {
+        for (int which = 0; which < 2; ++which) {
+          const auto w = which ? run(shifted, 2, len) : run(stored, 2, len);
+          const auto a = which ? run(shifted, 1, len) : run(stored, 1, len);
+          EXPECT_EQ(differing_segments(w, a, special != 0), 0u)
+              << "len " << len << " shifted " << which;
+          if (!special) {
+            const auto p = which ? run(shifted, 0, len) : run(stored, 0, len);
+            EXPECT_EQ(differing_segments(w, p), 0u) << "len " << len << " shifted " << which;
+          }
+          ++runs;
+          segments += w.size();
+          for (const auto& seg : w) interior += seg.kind[0] == EndKind::interior;
+        }
+      }
+    }
+  }
+  std::printf("%zu runs, %zu segments, %zu starting inside a face\n", runs, segments, interior);
+  EXPECT_GT(segments, 100000u);
+  EXPECT_GT(interior, 1000u);
+#endif
 }
