@@ -279,10 +279,13 @@ void run_fit(std::size_t nf, const FitArrays& arrays, const FitSchedule& sch,
 // Layout (for speed): per-vertex data the face passes need is packed into
 // one record per vertex; each face pass fits its tensor and immediately
 // re-expresses it in the frame of each of its three vertices, writing the
-// weighted result into that corner's slot of a CSR array ordered like
-// topology().vertex_faces(v). The vertex pass then sums contiguous slots in
-// that fixed order: no scattered reads, no atomics, same bits at any thread
-// count.
+// weighted result into that corner's slot (each vertex's slots contiguous,
+// ordered like topology().vertex_faces(v)). The vertex pass then sums a
+// vertex's slots in that fixed order: no scattered reads, no atomics, same
+// bits at any thread count. Faces go in steps (FitSchedule), after each of
+// which the vertices it completes are summed, so slots exist only for one
+// step's vertices and for those spread over several steps (igea: 256k of
+// 806k corners).
 PrincipalCurvatures estimate_curvature(const CurvatureInputs& in, FaceFitScratch& scratch) {
   const TriangleMesh& mesh = in.mesh;
   const Topology& topo = in.topology;

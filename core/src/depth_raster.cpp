@@ -213,9 +213,9 @@ RasterScratch& RasterScratchSlot::get() {
 // the same order), so the buffer is bit-identical to it; what changed is
 // which triangles and pixels are visited:
 //  * only pixel centres inside a triangle's bounding box are tested;
-//  * triangles are binned into 32-row bands per fixed chunk of faces (count,
-//    then fill; both in parallel over chunks) and the bands are rasterised
-//    in parallel;
+//  * triangles are binned into 32-row bands per fixed chunk of faces, each
+//    chunk into a list of its own (in parallel over chunks), and the bands
+//    are rasterised in parallel, each band's triangles chunk after chunk;
 //  * in each band the triangles facing the camera in the image (negative
 //    signed area: counter-clockwise in a y-up view) are drawn first, then the
 //    others, each of which is skipped when every pixel of its box already
