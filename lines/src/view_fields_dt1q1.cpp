@@ -411,29 +411,28 @@ struct RingPass {
       store_apparent_vertex(packed[i], out[i], t1_world[i], q1[i]);
   }
 
+  // The run for this pass's entry base and record positions (inlined into
+  // each instruction set's caller).
+  template <bool Wide>
+  [[gnu::always_inline]] inline void run_for(std::size_t b, std::size_t e) const {
+    if (entry_base != 0 && write_pos)
+      run<Wide, true, true>(b, e);
+    else if (entry_base != 0)
+      run<Wide, false, true>(b, e);
+    else if (write_pos)
+      run<Wide, true, false>(b, e);
+    else
+      run<Wide, false, false>(b, e);
+  }
   // Copies of the pass (`r`) in registers, not reloaded after the stores.
   FABRICA_DT1Q1_MULTIVERSION void portable(std::size_t b, std::size_t e) const {
     const RingPass r = *this;
-    if (entry_base != 0 && write_pos)
-      r.run<false, true, true>(b, e);
-    else if (entry_base != 0)
-      r.run<false, false, true>(b, e);
-    else if (write_pos)
-      r.run<false, true, false>(b, e);
-    else
-      r.run<false, false, false>(b, e);
+    r.run_for<false>(b, e);
   }
 #if defined(FABRICA_LINES_AVX2)
   [[gnu::target("arch=x86-64-v3")]] void wide(std::size_t b, std::size_t e) const {
     const RingPass r = *this;
-    if (entry_base != 0 && write_pos)
-      r.run<true, true, true>(b, e);
-    else if (entry_base != 0)
-      r.run<true, false, true>(b, e);
-    else if (write_pos)
-      r.run<true, true, false>(b, e);
-    else
-      r.run<true, false, false>(b, e);
+    r.run_for<true>(b, e);
   }
 #endif
   // The same bits either way: the wide pass only finds the candidate faces
