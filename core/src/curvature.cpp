@@ -124,71 +124,110 @@ void vertex_frame(const TriangleMesh& mesh, const Topology& topo, std::size_t vt
   v = n.cross(u);
 }
 
-namespace {
-
-FitSchedule fit_schedule(const Topology& topo, std::size_t step_faces) {
-  FitSchedule out;
-  const std::size_t nv = topo.vertex_count(), nf = topo.face_count();
-  if (nv == 0 || nf == 0) return out;
-  if (step_faces == 0 || step_faces > nf) step_faces = nf;
-  const std::size_t steps = (nf + step_faces - 1) / step_faces;
-  out.step_faces = step_faces;
-  out.steps = steps;
-  // Per vertex: its first and last step; the slots of the vertices within
-  // one step (per step) and of the others.
-  std::vector<std::int32_t> local(steps, 0);
-  std::int32_t spread = 0;
-  out.completed.assign(steps + 1, 0);
-  for (std::size_t v = 0; v < nv; ++v) {
-    const auto faces = topo.vertex_faces(v);
-    if (faces.empty()) continue;
-    const std::size_t s0 = static_cast<std::size_t>(faces.front()) / step_faces;
-    const std::size_t s1 = static_cast<std::size_t>(faces.back()) / step_faces;
-    (s0 == s1 ? local[s0] : spread) += static_cast<std::int32_t>(faces.size());
-    ++out.completed[s1 + 1];
-  }
-  for (std::size_t s = 0; s < steps; ++s) out.completed[s + 1] += out.completed[s];
-  // The vertices over several steps first, then the region of one step's.
-  out.capacity = static_cast<std::size_t>(spread + *std::max_element(local.begin(), local.end()));
-  out.start.resize(nv);
-  out.vertices.resize(out.completed[steps]);
-  std::vector<std::size_t> cursor(out.completed.begin(), out.completed.end() - 1);
-  std::fill(local.begin(), local.end(), spread);
-  std::int32_t next = 0;
-  for (std::size_t v = 0; v < nv; ++v) {
-    const auto faces = topo.vertex_faces(v);
-    out.start[v] = next;  // (no slots)
-    if (faces.empty()) continue;
-    const std::size_t s0 = static_cast<std::size_t>(faces.front()) / step_faces;
-    const std::size_t s1 = static_cast<std::size_t>(faces.back()) / step_faces;
-    std::int32_t& at = s0 == s1 ? local[s0] : next;
-    out.start[v] = at;
-    at += static_cast<std::int32_t>(faces.size());
-    out.vertices[cursor[s1]++] = static_cast<std::int32_t>(v);
-  }
-  return out;
-}
-
-}  // namespace
-
 std::atomic<std::size_t>& curvature_fit_step_faces() {
   static std::atomic<std::size_t> faces{32768};
   return faces;
 }
 
+// The schedule (FitSchedule) and every corner's slot, in two parallel
+// passes over fixed chunks of vertices: per chunk, how many slots its
+// vertices take (per step for those in one step, in all for the others) and
+// how many it completes per step; then, from these counts' prefix sums over
+// the chunks, each vertex's first slot and place in the completion order,
+// and its corners' slots. The same schedule as one serial pass in vertex
+// order, at any thread count.
 void fill_corner_slots(const Topology& topo, FaceFitScratch& scratch) {
-  const std::size_t nv = topo.vertex_count();
-  scratch.schedule = fit_schedule(topo, curvature_fit_step_faces().load());
-  const std::int32_t* start = scratch.schedule.start.data();
+  FitSchedule& out = scratch.schedule;
+  out = FitSchedule{};
+  const std::size_t nv = topo.vertex_count(), nf = topo.face_count();
   auto& slots = scratch.corner_slot;
-  slots.resize(topo.face_count());
-  if (nv == 0) return;
-  parallel_chunks(nv, 8192, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t v = begin; v < end; ++v) {
-      const auto faces = topo.vertex_faces(v);
-      const auto corners = topo.vertex_face_corners(v);
-      for (std::size_t i = 0; i < faces.size(); ++i)
-        slots[faces[i]][corners[i]] = start[v] + static_cast<std::int32_t>(i);
+  slots.resize(nf);
+  if (nv == 0 || nf == 0) return;
+  std::size_t step_faces = curvature_fit_step_faces().load();
+  if (step_faces == 0 || step_faces > nf) step_faces = nf;
+  const std::size_t steps = (nf + step_faces - 1) / step_faces;
+  out.step_faces = step_faces;
+  out.steps = steps;
+  constexpr std::size_t kChunk = 8192;
+  const std::size_t chunks = (nv + kChunk - 1) / kChunk;
+  // Per chunk and step: local slots (and at step `steps`, the spread
+  // vertices' slots), and completed vertices; made running sums below.
+  std::vector<std::int32_t> local(chunks * (steps + 1), 0), done(chunks * steps, 0);
+  // Per vertex, until replaced by its first slot: its last step, or -2 -
+  // that step when it is spread over several; -1 without faces.
+  out.start.resize(nv);
+  const auto step_of = [&](std::int32_t face) {
+    return static_cast<std::int32_t>(static_cast<std::size_t>(face) / step_faces);
+  };
+  parallel_chunks(chunks, 1, [&](std::size_t c0, std::size_t c1) {
+    for (std::size_t c = c0; c < c1; ++c) {
+      std::int32_t* const loc = local.data() + c * (steps + 1);
+      std::int32_t* const dn = done.data() + c * steps;
+      for (std::size_t v = c * kChunk, e = std::min(nv, v + kChunk); v < e; ++v) {
+        const auto faces = topo.vertex_faces(v);
+        if (faces.empty()) {
+          out.start[v] = -1;
+          continue;
+        }
+        const std::int32_t s0 = step_of(faces.front()), s1 = step_of(faces.back());
+        const auto n = static_cast<std::int32_t>(faces.size());
+        loc[s0 == s1 ? static_cast<std::size_t>(s1) : steps] += n;
+        ++dn[s1];
+        out.start[v] = s0 == s1 ? s1 : -2 - s1;
+      }
+    }
+  });
+  // Exclusive running sums over the chunks: the spread vertices' slots
+  // first, then each step's region (the same for every step).
+  std::int32_t spread = 0, region = 0;
+  out.completed.assign(steps + 1, 0);
+  for (std::size_t c = 0; c < chunks; ++c) {
+    std::int32_t& n = local[c * (steps + 1) + steps];
+    const std::int32_t here = n;
+    n = spread;
+    spread += here;
+  }
+  for (std::size_t s = 0; s < steps; ++s) {
+    std::int32_t at = 0;
+    std::size_t finished = 0;
+    for (std::size_t c = 0; c < chunks; ++c) {
+      std::int32_t& n = local[c * (steps + 1) + s];
+      const std::int32_t here = n;
+      n = at;
+      at += here;
+      std::int32_t& d = done[c * steps + s];
+      const auto dhere = static_cast<std::size_t>(d);
+      d = static_cast<std::int32_t>(finished);
+      finished += dhere;
+    }
+    region = std::max(region, at);
+    out.completed[s + 1] = out.completed[s] + finished;
+  }
+  out.capacity = static_cast<std::size_t>(spread + region);
+  out.vertices.resize(out.completed[steps]);
+  parallel_chunks(chunks, 1, [&](std::size_t c0, std::size_t c1) {
+    for (std::size_t c = c0; c < c1; ++c) {
+      std::int32_t* const loc = local.data() + c * (steps + 1);
+      std::int32_t* const dn = done.data() + c * steps;
+      for (std::size_t v = c * kChunk, e = std::min(nv, v + kChunk); v < e; ++v) {
+        const std::int32_t code = out.start[v];
+        const auto faces = topo.vertex_faces(v);
+        const auto corners = topo.vertex_face_corners(v);
+        if (code == -1) {
+          out.start[v] = 0;  // (no slots)
+          continue;
+        }
+        const bool spread_out = code < -1;
+        const auto s1 = static_cast<std::size_t>(spread_out ? -2 - code : code);
+        std::int32_t& at = loc[spread_out ? steps : s1];
+        const std::int32_t first = spread_out ? at : spread + at;
+        at += static_cast<std::int32_t>(faces.size());
+        out.start[v] = first;
+        out.vertices[out.completed[s1] + static_cast<std::size_t>(dn[s1]++)] =
+            static_cast<std::int32_t>(v);
+        for (std::size_t i = 0; i < faces.size(); ++i)
+          slots[faces[i]][corners[i]] = first + static_cast<std::int32_t>(i);
+      }
     }
   });
 }
