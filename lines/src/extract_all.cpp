@@ -170,15 +170,12 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
       tbb::this_task_arena::max_concurrency() == 1 ||
       tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism) == 1;
   const bool pipelined = three && one_thread;
-  // One-shot: the tangent ring (its layout) and t1, which only D_t1 q1
-  // reads, are freed once D_t1 q1 is complete; when pipelined, once both the
-  // kernel (which drives it) and run_all are.
+  // One-shot: the tangent ring is freed once D_t1 q1 is complete; when
+  // pipelined, once both the kernel (which drives it) and run_all are.
   std::atomic<int> ring_readers{0};
   auto ring_done = [&] {
-    if (one_shot_ && (!pipelined || ring_readers.fetch_add(1) == 1)) {
+    if (one_shot_ && (!pipelined || ring_readers.fetch_add(1) == 1))
       precompute_->release_tangent_ring();
-      std::vector<Vec2>().swap(fields_.t1);
-    }
   };
   std::optional<detail::Dt1q1Blocks> dt1q1;
   detail::ChunkReady ready;

@@ -151,10 +151,8 @@ class LineExtractor {
   void extract(const Camera& camera, std::vector<SegmentSoup>& soups);
   /// One view only (the one-shot draw_lines): each extract() frees the
   /// precompute's per-view inputs (LinePrecompute::vertex_blocks,
-  /// tangent_ring, which D_t1 q1 then builds a block at a time) and the
-  /// fields' t1 (fields().t1 is then empty) as soon as its passes are
-  /// through with them, which lowers the peak memory; a further extract()
-  /// would rebuild them.
+  /// tangent_ring) as soon as its passes are through with them, which
+  /// lowers the peak memory; a further extract() would rebuild them.
   void set_one_shot(bool one_shot) { one_shot_ = one_shot; }
 
  private:
