@@ -4,6 +4,10 @@
 //   5 a batch finished but some items failed.
 #include <tbb/global_control.h>
 
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
+
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
@@ -58,6 +62,13 @@ void add_common_options(CLI::App& app, int& threads) {
 
 int main(int argc, char** argv) {
   fabrica::cli::keep_freed_memory_for_reuse();
+#if defined(__GLIBC__) && defined(M_ARENA_MAX)
+  // One arena for every thread: the worker threads' large arrays reuse the
+  // memory the others freed instead of growing arenas of their own (10 MB
+  // less at the peak of `fabrica lines` on a 270k-face mesh at two threads;
+  // small blocks still come from each thread's cache, without the lock).
+  mallopt(M_ARENA_MAX, 1);
+#endif
   CLI::App app{
       "fabrica: feature lines, hatching and focus-and-context illustrations of anatomy meshes"};
   app.require_subcommand(1);

@@ -124,18 +124,110 @@ void vertex_frame(const TriangleMesh& mesh, const Topology& topo, std::size_t vt
   v = n.cross(u);
 }
 
-void fill_corner_slots(const Topology& topo, ScratchArray<std::array<std::int32_t, 3>>& slots) {
-  const std::size_t nv = topo.vertex_count();
-  slots.resize(topo.face_count());
-  if (nv == 0) return;
-  const std::int32_t* base = topo.vertex_faces(0).data();
-  parallel_chunks(nv, 8192, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t v = begin; v < end; ++v) {
-      const auto faces = topo.vertex_faces(v);
-      const auto corners = topo.vertex_face_corners(v);
-      const auto offset = static_cast<std::int32_t>(faces.data() - base);
-      for (std::size_t i = 0; i < faces.size(); ++i)
-        slots[faces[i]][corners[i]] = offset + static_cast<std::int32_t>(i);
+std::atomic<std::size_t>& curvature_fit_step_faces() {
+  static std::atomic<std::size_t> faces{32768};
+  return faces;
+}
+
+// The schedule (FitSchedule) and every corner's slot, in two parallel
+// passes over fixed chunks of vertices: per chunk, how many slots its
+// vertices take (per step for those in one step, in all for the others) and
+// how many it completes per step; then, from these counts' prefix sums over
+// the chunks, each vertex's first slot and place in the completion order,
+// and its corners' slots. The same schedule as one serial pass in vertex
+// order, at any thread count.
+void fill_corner_slots(const Topology& topo, FaceFitScratch& scratch) {
+  FitSchedule& out = scratch.schedule;
+  out = FitSchedule{};
+  const std::size_t nv = topo.vertex_count(), nf = topo.face_count();
+  auto& slots = scratch.corner_slot;
+  slots.resize(nf);
+  if (nv == 0 || nf == 0) return;
+  std::size_t step_faces = curvature_fit_step_faces().load();
+  if (step_faces == 0 || step_faces > nf) step_faces = nf;
+  const std::size_t steps = (nf + step_faces - 1) / step_faces;
+  out.step_faces = step_faces;
+  out.steps = steps;
+  constexpr std::size_t kChunk = 8192;
+  const std::size_t chunks = (nv + kChunk - 1) / kChunk;
+  // Per chunk and step: local slots (and at step `steps`, the spread
+  // vertices' slots), and completed vertices; made running sums below.
+  std::vector<std::int32_t> local(chunks * (steps + 1), 0), done(chunks * steps, 0);
+  // Per vertex, until replaced by its first slot: its last step, or -2 -
+  // that step when it is spread over several; -1 without faces.
+  out.start.resize(nv);
+  const auto step_of = [&](std::int32_t face) {
+    return static_cast<std::int32_t>(static_cast<std::size_t>(face) / step_faces);
+  };
+  parallel_chunks(chunks, 1, [&](std::size_t c0, std::size_t c1) {
+    for (std::size_t c = c0; c < c1; ++c) {
+      std::int32_t* const loc = local.data() + c * (steps + 1);
+      std::int32_t* const dn = done.data() + c * steps;
+      for (std::size_t v = c * kChunk, e = std::min(nv, v + kChunk); v < e; ++v) {
+        const auto faces = topo.vertex_faces(v);
+        if (faces.empty()) {
+          out.start[v] = -1;
+          continue;
+        }
+        const std::int32_t s0 = step_of(faces.front()), s1 = step_of(faces.back());
+        const auto n = static_cast<std::int32_t>(faces.size());
+        loc[s0 == s1 ? static_cast<std::size_t>(s1) : steps] += n;
+        ++dn[s1];
+        out.start[v] = s0 == s1 ? s1 : -2 - s1;
+      }
+    }
+  });
+  // Exclusive running sums over the chunks: the spread vertices' slots
+  // first, then each step's region (the same for every step).
+  std::int32_t spread = 0, region = 0;
+  out.completed.assign(steps + 1, 0);
+  for (std::size_t c = 0; c < chunks; ++c) {
+    std::int32_t& n = local[c * (steps + 1) + steps];
+    const std::int32_t here = n;
+    n = spread;
+    spread += here;
+  }
+  for (std::size_t s = 0; s < steps; ++s) {
+    std::int32_t at = 0;
+    std::size_t finished = 0;
+    for (std::size_t c = 0; c < chunks; ++c) {
+      std::int32_t& n = local[c * (steps + 1) + s];
+      const std::int32_t here = n;
+      n = at;
+      at += here;
+      std::int32_t& d = done[c * steps + s];
+      const auto dhere = static_cast<std::size_t>(d);
+      d = static_cast<std::int32_t>(finished);
+      finished += dhere;
+    }
+    region = std::max(region, at);
+    out.completed[s + 1] = out.completed[s] + finished;
+  }
+  out.capacity = static_cast<std::size_t>(spread + region);
+  out.vertices.resize(out.completed[steps]);
+  parallel_chunks(chunks, 1, [&](std::size_t c0, std::size_t c1) {
+    for (std::size_t c = c0; c < c1; ++c) {
+      std::int32_t* const loc = local.data() + c * (steps + 1);
+      std::int32_t* const dn = done.data() + c * steps;
+      for (std::size_t v = c * kChunk, e = std::min(nv, v + kChunk); v < e; ++v) {
+        const std::int32_t code = out.start[v];
+        const auto faces = topo.vertex_faces(v);
+        const auto corners = topo.vertex_face_corners(v);
+        if (code == -1) {
+          out.start[v] = 0;  // (no slots)
+          continue;
+        }
+        const bool spread_out = code < -1;
+        const auto s1 = static_cast<std::size_t>(spread_out ? -2 - code : code);
+        std::int32_t& at = loc[spread_out ? steps : s1];
+        const std::int32_t first = spread_out ? at : spread + at;
+        at += static_cast<std::int32_t>(faces.size());
+        out.start[v] = first;
+        out.vertices[out.completed[s1] + static_cast<std::size_t>(dn[s1]++)] =
+            static_cast<std::int32_t>(v);
+        for (std::size_t i = 0; i < faces.size(); ++i)
+          slots[faces[i]][corners[i]] = first + static_cast<std::int32_t>(i);
+      }
     }
   });
 }
@@ -183,18 +275,42 @@ FitArrays fit_arrays(const CurvatureInputs& in, const std::uint8_t* valid,
           &scratch.fit_slots[0]};
 }
 
-/// One face pass (II or C fit) over all faces, eight at a time, AVX2 where
-/// the CPU has it: both versions give the same bits.
-template <class Portable, class Avx2>
-void run_face_pass(std::size_t nf, const FitArrays& arrays, const Portable& portable,
-                   const Avx2& avx2) {
+/// One fit (II or C) step by step (FitSchedule): the face pass over the
+/// step's faces, eight at a time, AVX2 where the CPU has it (both versions
+/// give the same bits); then sum(v, slots) for each vertex the step
+/// completes, `slots` its first slot. `beside` runs beside the first face
+/// pass (the first touch of the outputs' memory).
+template <class Portable, class Avx2, class Sum, class Beside>
+void run_fit(std::size_t nf, const FitArrays& arrays, const FitSchedule& sch,
+             const Portable& portable, const Avx2& avx2, const Sum& sum, const Beside& beside) {
+  if (sch.steps == 0) {
+    beside();
+    return;
+  }
   const bool wide = curvature_avx2_enabled().load(std::memory_order_relaxed);
-  parallel_chunks(nf, kFaceGrain, [&](std::size_t begin, std::size_t end) {
-    if (wide)
-      avx2(arrays, begin, end);
+  for (std::size_t s = 0; s < sch.steps; ++s) {
+    const std::size_t f0 = s * sch.step_faces, f1 = std::min(nf, f0 + sch.step_faces);
+    const auto face_pass = [&] {
+      parallel_chunks(f1 - f0, kFaceGrain, [&](std::size_t begin, std::size_t end) {
+        if (wide)
+          avx2(arrays, f0 + begin, f0 + end);
+        else
+          portable(arrays, f0 + begin, f0 + end);
+      });
+    };
+    if (s == 0)
+      tbb::parallel_invoke(face_pass, beside);
     else
-      portable(arrays, begin, end);
-  });
+      face_pass();
+    const std::int32_t* const done = sch.vertices.data() + sch.completed[s];
+    parallel_chunks(sch.completed[s + 1] - sch.completed[s], kVertexGrain,
+                    [&](std::size_t begin, std::size_t end) {
+                      for (std::size_t i = begin; i < end; ++i) {
+                        const auto v = static_cast<std::size_t>(done[i]);
+                        sum(v, arrays.slots + sch.start[v]);
+                      }
+                    });
+  }
 }
 
 }  // namespace
@@ -202,18 +318,22 @@ void run_face_pass(std::size_t nf, const FitArrays& arrays, const Portable& port
 // Layout (for speed): per-vertex data the face passes need is packed into
 // one record per vertex; each face pass fits its tensor and immediately
 // re-expresses it in the frame of each of its three vertices, writing the
-// weighted result into that corner's slot of a CSR array ordered like
-// topology().vertex_faces(v). The vertex pass then sums contiguous slots in
-// that fixed order: no scattered reads, no atomics, same bits at any thread
-// count.
+// weighted result into that corner's slot (each vertex's slots contiguous,
+// ordered like topology().vertex_faces(v)). The vertex pass then sums a
+// vertex's slots in that fixed order: no scattered reads, no atomics, same
+// bits at any thread count. Faces go in steps (FitSchedule), after each of
+// which the vertices it completes are summed, so slots exist only for one
+// step's vertices and for those spread over several steps (igea: 256k of
+// 806k corners).
 PrincipalCurvatures estimate_curvature(const CurvatureInputs& in, FaceFitScratch& scratch) {
   const TriangleMesh& mesh = in.mesh;
   const Topology& topo = in.topology;
   const std::size_t nf = mesh.faces.size();
   const std::size_t nv = mesh.positions.size();
 
-  if (scratch.corner_slot.size() != nf) fill_corner_slots(topo, scratch.corner_slot);
-  scratch.fit_slots.resize(3 * nf);
+  if (scratch.corner_slot.size() != nf || scratch.schedule.start.size() != nv)
+    fill_corner_slots(topo, scratch);
+  scratch.fit_slots.resize(scratch.schedule.capacity);
 
   // Per vertex: normal and reference tangent frame (x = u, y = v = n x u).
   // Usually already filled by the vertex-normal pass (surface.cpp).
@@ -229,56 +349,47 @@ PrincipalCurvatures estimate_curvature(const CurvatureInputs& in, FaceFitScratch
     });
   }
 
-  auto& slots = scratch.fit_slots;
   PrincipalCurvatures out;
-  // The outputs' fresh memory is filled while the face pass runs.
-  tbb::parallel_invoke(
-      [&] {
-        if (nf == 0) return;
-        run_face_pass(nf, fit_arrays(in, in.normal_valid.data(), scratch),
-                      fitk::fit_second_fundamental_forms<fitk::FloatLanes>,
-                      fit_second_fundamental_forms_avx2);
-      },
-      [&] {
-        assign_large(out.k1, nv, 0.0);
-        assign_large(out.k2, nv, 0.0);
-        assign_large(out.e1, nv, Vec3(Vec3::Zero()));
-        assign_large(out.e2, nv, Vec3(Vec3::Zero()));
-        out.valid.assign(nv, 0);
-      });
-  const auto* base = nv ? topo.vertex_faces(0).data() : nullptr;
-  parallel_chunks(nv, kVertexGrain, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t vi = begin; vi < end; ++vi) {
-      if (!in.normal_valid[vi]) continue;
-      const auto faces = topo.vertex_faces(vi);
-      const std::size_t first = static_cast<std::size_t>(faces.data() - base);
-      float ku = 0, kuv = 0, kv = 0, wsum = 0;
-      for (std::size_t i = 0; i < faces.size(); ++i) {
-        const auto& c = slots[first + i];
-        if (!(c[4] > 0.0f)) continue;
-        ku += c[0];
-        kuv += c[1];
-        kv += c[2];
-        wsum += c[4];
-      }
-      if (!(wsum > 0.0f)) continue;
-      const double inv = 1.0 / double(wsum);
-      const FitVertex& F = frames[vi];
-      const PrincipalFrame pf =
-          diagonalize({ku * inv, kuv * inv, kv * inv}, Vec3(F.x[0], F.x[1], F.x[2]),
-                      Vec3(F.y[0], F.y[1], F.y[2]), in.vertex_normals[vi]);
-      if (!std::isfinite(pf.k1) || !std::isfinite(pf.k2)) continue;
-      // The float frame (u, v) is orthonormal to float rounding only:
-      // e1 is made a unit tangent again in double, e2 = n x e1.
-      const Vec3& n = in.vertex_normals[vi];
-      const Vec3 e1 = (pf.e1 - pf.e1.dot(n) * n).normalized();
-      out.k1[vi] = pf.k1;
-      out.k2[vi] = pf.k2;
-      out.e1[vi] = e1;
-      out.e2[vi] = n.cross(e1);
-      out.valid[vi] = 1;
+  // Per vertex: the sum of its slots in CSR order, diagonalised.
+  const auto sum = [&](std::size_t vi, const FitSlot* slots) {
+    if (!in.normal_valid[vi]) return;
+    const std::size_t count = topo.vertex_faces(vi).size();
+    float ku = 0, kuv = 0, kv = 0, wsum = 0;
+    for (std::size_t i = 0; i < count; ++i) {
+      const auto& c = slots[i];
+      if (!(c[4] > 0.0f)) continue;
+      ku += c[0];
+      kuv += c[1];
+      kv += c[2];
+      wsum += c[4];
     }
-  });
+    if (!(wsum > 0.0f)) return;
+    const double inv = 1.0 / double(wsum);
+    const FitVertex& F = frames[vi];
+    const PrincipalFrame pf =
+        diagonalize({ku * inv, kuv * inv, kv * inv}, Vec3(F.x[0], F.x[1], F.x[2]),
+                    Vec3(F.y[0], F.y[1], F.y[2]), in.vertex_normals[vi]);
+    if (!std::isfinite(pf.k1) || !std::isfinite(pf.k2)) return;
+    // The float frame (u, v) is orthonormal to float rounding only:
+    // e1 is made a unit tangent again in double, e2 = n x e1.
+    const Vec3& n = in.vertex_normals[vi];
+    const Vec3 e1 = (pf.e1 - pf.e1.dot(n) * n).normalized();
+    out.k1[vi] = pf.k1;
+    out.k2[vi] = pf.k2;
+    out.e1[vi] = e1;
+    out.e2[vi] = n.cross(e1);
+    out.valid[vi] = 1;
+  };
+  // The outputs' fresh memory is filled while the first face pass runs.
+  run_fit(nf, fit_arrays(in, in.normal_valid.data(), scratch), scratch.schedule,
+          fitk::fit_second_fundamental_forms<fitk::FloatLanes>, fit_second_fundamental_forms_avx2,
+          sum, [&] {
+            assign_large(out.k1, nv, 0.0);
+            assign_large(out.k2, nv, 0.0);
+            assign_large(out.e1, nv, Vec3(Vec3::Zero()));
+            assign_large(out.e2, nv, Vec3(Vec3::Zero()));
+            out.valid.assign(nv, 0);
+          });
   return out;
 }
 
@@ -290,12 +401,11 @@ CurvatureDerivatives estimate_curvature_derivatives(const CurvatureInputs& in,
   const std::size_t nf = mesh.faces.size();
   const std::size_t nv = mesh.positions.size();
 
-  auto& slots = scratch.fit_slots;
   CurvatureDerivatives out;
+  // Per vertex, what the face pass reads (x = e1, y = e2), in the buffer the
+  // II fit used for its frames; the outputs' fresh memory filled meanwhile.
   tbb::parallel_invoke(
       [&] {
-        // Per vertex, what the face pass reads (x = e1, y = e2), in the buffer the
-        // II fit used for its frames.
         auto& vrec = scratch.vertices;
         vrec.resize(nv);
         scratch.frames_ready = false;
@@ -304,11 +414,6 @@ CurvatureDerivatives estimate_curvature_derivatives(const CurvatureInputs& in,
             set_fit_vertex(vrec[v], in.vertex_normals[v], curv.e1[v], curv.e2[v],
                            curv.valid[v] ? curv.k1[v] : 0.0, curv.valid[v] ? curv.k2[v] : 0.0);
         });
-        if (nf == 0) return;
-        // Face pass: re-uses the slot map of the II fit.
-        run_face_pass(nf, fit_arrays(in, curv.valid.data(), scratch),
-                      fitk::fit_curvature_derivatives<fitk::FloatLanes>,
-                      fit_curvature_derivatives_avx2);
       },
       [&] {
         assign_large(out.a, nv, 0.0);
@@ -317,29 +422,29 @@ CurvatureDerivatives estimate_curvature_derivatives(const CurvatureInputs& in,
         assign_large(out.d, nv, 0.0);
         out.valid.assign(nv, 0);
       });
-  const auto* base = nv ? topo.vertex_faces(0).data() : nullptr;
-  parallel_chunks(nv, kVertexGrain, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t vi = begin; vi < end; ++vi) {
-      if (!curv.valid[vi]) continue;
-      const auto faces = topo.vertex_faces(vi);
-      const std::size_t first = static_cast<std::size_t>(faces.data() - base);
-      float acc[4] = {0.0f, 0.0f, 0.0f, 0.0f};
-      float wsum = 0.0f;
-      for (std::size_t i = 0; i < faces.size(); ++i) {
-        const auto& c = slots[first + i];
-        if (!(c[4] > 0.0f)) continue;
-        for (int k = 0; k < 4; ++k) acc[k] += c[k];
-        wsum += c[4];
-      }
-      if (!(wsum > 0.0f)) continue;
-      const double inv = 1.0 / double(wsum);
-      out.a[vi] = acc[0] * inv;
-      out.b[vi] = acc[1] * inv;
-      out.c[vi] = acc[2] * inv;
-      out.d[vi] = acc[3] * inv;
-      out.valid[vi] = 1;
+  const auto sum = [&](std::size_t vi, const FitSlot* slots) {
+    if (!curv.valid[vi]) return;
+    const std::size_t count = topo.vertex_faces(vi).size();
+    float acc[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+    float wsum = 0.0f;
+    for (std::size_t i = 0; i < count; ++i) {
+      const auto& c = slots[i];
+      if (!(c[4] > 0.0f)) continue;
+      for (int k = 0; k < 4; ++k) acc[k] += c[k];
+      wsum += c[4];
     }
-  });
+    if (!(wsum > 0.0f)) return;
+    const double inv = 1.0 / double(wsum);
+    out.a[vi] = acc[0] * inv;
+    out.b[vi] = acc[1] * inv;
+    out.c[vi] = acc[2] * inv;
+    out.d[vi] = acc[3] * inv;
+    out.valid[vi] = 1;
+  };
+  // The slot map and schedule of the II fit.
+  run_fit(nf, fit_arrays(in, curv.valid.data(), scratch), scratch.schedule,
+          fitk::fit_curvature_derivatives<fitk::FloatLanes>, fit_curvature_derivatives_avx2, sum,
+          [] {});
   return out;
 }
 

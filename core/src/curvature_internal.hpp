@@ -24,12 +24,37 @@ struct CurvatureInputs {
   const std::vector<std::uint8_t>& normal_valid;
 };
 
+/// Where the fits keep the per-corner slots, and in which order they visit
+/// the faces and vertices, so that fewer slots than corners exist at once:
+/// the faces go in steps of `step_faces` consecutive faces; after step s,
+/// the vertices whose last face is in it (all of their slots written) are
+/// summed. A vertex whose faces all lie in one step has its slots in a
+/// region that every step reuses; the others (faces in several steps) keep
+/// theirs, after one another, until the end. Vertex v's slots are
+/// [start[v], start[v] + its face count), in its vertex_faces order, which
+/// its sum reads in that order, as one pass over all faces and then all
+/// vertices would: the same bits at any step size (0: one step, a slot for
+/// every corner). On a mesh whose faces follow its vertices' order (igea,
+/// scans) most vertices are in one step.
+struct FitSchedule {
+  std::size_t step_faces = 0, steps = 0;
+  std::vector<std::int32_t> start;     ///< per vertex: its first slot
+  std::vector<std::int32_t> vertices;  ///< the vertices with faces, by their last step
+  std::vector<std::size_t> completed;  ///< step s sums vertices[completed[s], completed[s + 1])
+  std::size_t capacity = 0;            ///< slots in all
+};
+
+/// The faces per step of the fits (FitSchedule; tests set other sizes: the
+/// bits do not depend on it).
+std::atomic<std::size_t>& curvature_fit_step_faces();
+
 /// Buffers shared by the passes of one Surface (allocated once, reused, so
-/// that fresh memory, whose first touch is expensive, is touched once): each
-/// (face, corner)'s position in the vertex -> faces CSR list; one slot per
-/// such position for the fits (II: 3 values, C: 4, then the weight, 0 = not
-/// used; float, curvature_fit_kernel.hpp); and one float record per vertex.
+/// that fresh memory, whose first touch is expensive, is touched once): the
+/// slot schedule and each (face, corner)'s slot; the slots (II: 3 values,
+/// C: 4, then the weight, 0 = not used; float, curvature_fit_kernel.hpp);
+/// and one float record per vertex.
 struct FaceFitScratch {
+  FitSchedule schedule;
   ScratchArray<std::array<std::int32_t, 3>> corner_slot;
   ScratchArray<FitSlot> fit_slots;
   ScratchArray<FitVertex> vertices;
@@ -59,10 +84,11 @@ std::atomic<bool>& curvature_avx2_enabled();
 void vertex_frame(const TriangleMesh& mesh, const Topology& topo, std::size_t vtx, const Vec3& n,
                   Vec3& u, Vec3& v);
 
-/// For every (face, corner), its position in the vertex -> faces CSR list
-/// of `topo`, so a face pass can write per-corner results where a vertex
-/// pass reads them contiguously, in vertex_faces(v) order.
-void fill_corner_slots(const Topology& topo, ScratchArray<std::array<std::int32_t, 3>>& slots);
+/// The fits' schedule (FitSchedule, with curvature_fit_step_faces()) and,
+/// for every (face, corner), its slot, so a face pass can write per-corner
+/// results where a vertex pass reads them contiguously, in vertex_faces(v)
+/// order.
+void fill_corner_slots(const Topology& topo, FaceFitScratch& scratch);
 
 /// Rusinkiewicz per-face fit of II and its re-expression at the vertices.
 /// Fills scratch (kept for the derivative fit).

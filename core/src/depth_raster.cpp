@@ -183,10 +183,14 @@ struct RasterScratch {
   };
   static_assert(std::is_trivially_default_constructible_v<Corner> &&
                 std::is_trivially_default_constructible_v<Binned>);
+  // One chunk of faces' triangles, by (group, band, face): (group g, band
+  // k)'s are [start[g * bands + k], start[g * bands + k + 1]).
+  struct Chunk {
+    Array<Binned> binned;
+    std::vector<std::uint32_t> start;
+  };
   Array<Corner> corners;
-  Array<Binned> per_face;            // face -1: covers no pixel centre
-  std::vector<std::uint32_t> count;  // [chunk][group][band], then offsets
-  Array<Binned> binned;              // by (group, band, chunk, face)
+  std::vector<Chunk> chunks;
 };
 
 RasterScratchSlot::RasterScratchSlot() = default;
@@ -209,9 +213,9 @@ RasterScratch& RasterScratchSlot::get() {
 // the same order), so the buffer is bit-identical to it; what changed is
 // which triangles and pixels are visited:
 //  * only pixel centres inside a triangle's bounding box are tested;
-//  * triangles are binned into 32-row bands per fixed chunk of faces (count,
-//    then fill; both in parallel over chunks) and the bands are rasterised
-//    in parallel;
+//  * triangles are binned into 32-row bands per fixed chunk of faces, each
+//    chunk into a list of its own (in parallel over chunks), and the bands
+//    are rasterised in parallel, each band's triangles chunk after chunk;
 //  * in each band the triangles facing the camera in the image (negative
 //    signed area: counter-clockwise in a y-up view) are drawn first, then the
 //    others, each of which is skipped when every pixel of its box already
@@ -292,54 +296,38 @@ void render_depth(const TriangleMesh& mesh, const Camera& camera, DepthBuffer& b
     }
     return true;
   };
-  // count[(c * 2 + g) * nb + band]: entries of chunk c, group g in the band.
-  std::vector<std::uint32_t>& count = scratch.count;
-  count.assign(chunks * 2 * nb, 0);
-  auto& per_face = scratch.per_face;
-  per_face.resize(nf);
+  // Per chunk of faces (in parallel), its triangles binned by group and
+  // band in a list of its own: the chunks' lists are small pieces (a few
+  // hundred kB each on a 270k-face mesh) instead of one array of every
+  // band's triangles and one of every face's. A chunk's triangles are set
+  // up once into a buffer of the task's, counted, then copied to their
+  // bins.
+  scratch.chunks.resize(chunks);
   tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
-    std::uint32_t* cnt = count.data() + c * 2 * nb;
+    const std::size_t f0 = c * kChunk, f1 = std::min(nf, f0 + kChunk);
+    const std::unique_ptr<Binned[]> local(new Binned[f1 - f0]);
+    detail::RasterScratch::Chunk& chunk = scratch.chunks[c];
+    std::vector<std::uint32_t>& start = chunk.start;
+    start.assign(2 * nb + 1, 0);
     std::size_t g;
-    for (std::size_t f = c * kChunk; f < std::min(nf, (c + 1) * kChunk); ++f) {
-      Binned& e = per_face[f];
+    for (std::size_t f = f0; f < f1; ++f) {
+      Binned& e = local[f - f0];
       if (setup(f, e, g)) {
         for (int k = e.y0 / kBand; k <= e.y1 / kBand; ++k)
-          ++cnt[g * nb + static_cast<std::size_t>(k)];
+          ++start[g * nb + static_cast<std::size_t>(k) + 1];
       } else {
         e.face = -1;
       }
     }
-  });
-  // Offsets in (group, band, chunk) order: each band's entries of a group
-  // are contiguous and in face order.
-  std::uint32_t total = 0;
-  for (std::size_t g = 0; g < 2; ++g)
-    for (std::size_t k = 0; k < nb; ++k)
-      for (std::size_t c = 0; c < chunks; ++c) {
-        std::uint32_t& n = count[(c * 2 + g) * nb + k];
-        const std::uint32_t here = n;
-        n = total;
-        total += here;
-      }
-  // Start of (group, band): the offset of its first chunk; the end is the
-  // start of the next (group, band), or `total`.
-  auto range_start = [&](std::size_t g, std::size_t k) {
-    return count[g * nb + k];  // chunk 0
-  };
-  std::vector<std::uint32_t> starts(2 * nb + 1);
-  for (std::size_t g = 0; g < 2; ++g)
-    for (std::size_t k = 0; k < nb; ++k) starts[g * nb + k] = range_start(g, k);
-  starts[2 * nb] = total;
-  auto& binned = scratch.binned;
-  binned.resize(total);
-  tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
-    std::uint32_t* cursor = count.data() + c * 2 * nb;
-    for (std::size_t f = c * kChunk; f < std::min(nf, (c + 1) * kChunk); ++f) {
-      const Binned& e = per_face[f];
+    for (std::size_t i = 0; i < 2 * nb; ++i) start[i + 1] += start[i];
+    chunk.binned.resize(start[2 * nb]);
+    std::vector<std::uint32_t> cursor(start.begin(), start.end() - 1);
+    for (std::size_t f = f0; f < f1; ++f) {
+      const Binned& e = local[f - f0];
       if (e.face < 0) continue;
-      const std::size_t g = e.area < 0.0 ? 0 : 1;
+      const std::size_t h = e.area < 0.0 ? 0 : 1;
       for (int k = e.y0 / kBand; k <= e.y1 / kBand; ++k)
-        binned[cursor[g * nb + static_cast<std::size_t>(k)]++] = e;
+        chunk.binned[cursor[h * nb + static_cast<std::size_t>(k)]++] = e;
     }
   });
   tbb::parallel_for(std::size_t{0}, nb, [&](std::size_t band) {
@@ -352,26 +340,22 @@ void render_depth(const TriangleMesh& mesh, const Camera& camera, DepthBuffer& b
     if (faces)
       std::fill(seen + static_cast<std::size_t>(y_lo) * W,
                 seen + static_cast<std::size_t>(y_hi + 1) * W, -1);
-    const std::uint32_t* const at = starts.data() + band;
-    detail::RasterBand job{binned.data.get() + at[0],
-                           binned.data.get() + at[nb],
-                           mesh.faces.data(),
-                           proj.data.get(),
-                           image,
-                           faces ? seen : nullptr,
-                           W,
-                           y_lo,
-                           y_hi,
-                           perspective};
-    // The triangles facing the camera first (group 0), then the others.
-    for (std::size_t g = 0; g < 2; ++g) {
-      job.first = binned.data.get() + at[g * nb];
-      job.last = binned.data.get() + at[g * nb + 1];
-      if (avx2)
-        detail::draw_band_avx2(job);
-      else
-        detail::draw_band_portable(job);
-    }
+    detail::RasterBand job{
+        nullptr, nullptr, mesh.faces.data(), proj.data.get(), image, faces ? seen : nullptr, W,
+        y_lo,    y_hi,    perspective};
+    // The triangles facing the camera first (group 0), then the others;
+    // each group's in face order (chunk after chunk).
+    for (std::size_t g = 0; g < 2; ++g)
+      for (detail::RasterScratch::Chunk& chunk : scratch.chunks) {
+        const std::uint32_t* const at = chunk.start.data() + g * nb + band;
+        if (at[0] == at[1]) continue;
+        job.first = chunk.binned.data.get() + at[0];
+        job.last = chunk.binned.data.get() + at[1];
+        if (avx2)
+          detail::draw_band_avx2(job);
+        else
+          detail::draw_band_portable(job);
+      }
   });
 }
 

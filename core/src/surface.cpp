@@ -176,7 +176,7 @@ void compute_face_and_vertex(const TriangleMesh& mesh, const Topology& topo,
                        [&] {
                          if (!vertex_normals) return;
                          // The fits' CSR slot of each corner (kept for them).
-                         detail::fill_corner_slots(topo, scratch->corner_slot);
+                         detail::fill_corner_slots(topo, *scratch);
                          weights.resize(nf);
                          scratch->vertices.resize(nv);
                        });

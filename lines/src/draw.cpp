@@ -125,11 +125,12 @@ LineDrawing draw_lines(const Surface& surface, const Camera& camera,
                        const DrawLinesOptions& options) {
   // One drawing, so nothing is kept for a next view, and the three phases'
   // working memory is not alive at once (docs/PERFORMANCE.md, peak memory):
-  // the depth buffer is rendered first and its raster scratch (projected
-  // corners, binned triangles: ~5x the buffer) freed; the extractor (line
-  // precompute, view fields, about half the peak on igea) is freed once the
-  // segments are extracted, before chaining, smoothing and hidden-line
-  // removal.
+  // the extractor (line precompute, view fields, about half the peak on
+  // igea) is freed once the segments are extracted, and the soups once
+  // chained; only then is the depth buffer rendered (its raster scratch,
+  // projected corners and binned triangles, ~3x the buffer, in the memory
+  // they left), so neither the buffer nor the scratch adds to the
+  // extraction's peak.
   validate(options);
   // Built first, so that bad options are reported before anything is
   // computed, as LineDrawer does (its precompute is filled on extraction).
@@ -156,15 +157,15 @@ LineDrawing draw_lines(const Surface& surface, const Camera& camera,
       break;
     }
   const double feature_size = extractor->feature_size();
-  DepthBuffer depth;
-  if (options.visibility) {
-    validate_camera(camera);  // as the extraction would, before the raster reads it
-    render_depth(surface.mesh(), camera, depth);
-    depth.scratch = detail::RasterScratchSlot();
-  }
   std::vector<SegmentSoup> soups = extractor->extract(camera);
   extractor.reset();
   LineDrawing drawing = chain_soups(std::move(soups), feature_size, camera, options);
+  DepthBuffer depth;
+  if (options.visibility) {
+    validate_camera(camera);  // (the extraction did; not when it has no family)
+    render_depth(surface.mesh(), camera, depth);
+    depth.scratch = detail::RasterScratchSlot();
+  }
   smooth_and_hide(drawing, surface, camera, options, options.visibility ? &depth : nullptr);
   return drawing;
 }

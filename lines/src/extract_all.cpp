@@ -181,7 +181,7 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
   detail::ChunkReady ready;
   if (pipelined) {
     dt1q1.emplace(fields_, *surface_, fields_.apparent_cull_threshold.has_value(), *precompute_,
-                  false);
+                  false, one_shot_);
     std::vector<std::int32_t>& top = apparent_faces_->top_vertex;
     if (top.empty()) {
       // Per chunk, the largest index among its faces' corners: a flat
@@ -251,7 +251,7 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
           break;
         }
         detail::update_dt1q1(fields_, *surface_, fields_.apparent_cull_threshold.has_value(),
-                             precompute_.get(), false);
+                             precompute_.get(), false, one_shot_);
         ring_done();
         if (three) {
           if (arrived.fetch_add(1) == 1) apparent_kernel();

@@ -42,6 +42,9 @@ struct LinePrecompute::Cache {
   bool tangent_ring_ready = false, blocks_ready = false;
   VertexBlocks blocks;
   TangentRing tangent_ring;
+  // With a streamed ring (only its layout in tangent_ring): each corner's
+  // rank in its vertex's fan (RingBuilder::layout).
+  std::unique_ptr<std::uint8_t[]> ring_order;
   std::vector<RawKey> ridge_keys, valley_keys, demarcating_keys;
   CornerRing ring;
   std::vector<double> abs_k1;
@@ -139,49 +142,53 @@ bool fan_order(const std::array<std::int32_t, 2>* o, std::int32_t k, std::uint8_
 
 }  // namespace
 
-const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
-  std::lock_guard lock(cache_->tangent_ring_mutex);
-  if (cache_->tangent_ring_ready) return cache_->tangent_ring;
-  // Isolated: a thread waiting inside takes no outer task that could ask
-  // for the ring again (the mutex is held).
-  tbb::this_task_arena::isolate([&] {
-    // Topology::vertex_face_opposite read in place (CSR like vertex_faces:
-    // the corner offset of vertex i is its vertex_faces(i) position).
-    const Topology& topo = surface_->topology();
-    const std::size_t nv = surface_->vertex_count();
-    const std::int32_t* const face_base = nv ? topo.vertex_faces(0).data() : nullptr;
-    auto corner_at = [&](std::size_t i) {
-      return static_cast<std::size_t>(topo.vertex_faces(i).data() - face_base);
-    };
-    const std::size_t corners = nv ? corner_at(nv - 1) + topo.vertex_faces(nv - 1).size() : 0;
-    const auto& pos = surface_->positions();
-    const auto& curv = surface_->curvature();
-    TangentRing& t = cache_->tangent_ring;
+namespace {
+
+// The two passes of the tangent ring (LinePrecompute::TangentRing): its
+// layout (each vertex's fan order, entry count and offset), then the entries
+// of each vertex, which depend on nothing else.
+class RingBuilder {
+ public:
+  explicit RingBuilder(const Surface& surface)
+      : topo_(surface.topology()),
+        pos_(surface.positions()),
+        curv_(surface.curvature()),
+        face_base_(surface.vertex_count() ? topo_.vertex_faces(0).data() : nullptr) {}
+
+  // Topology::vertex_face_opposite read in place (CSR like vertex_faces:
+  // the corner offset of vertex i is its vertex_faces(i) position).
+  std::size_t corner_at(std::size_t i) const {
+    return static_cast<std::size_t>(topo_.vertex_faces(i).data() - face_base_);
+  }
+
+  // t.fan and t.offset, and the rank of each fan face into `order` at the
+  // vertex's corner offset (left uninitialised: the entries pass reads it
+  // only for fans, whose entries this pass wrote). Returns `order`.
+  std::unique_ptr<std::uint8_t[]> layout(LinePrecompute::TangentRing& t) const {
+    const std::size_t nv = pos_.size();
+    const std::size_t corners = nv ? corner_at(nv - 1) + topo_.vertex_faces(nv - 1).size() : 0;
     // A fan also needs finite offsets (d·e1, d·e2) where the curvature is
     // valid. They are when every position is finite and below 1e30 in
     // magnitude and e1, e2 are finite with components at most 2 (|d·e| <
     // 3 · 2e30 · 2, far below FLT_MAX; a non-finite e gives a non-finite
     // product): then the fan pass needs no gather of the ring's positions,
-    // and the layout pass computes the offsets once, in place. Otherwise
+    // and the entries pass computes the offsets once, in place. Otherwise
     // they are computed to check (a Surface rejects coordinates beyond
     // 1e15, so only a frame that is not unit gets there).
     // (Every Surface's coordinates are at most 1e15 in magnitude:
     // check_mesh_indices_and_values, so positions_bounded always holds.)
     constexpr bool positions_bounded = true;
     auto unit_frame = [&](std::size_t i) {
-      const Vec3 &e1 = curv.e1[i], &e2 = curv.e2[i];
+      const Vec3 &e1 = curv_.e1[i], &e2 = curv_.e2[i];
       return positions_bounded && std::abs(e1[0]) <= 2.0 && std::abs(e1[1]) <= 2.0 &&
              std::abs(e1[2]) <= 2.0 && std::abs(e2[0]) <= 2.0 && std::abs(e2[1]) <= 2.0 &&
              std::abs(e2[2]) <= 2.0;
     };
-    // Fan order first: the rank of each fan face, into `order` at the
-    // vertex's corner offset (left uninitialised: the layout pass reads it
-    // only for fans, whose entries this pass wrote).
     // The pass runs over fixed chunks of vertices, each also writing its
     // vertices' entry counts into t.offset[i + 1] and summing them; the
     // offsets are then these counts' prefix sums, chunk after chunk (the
     // same at any thread count, no serial pass over the vertices).
-    const std::unique_ptr<std::uint8_t[]> order(new std::uint8_t[corners]);
+    std::unique_ptr<std::uint8_t[]> order(new std::uint8_t[corners]);
     t.fan.resize(nv);
     t.offset.resize(nv + 1);
     t.offset[0] = 0;
@@ -193,14 +200,14 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
         [&](std::size_t c) {
           std::int32_t entries = 0;
           for (std::size_t i = c * kChunk, e = std::min(nv, i + kChunk); i < e; ++i) {
-            const auto o = topo.vertex_face_opposite(i);
+            const auto o = topo_.vertex_face_opposite(i);
             const auto k = static_cast<std::int32_t>(o.size());
             std::uint8_t* const rank = order.get() + corner_at(i);
             bool fan = fan_order(o.data(), k, rank);
-            if (fan && curv.valid[i] && !unit_frame(i)) {
-              const Vec3 p = pos[i], e1 = curv.e1[i], e2 = curv.e2[i];
+            if (fan && curv_.valid[i] && !unit_frame(i)) {
+              const Vec3 p = pos_[i], e1 = curv_.e1[i], e2 = curv_.e2[i];
               for (std::int32_t j = 0; j < k && fan; ++j) {
-                const Vec3 d = pos[static_cast<std::size_t>(o[rank[j]][0])] - p;
+                const Vec3 d = pos_[static_cast<std::size_t>(o[rank[j]][0])] - p;
                 fan = std::isfinite(static_cast<float>(d.dot(e1))) &&
                       std::isfinite(static_cast<float>(d.dot(e2)));
               }
@@ -221,67 +228,131 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
             t.offset[i + 1] = at += t.offset[i + 1];
         },
         1);
-    const auto total = static_cast<std::size_t>(t.offset[nv]);
-    // Every entry is written below (no zeroing pass first): kPad entries
-    // after the last ring (vertex 0, zeros), so fixed-width reads past a
-    // short ring stay inside the arrays; zeros for the offsets of a vertex
-    // without valid curvature and for the rank outside fans.
-    t.vertex.resize(total + TangentRing::kPad);
-    t.rank.resize(total + TangentRing::kPad);
-    t.x.resize(total + TangentRing::kPad);
-    t.y.resize(total + TangentRing::kPad);
-    std::fill(t.vertex.begin() + total, t.vertex.end(), 0);
-    std::fill(t.rank.begin() + total, t.rank.end(), 0);
-    std::fill(t.x.begin() + total, t.x.end(), 0.0f);
-    std::fill(t.y.begin() + total, t.y.end(), 0.0f);
-    // Ring entries [0, m) of vertex i: offsets (d·e1, d·e2) of vertex[j],
-    // d = p_vertex[j] - p_i, as float; zeros where the curvature is invalid.
-    auto offsets = [&](std::size_t i, std::size_t m, const std::int32_t* vertex, float* x,
-                       float* y) {
-      if (!curv.valid[i]) {
-        std::fill(x, x + m, 0.0f);
-        std::fill(y, y + m, 0.0f);
-        return;
-      }
-      const Vec3 p = pos[i], e1 = curv.e1[i], e2 = curv.e2[i];
-      for (std::size_t j = 0; j < m; ++j) {
-        const Vec3 d = pos[static_cast<std::size_t>(vertex[j])] - p;
-        x[j] = static_cast<float>(d.dot(e1));
-        y[j] = static_cast<float>(d.dot(e2));
-      }
-    };
+    return order;
+  }
+
+  // The entries of vertex i (its fan flag, its count n = offset[i + 1] -
+  // offset[i] and, for a fan, its faces' ranks in order[corner_at(i)...])
+  // at vertex, rank, x, y [0, n).
+  void entries(std::size_t i, bool fan, std::size_t m, const std::uint8_t* order,
+               std::int32_t* vertex, std::uint8_t* rank_out, float* x, float* y) const {
+    const auto o = topo_.vertex_face_opposite(i);
+    const auto k = static_cast<std::int32_t>(o.size());
+    if (fan) {
+      // n_0 .. n_{k-1} in fan order, then n_0 again (the last face's
+      // second opposite corner).
+      const std::uint8_t* const rank = order + corner_at(i);
+      std::copy(rank, rank + k, rank_out);
+      rank_out[k] = 0;
+      for (std::int32_t j = 0; j < k; ++j) vertex[j] = o[rank[j]][0];
+      vertex[k] = o[rank[k - 1]][1];
+      // (the last entry is n_0's offset again)
+      offsets(i, static_cast<std::size_t>(k), vertex, x, y);
+      x[k] = x[0];
+      y[k] = y[0];
+      return;
+    }
+    std::fill(rank_out, rank_out + m, std::uint8_t{0});
+    for (std::int32_t j = 0; j < k; ++j) {
+      vertex[2 * j] = o[j][0];
+      vertex[2 * j + 1] = o[j][1];
+    }
+    offsets(i, m, vertex, x, y);
+  }
+
+ private:
+  // Ring entries [0, m) of vertex i: offsets (d·e1, d·e2) of vertex[j],
+  // d = p_vertex[j] - p_i, as float; zeros where the curvature is invalid.
+  void offsets(std::size_t i, std::size_t m, const std::int32_t* vertex, float* x, float* y) const {
+    if (!curv_.valid[i]) {
+      std::fill(x, x + m, 0.0f);
+      std::fill(y, y + m, 0.0f);
+      return;
+    }
+    const Vec3 p = pos_[i], e1 = curv_.e1[i], e2 = curv_.e2[i];
+    for (std::size_t j = 0; j < m; ++j) {
+      const Vec3 d = pos_[static_cast<std::size_t>(vertex[j])] - p;
+      x[j] = static_cast<float>(d.dot(e1));
+      y[j] = static_cast<float>(d.dot(e2));
+    }
+  }
+
+  const Topology& topo_;
+  const std::vector<Vec3>& pos_;
+  const PrincipalCurvatures& curv_;
+  const std::int32_t* face_base_;
+};
+
+// Sizes t's entry arrays for `total` entries and writes their kPad entries
+// after them (vertex 0, zeros), so fixed-width reads past a short ring stay
+// inside them; every other entry is written by RingBuilder::entries (no
+// zeroing pass first).
+void size_ring_entries(LinePrecompute::TangentRing& t, std::size_t total) {
+  constexpr std::size_t kPad = LinePrecompute::TangentRing::kPad;
+  t.vertex.resize(total + kPad);
+  t.rank.resize(total + kPad);
+  t.x.resize(total + kPad);
+  t.y.resize(total + kPad);
+  std::fill(t.vertex.begin() + total, t.vertex.end(), 0);
+  std::fill(t.rank.begin() + total, t.rank.end(), 0);
+  std::fill(t.x.begin() + total, t.x.end(), 0.0f);
+  std::fill(t.y.begin() + total, t.y.end(), 0.0f);
+}
+
+}  // namespace
+
+const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
+  std::lock_guard lock(cache_->tangent_ring_mutex);
+  if (cache_->tangent_ring_ready && !cache_->ring_order) return cache_->tangent_ring;
+  // Isolated: a thread waiting inside takes no outer task that could ask
+  // for the ring again (the mutex is held).
+  tbb::this_task_arena::isolate([&] {
+    const RingBuilder build(*surface_);
+    TangentRing& t = cache_->tangent_ring;
+    const std::unique_ptr<std::uint8_t[]> order = build.layout(t);
+    cache_->ring_order.reset();
+    const std::size_t nv = surface_->vertex_count();
+    size_ring_entries(t, static_cast<std::size_t>(t.offset[nv]));
     detail::parallel_range(nv, [&](std::size_t i) {
-      const auto o = topo.vertex_face_opposite(i);
-      const auto k = static_cast<std::int32_t>(o.size());
       const auto n = static_cast<std::size_t>(t.offset[i]);
-      const auto m = static_cast<std::size_t>(t.offset[i + 1]) - n;  // entries
-      std::int32_t* const vertex = t.vertex.data() + n;
-      float* const x = t.x.data() + n;
-      float* const y = t.y.data() + n;
-      if (t.fan[i]) {
-        // n_0 .. n_{k-1} in fan order, then n_0 again (the last face's
-        // second opposite corner).
-        const std::uint8_t* const rank = order.get() + corner_at(i);
-        std::copy(rank, rank + k, t.rank.data() + n);
-        t.rank[n + static_cast<std::size_t>(k)] = 0;
-        for (std::int32_t j = 0; j < k; ++j) vertex[j] = o[rank[j]][0];
-        vertex[k] = o[rank[k - 1]][1];
-        // (the last entry is n_0's offset again)
-        offsets(i, static_cast<std::size_t>(k), vertex, x, y);
-        x[k] = x[0];
-        y[k] = y[0];
-        return;
-      }
-      std::fill(t.rank.data() + n, t.rank.data() + n + m, std::uint8_t{0});
-      for (std::int32_t j = 0; j < k; ++j) {
-        vertex[2 * j] = o[j][0];
-        vertex[2 * j + 1] = o[j][1];
-      }
-      offsets(i, m, vertex, x, y);
+      build.entries(i, t.fan[i], static_cast<std::size_t>(t.offset[i + 1]) - n, order.get(),
+                    t.vertex.data() + n, t.rank.data() + n, t.x.data() + n, t.y.data() + n);
     });
   });
   cache_->tangent_ring_ready = true;
   return cache_->tangent_ring;
+}
+
+const LinePrecompute::TangentRing& LinePrecompute::streamed_tangent_ring() const {
+  std::lock_guard lock(cache_->tangent_ring_mutex);
+  if (cache_->tangent_ring_ready) return cache_->tangent_ring;
+  tbb::this_task_arena::isolate(
+      [&] { cache_->ring_order = RingBuilder(*surface_).layout(cache_->tangent_ring); });
+  cache_->tangent_ring_ready = true;
+  return cache_->tangent_ring;
+}
+
+void LinePrecompute::tangent_ring_block(std::size_t v0, std::size_t v1, TangentRing& out) const {
+  // Called while the layout exists (streamed_tangent_ring(), or
+  // tangent_ring(), whose order is gone: then the entries are copied).
+  const TangentRing& t = cache_->tangent_ring;
+  const auto first = static_cast<std::size_t>(t.offset[v0]);
+  size_ring_entries(out, static_cast<std::size_t>(t.offset[v1]) - first);
+  if (!cache_->ring_order) {
+    const std::size_t n = static_cast<std::size_t>(t.offset[v1]) - first;
+    std::copy_n(t.vertex.data() + first, n, out.vertex.data());
+    std::copy_n(t.rank.data() + first, n, out.rank.data());
+    std::copy_n(t.x.data() + first, n, out.x.data());
+    std::copy_n(t.y.data() + first, n, out.y.data());
+    return;
+  }
+  const RingBuilder build(*surface_);
+  for (std::size_t i = v0; i < v1; ++i) {
+    const auto n = static_cast<std::size_t>(t.offset[i]) - first;
+    build.entries(i, t.fan[i], static_cast<std::size_t>(t.offset[i + 1] - t.offset[i]),
+                  cache_->ring_order.get(), out.vertex.data() + n, out.rank.data() + n,
+                  out.x.data() + n, out.y.data() + n);
+  }
 }
 
 void LinePrecompute::pack_vertex_blocks(std::size_t b0, std::size_t b1, VertexBlock* block,
@@ -351,6 +422,7 @@ void LinePrecompute::release_vertex_blocks() const {
 void LinePrecompute::release_tangent_ring() const {
   std::lock_guard lock(cache_->tangent_ring_mutex);
   cache_->tangent_ring = TangentRing{};
+  cache_->ring_order.reset();
   cache_->tangent_ring_ready = false;
 }
 

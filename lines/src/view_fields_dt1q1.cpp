@@ -337,6 +337,12 @@ struct RingPass {
   // position stream and a third of each record's stores (~0.2 ms a view on
   // igea at 1T) saved.
   bool write_pos = true;
+  // With a streamed ring (the one-shot extraction): each call builds the
+  // entries of its vertices (LinePrecompute::tangent_ring_block) and runs
+  // over them; nbr, xs, ys and rank then hold entries from off[b] on
+  // (entry_base), not from 0.
+  const LinePrecompute* stream = nullptr;
+  std::int32_t entry_base = 0;
 
   // The faces of vertex i with neighbours (a, b) (relative to the ring) in
   // the order given by `next` (returns false at the end), one at a time, as
@@ -365,7 +371,7 @@ struct RingPass {
   // Not a fan, or a fan with more than two candidate faces (p, cand).
   [[gnu::noinline]] double general(std::size_t i, const double* p, std::uint64_t cand, double c,
                                    double sn, double an, double q0) const {
-    const std::int32_t jb = off[i], m = off[i + 1] - jb;
+    const std::int32_t jb = off[i] - entry_base, m = off[i + 1] - off[i];
     const float *x = xs + jb, *y = ys + jb;
     if (!fan[i]) {
       int j = 0;
@@ -405,26 +411,46 @@ struct RingPass {
       store_apparent_vertex(packed[i], out[i], t1_world[i], q1[i]);
   }
 
+  // The run for this pass's entry base and record positions (inlined into
+  // each instruction set's caller).
+  template <bool Wide>
+  [[gnu::always_inline]] inline void run_for(std::size_t b, std::size_t e) const {
+    if (entry_base != 0 && write_pos)
+      run<Wide, true, true>(b, e);
+    else if (entry_base != 0)
+      run<Wide, false, true>(b, e);
+    else if (write_pos)
+      run<Wide, true, false>(b, e);
+    else
+      run<Wide, false, false>(b, e);
+  }
   // Copies of the pass (`r`) in registers, not reloaded after the stores.
   FABRICA_DT1Q1_MULTIVERSION void portable(std::size_t b, std::size_t e) const {
     const RingPass r = *this;
-    if (write_pos)
-      r.run<false, true>(b, e);
-    else
-      r.run<false, false>(b, e);
+    r.run_for<false>(b, e);
   }
 #if defined(FABRICA_LINES_AVX2)
   [[gnu::target("arch=x86-64-v3")]] void wide(std::size_t b, std::size_t e) const {
     const RingPass r = *this;
-    if (write_pos)
-      r.run<true, true>(b, e);
-    else
-      r.run<true, false>(b, e);
+    r.run_for<true>(b, e);
   }
 #endif
   // The same bits either way: the wide pass only finds the candidate faces
   // of a fan from float products where their signs are certain.
   void operator()(std::size_t b, std::size_t e) const {
+    if (stream) {
+      // This block's ring entries, then the pass over them.
+      LinePrecompute::TangentRing ring;
+      stream->tangent_ring_block(b, e, ring);
+      RingPass r = *this;
+      r.stream = nullptr;
+      r.nbr = ring.vertex.data();
+      r.xs = ring.x.data();
+      r.ys = ring.y.data();
+      r.rank = ring.rank.data();
+      r.entry_base = off[b];
+      return r(b, e);
+    }
 #if defined(FABRICA_LINES_AVX2)
     if (cpu_has_avx2()) return wide(b, e);
 #endif
@@ -462,8 +488,10 @@ struct RingPass {
   }
 #endif
 
-  template <bool Wide, bool Pos>
+  // Based: the entries start at off[b] (entry_base), not at 0.
+  template <bool Wide, bool Pos, bool Based>
   [[gnu::always_inline]] inline void run(std::size_t b, std::size_t e) const {
+    const std::int32_t base = Based ? entry_base : 0;
     constexpr int kQueue = 16;
     TwoFaces queue[kQueue];
     int nq = 0;
@@ -480,7 +508,7 @@ struct RingPass {
       nq = 0;
     };
     for (std::size_t i = b; i < e; ++i) {
-      const std::int32_t jb = off[i], je = off[i + 1];
+      const std::int32_t jb = off[i] - base, je = off[i + 1] - base;
       {
         // q1 of the neighbours of a vertex kAhead further (its ring
         // entries are read in order; q1 is scattered), every other entry,
@@ -488,7 +516,7 @@ struct RingPass {
         // misses them where culled vertices leave gaps (ring pass alone
         // 2.04 → 1.93 ms on igea at 1T, min of 60).
         constexpr std::size_t kAhead = 6;
-        const std::int32_t ahead = off[std::min(i + kAhead, e)];
+        const std::int32_t ahead = off[std::min(i + kAhead, e)] - base;
         const std::int32_t* a = nbr + ahead;
         for (int k = 0; k < 8; k += 2) __builtin_prefetch(q1 + a[k]);
         __builtin_prefetch(xs + ahead);
@@ -597,7 +625,7 @@ struct RingPass {
 
 // The RingPass of update_dt1q1 over the precomputed tangent ring.
 RingPass ring_pass(ViewFields& fields, const Surface& surface, bool cull,
-                   const LinePrecompute& precompute, bool write_positions) {
+                   const LinePrecompute& precompute, bool write_positions, bool stream_ring) {
   const auto& pos = surface.positions();
   const double* q1 = fields.q1.data();
   const std::uint8_t* sg = fields.signs.data();
@@ -609,7 +637,10 @@ RingPass ring_pass(ViewFields& fields, const Surface& surface, bool cull,
   // each neighbour's p·t2 is computed once for its two faces, and only the
   // faces whose corners can give a crossing (a superset, see
   // candidate_faces) are tested.
-  const LinePrecompute::TangentRing& tr = precompute.tangent_ring();
+  // A streamed ring: its entries are made per block (RingPass::stream).
+  const LinePrecompute::TangentRing& tr =
+      stream_ring ? precompute.streamed_tangent_ring() : precompute.tangent_ring();
+  const bool streamed = tr.vertex.empty();
   return RingPass{tr.offset.data(),
                   tr.vertex.data(),
                   tr.x.data(),
@@ -626,7 +657,8 @@ RingPass ring_pass(ViewFields& fields, const Surface& surface, bool cull,
                   fields.apparent_vertex.data(),
                   cull,
                   nullptr,
-                  write_positions};
+                  write_positions,
+                  streamed ? &precompute : nullptr};
 }
 
 }  // namespace
@@ -652,9 +684,9 @@ void attach_above_bits(RingPass& pass, const ViewFields& fields,
 }  // namespace
 
 Dt1q1Blocks::Dt1q1Blocks(ViewFields& fields, const Surface& surface, bool cull,
-                         const LinePrecompute& precompute, bool write_positions) {
+                         const LinePrecompute& precompute, bool write_positions, bool stream_ring) {
   const std::size_t nv = surface.vertex_count(), blocks = (nv + kBlock - 1) / kBlock;
-  state_.reset(new State{ring_pass(fields, surface, cull, precompute, write_positions),
+  state_.reset(new State{ring_pass(fields, surface, cull, precompute, write_positions, stream_ring),
                          nv,
                          blocks,
                          {},
@@ -702,7 +734,7 @@ void Dt1q1Blocks::ready_through(std::size_t v) {
 }
 
 void update_dt1q1(ViewFields& fields, const Surface& surface, bool cull,
-                  const LinePrecompute* precompute, bool write_positions) {
+                  const LinePrecompute* precompute, bool write_positions, bool stream_ring) {
   const std::size_t nv = surface.vertex_count();
   const auto& pos = surface.positions();
   const auto& normals = surface.vertex_normals();
@@ -720,7 +752,7 @@ void update_dt1q1(ViewFields& fields, const Surface& surface, bool cull,
   const double* q1 = fields.q1.data();
   const std::uint8_t* sg = fields.signs.data();
   if (precompute) {
-    RingPass pass = ring_pass(fields, surface, cull, *precompute, write_positions);
+    RingPass pass = ring_pass(fields, surface, cull, *precompute, write_positions, stream_ring);
     std::vector<std::uint32_t> above;
     attach_above_bits(pass, fields, above);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, Dt1q1Blocks::kBlock),

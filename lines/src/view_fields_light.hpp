@@ -61,9 +61,12 @@ void update_view_fields(ViewFields& fields, const Surface& surface, const Camera
 /// (dt1q1 0 elsewhere, records left as they were). `precompute` supplies
 /// the tangent ring; nullptr: from the topology. `write_positions` false:
 /// the records' positions are current (update_view_fields' same_surface)
-/// and are not written again (with `precompute` only).
+/// and are not written again (with `precompute` only). `stream_ring`: the
+/// ring is built a block of vertices at a time (for one view: less memory,
+/// LinePrecompute::streamed_tangent_ring), the same bits.
 void update_dt1q1(ViewFields& fields, const Surface& surface, bool cull,
-                  const LinePrecompute* precompute, bool write_positions = true);
+                  const LinePrecompute* precompute, bool write_positions = true,
+                  bool stream_ring = false);
 
 /// update_dt1q1 (with the precomputed tangent ring) in blocks of kBlock
 /// vertices that any thread can claim, in increasing vertex order, so a
@@ -83,7 +86,8 @@ class Dt1q1Blocks {
  public:
   static constexpr std::size_t kBlock = 2048;
   Dt1q1Blocks(ViewFields& fields, const Surface& surface, bool cull,
-              const LinePrecompute& precompute, bool write_positions = true);
+              const LinePrecompute& precompute, bool write_positions = true,
+              bool stream_ring = false);
   ~Dt1q1Blocks();
   Dt1q1Blocks(const Dt1q1Blocks&) = delete;
   Dt1q1Blocks& operator=(const Dt1q1Blocks&) = delete;

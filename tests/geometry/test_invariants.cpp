@@ -499,6 +499,44 @@ TEST(Determinism, Avx2CurvatureFitsMatchPortable) {
   }
 }
 
+// The fits keep slots only for the vertices of one step of faces and those
+// spread over several steps (curvature_internal.hpp, FitSchedule): the same
+// bits at any step size, from one step (a slot for every corner) to steps
+// of a few faces, on a mesh whose faces follow its vertices and on the same
+// mesh with its faces and vertices shuffled (most vertices then spread).
+TEST(Determinism, CurvatureFitStepsGiveTheSameBits) {
+  std::atomic<std::size_t>& step = detail::curvature_fit_step_faces();
+  const std::size_t saved = step.load();
+  TriangleMesh ordered = test::make_torus(16, 4.5, 120, 60, 0.2);
+  TriangleMesh shuffled = ordered;
+  std::mt19937 rng(7);
+  std::vector<std::int32_t> to(shuffled.positions.size());
+  std::iota(to.begin(), to.end(), 0);
+  std::shuffle(to.begin(), to.end(), rng);
+  for (std::size_t v = 0; v < to.size(); ++v) shuffled.positions[to[v]] = ordered.positions[v];
+  for (Face& f : shuffled.faces)
+    for (int k = 0; k < 3; ++k) f[k] = to[static_cast<std::size_t>(f[k])];
+  std::shuffle(shuffled.faces.begin(), shuffled.faces.end(), rng);
+  for (const TriangleMesh* m : {&ordered, &shuffled}) {
+    step = 0;
+    Surface whole(*m);
+    whole.precompute();
+    const auto expected = bytes_of(whole);
+    for (const std::size_t faces : {std::size_t{1}, std::size_t{37}, std::size_t{1000},
+                                    std::size_t{4096}, m->faces.size() - 1}) {
+      step = faces;
+      for (const int threads : {1, 2}) {
+        tbb::global_control gc(tbb::global_control::max_allowed_parallelism,
+                               static_cast<std::size_t>(threads));
+        Surface s(*m);
+        s.precompute();
+        EXPECT_EQ(bytes_of(s), expected) << faces << " faces a step, " << threads << " threads";
+      }
+    }
+  }
+  step = saved;
+}
+
 TEST(Determinism, ConcurrentLazyAccess) {
   const TriangleMesh m = test::make_torus(16, 4.5, 128, 64, 0.2);
   Surface ref(m);

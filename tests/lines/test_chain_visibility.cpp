@@ -153,6 +153,9 @@ TEST(DepthRaster, BitIdenticalToBruteForceOnClosedOpenAndClippedScenes) {
                translated(test::make_icosphere(1.5, 4), Vec3(0.8, 0.3, -2)));
     const TriangleMesh cylinder = test::make_cylinder(1.0, 3.0, 20, 48);
     const TriangleMesh torus = test::make_torus(2.0, 0.6, 64, 32, 0.05);
+    // More faces than one binning chunk (16384): the bands draw the chunks'
+    // triangles one chunk after another.
+    const TriangleMesh fine = test::make_torus(2.0, 0.6, 240, 100, 0.05);
     struct Case {
       const TriangleMesh* mesh;
       Camera camera;
@@ -164,6 +167,7 @@ TEST(DepthRaster, BitIdenticalToBruteForceOnClosedOpenAndClippedScenes) {
         {&torus, look_at(Vec3(0, 2, 8), Vec3(0, 0, 0), 200, 150, Projection::orthographic, 30)},
         {&spheres,
          look_at(Vec3(0.2, 0.1, -0.5), Vec3(0, 0, 1), 160, 120, Projection::perspective, 100)},
+        {&fine, look_at(Vec3(2, 5, 3), Vec3(0, 0, 0), 300, 260)},
     };
     DepthBuffer reused;  // rendered into again and again: working memory reused
     for (std::size_t i = 0; i < cases.size(); ++i) {

@@ -227,6 +227,47 @@ TEST(LinePrecompute, TangentRingAndVertexBlocksMatchAPlainComputation) {
   }
 }
 
+// The streamed ring (the one-shot extraction's): its layout is the whole
+// ring's, and each block's entries are those of the whole ring at
+// [offset[v0], offset[v1]), then kPad entries of vertex 0 and zeros; from
+// the layout alone and once the whole ring exists.
+TEST(LinePrecompute, StreamedTangentRingBlocksMatchTheWholeRing) {
+  const Surface surface = load_mesh("meshes/classic/libigl_camelhead.off", true);
+  const LinePrecompute whole(surface);
+  const auto& t = whole.tangent_ring();
+  const std::size_t nv = surface.vertex_count();
+  const LinePrecompute streamed(surface);
+  for (const bool built : {false, true}) {
+    SCOPED_TRACE(built ? "whole ring built" : "layout only");
+    if (built) (void)streamed.tangent_ring();
+    const auto& layout = streamed.streamed_tangent_ring();
+    EXPECT_TRUE(same_bytes(layout.offset, t.offset));
+    EXPECT_TRUE(same_bytes(layout.fan, t.fan));
+    EXPECT_EQ(layout.vertex.empty(), !built);
+    for (const std::size_t block : {std::size_t{1}, std::size_t{7}, std::size_t{2048}, nv}) {
+      std::size_t wrong = 0;
+      LinePrecompute::TangentRing out;  // reused: stale entries must not show
+      for (std::size_t v0 = 0; v0 < nv; v0 += block) {
+        const std::size_t v1 = std::min(nv, v0 + block);
+        streamed.tangent_ring_block(v0, v1, out);
+        const auto a = static_cast<std::size_t>(t.offset[v0]);
+        const std::size_t n = static_cast<std::size_t>(t.offset[v1]) - a;
+        const std::size_t pad = LinePrecompute::TangentRing::kPad;
+        ASSERT_EQ(out.vertex.size(), n + pad);
+        ASSERT_EQ(out.x.size(), n + pad);
+        wrong += std::memcmp(out.vertex.data(), t.vertex.data() + a, n * 4) != 0;
+        wrong += std::memcmp(out.rank.data(), t.rank.data() + a, n) != 0;
+        wrong += std::memcmp(out.x.data(), t.x.data() + a, n * 4) != 0;
+        wrong += std::memcmp(out.y.data(), t.y.data() + a, n * 4) != 0;
+        for (std::size_t j = n; j < n + pad; ++j)
+          wrong += out.vertex[j] != 0 || out.rank[j] != 0 || out.x[j] != 0.0f || out.y[j] != 0.0f;
+      }
+      EXPECT_EQ(wrong, 0u) << block << " vertices a block";
+    }
+    streamed.release_tangent_ring();
+  }
+}
+
 TEST(LinePrecompute, PartialLastBlockIsZeroPadded) {
   // The cow's vertex count is not a multiple of 4 (checked), so the last
   // block has padding lanes.

@@ -15,8 +15,9 @@
 // (several threads may ask at once). Results are bit-identical at any
 // thread count. Method, accuracy and the CSV of `fabrica geometry`:
 // docs/geometry.md; speed: docs/PERFORMANCE.md. While curvature is computed the Surface holds
-// scratch (20-byte float fit slot per corner, 12 bytes of slot indices and, in the normal pass, 24
-// of weights per face, 48 per vertex), released once the derivatives exist. Vertices where a
+// scratch (20-byte float fit slots for the corners of the vertices of one step of faces and of
+// those spread over several steps, 12 bytes of slot indices and, in the normal pass, 24 of weights
+// per face, 48 per vertex), released once the derivatives exist. Vertices where a
 // quantity is undefined (isolated vertices, vertices whose faces are all degenerate) are marked
 // invalid in `valid` and hold zeros, never NaN.
 #pragma once

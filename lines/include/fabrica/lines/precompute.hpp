@@ -115,6 +115,17 @@ class LinePrecompute {
     detail::FilledVector<std::uint8_t> rank;
   };
   const TangentRing& tangent_ring() const;
+  /// The tangent ring a block of vertices at a time, for one view (the
+  /// one-shot extraction: ~6 bytes per vertex and a block's entries at a
+  /// time instead of ~90 bytes per vertex): streamed_tangent_ring() has
+  /// tangent_ring()'s offset and fan and no entries (vertex, x, y, rank
+  /// empty) unless tangent_ring() was built; tangent_ring_block(v0, v1, out)
+  /// then writes the entries of vertices [v0, v1), which tangent_ring() has
+  /// at [offset[v0], offset[v1]), to out's vertex, rank, x and y from 0 (and
+  /// kPad more: vertex 0, zeros), the same bits (thread-safe; `out`'s offset
+  /// and fan are not used). release_tangent_ring() frees the layout.
+  const TangentRing& streamed_tangent_ring() const;
+  void tangent_ring_block(std::size_t v0, std::size_t v1, TangentRing& out) const;
   /// The per-vertex inputs of the per-view vertex pass (view_fields.cpp:
   /// position, normal, principal frame, curvatures, derivative tensor)
   /// packed in blocks of four vertices, each quantity as four consecutive
