@@ -270,9 +270,9 @@ FitArrays fit_arrays(const CurvatureInputs& in, const std::uint8_t* valid,
           in.face_normals.empty() ? nullptr : in.face_normals[0].data(),
           in.corner_areas.empty() ? nullptr : in.corner_areas[0].data(),
           valid,
-          &scratch.vertices[0],
-          &scratch.corner_slot[0],
-          &scratch.fit_slots[0]};
+          scratch.vertices.data(),
+          scratch.corner_slot.data(),
+          scratch.fit_slots.data()};
 }
 
 /// One fit (II or C) step by step (FitSchedule): the face pass over the

@@ -102,6 +102,8 @@ class ScratchArray {
     mapped_ = false;
     size_ = capacity_ = 0;
   }
+  T* data() { return data_; }
+  const T* data() const { return data_; }
   T& operator[](std::size_t i) {
     return data_[i];
   }

@@ -183,7 +183,7 @@ void compute_face_and_vertex(const TriangleMesh& mesh, const Topology& topo,
   auto face_pass = [&] {
     detail::parallel_chunks(nf, kFaceGrain, [&](std::size_t begin, std::size_t end) {
       face_geometry_range(mesh, opt, face_normals.data(), face_areas.data(), corner_areas.data(),
-                          vertex_normals ? &weights[0] : nullptr, begin, end);
+                          vertex_normals ? weights.data() : nullptr, begin, end);
     });
   };
   if (!vertex_normals) {
