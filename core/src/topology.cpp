@@ -9,6 +9,7 @@
 #include <emmintrin.h>
 #endif
 #include <memory>
+#include <mutex>
 #include <numeric>
 #include <string>
 #include <type_traits>
@@ -190,16 +191,15 @@ Topology::Topology(const TriangleMesh& mesh) {
     neighbor_pass(std::true_type{});
   else
     neighbor_pass(std::false_type{});
-  vertex_neighbor_offsets_.resize(nv + 1);
+  // (The neighbour lists themselves are kept only when asked for: built
+  // from the edges, build_neighbor_lists.)
   vertex_edge_offsets_.resize(nv + 1);
   std::vector<std::int32_t> edge_face_base(nv + 1);
-  vertex_neighbor_offsets_[0] = vertex_edge_offsets_[0] = edge_face_base[0] = 0;
+  vertex_edge_offsets_[0] = edge_face_base[0] = 0;
   for (std::size_t v = 0; v < nv; ++v) {
-    vertex_neighbor_offsets_[v + 1] = vertex_neighbor_offsets_[v] + sizes[v][0];
     vertex_edge_offsets_[v + 1] = vertex_edge_offsets_[v] + sizes[v][1];
     edge_face_base[v + 1] = edge_face_base[v] + sizes[v][2];
   }
-  vertex_neighbors_.resize(vertex_neighbor_offsets_.back());
   edges_.resize(vertex_edge_offsets_.back());
   edge_face_offsets_.resize(edges_.size() + 1);
   edge_face_offsets_.back() = edge_face_base.back();
@@ -220,7 +220,6 @@ Topology::Topology(const TriangleMesh& mesh) {
         const auto count = static_cast<std::size_t>(sizes[v][0]);
         const std::int32_t upper = sizes[v][1];
         const std::size_t lower = count - static_cast<std::size_t>(upper);
-        std::copy(nb, nb + count, vertex_neighbors_.data() + vertex_neighbor_offsets_[v]);
         const std::int32_t first_edge = vertex_edge_offsets_[v];
         // The face count of each higher neighbour's slot becomes the write
         // cursor into that edge's faces.
@@ -261,6 +260,32 @@ Topology::Topology(const TriangleMesh& mesh) {
     edge_pass(std::true_type{});
   else
     edge_pass(std::false_type{});
+}
+
+// Each vertex's neighbours in increasing order, from the edges (a, b), a <
+// b, in their lexicographic order: b is appended to a's list and a to b's.
+// A vertex v receives first its lower neighbours (edges (a, v), a < v, come
+// before v's own edges, by increasing a), then its higher ones (v's edges,
+// by increasing b): the sorted list of the vertices sharing a face's edge
+// with v, as the constructor's neighbour pass finds them.
+void Topology::build_neighbor_lists(LazyNeighbors& n) const {
+  std::call_once(n.once, [&] {
+    const std::size_t nv = vertex_count();
+    NeighborLists& l = n.lists;
+    l.offsets.assign(nv + 1, 0);
+    // Degrees: v's higher neighbours are its edges; the lower ones counted.
+    for (const auto& e : edges_) ++l.offsets[static_cast<std::size_t>(e[1]) + 1];
+    for (std::size_t v = 0; v < nv; ++v)
+      l.offsets[v + 1] += l.offsets[v] + (vertex_edge_offsets_[v + 1] - vertex_edge_offsets_[v]);
+    l.neighbors.resize(static_cast<std::size_t>(nv ? l.offsets[nv] : 0));
+    std::vector<std::int32_t> cursor(l.offsets.begin(), l.offsets.end() - (nv ? 1 : 0));
+    for (const auto& e : edges_) {
+      const auto a = static_cast<std::size_t>(e[0]), b = static_cast<std::size_t>(e[1]);
+      l.neighbors[static_cast<std::size_t>(cursor[a]++)] = e[1];
+      l.neighbors[static_cast<std::size_t>(cursor[b]++)] = e[0];
+    }
+    n.ready.store(true, std::memory_order_release);
+  });
 }
 
 void Topology::reverse_face(std::size_t f, const Face& corners) {

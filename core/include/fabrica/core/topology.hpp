@@ -6,8 +6,10 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <new>
 #include <span>
 #include <type_traits>
@@ -80,22 +82,25 @@ class Topology {
     return {vertex_face_opposite_.data() + vertex_face_offsets_[v],
             vertex_face_opposite_.data() + vertex_face_offsets_[v + 1]};
   }
-  /// Vertices joined to v by an edge, increasing index.
+  /// Vertices joined to v by an edge, increasing index. (Built from the
+  /// edges on the first call of this, vertex_edge or upper_neighbors on
+  /// this topology or a copy of it, once, thread-safe: most paths never
+  /// read them.)
   std::span<const std::int32_t> vertex_neighbors(std::size_t v) const {
-    return {vertex_neighbors_.data() + vertex_neighbor_offsets_[v],
-            vertex_neighbors_.data() + vertex_neighbor_offsets_[v + 1]};
+    const NeighborLists& n = neighbor_lists();
+    return {n.neighbors.data() + n.offsets[v], n.neighbors.data() + n.offsets[v + 1]};
   }
   /// Edge index of entry i of vertex_neighbors(v). The edges to v's higher
   /// neighbours are numbered consecutively from v's first edge; the edge to
   /// a lower neighbour a is found among a's higher neighbours.
   std::int32_t vertex_edge(std::size_t v, std::size_t i) const {
-    const auto begin = static_cast<std::size_t>(vertex_neighbor_offsets_[v]);
+    const NeighborLists& n = neighbor_lists();
+    const auto begin = static_cast<std::size_t>(n.offsets[v]);
     const auto upper =
         static_cast<std::size_t>(vertex_edge_offsets_[v + 1] - vertex_edge_offsets_[v]);
-    const std::size_t lower =
-        static_cast<std::size_t>(vertex_neighbor_offsets_[v + 1]) - begin - upper;
+    const std::size_t lower = static_cast<std::size_t>(n.offsets[v + 1]) - begin - upper;
     if (i >= lower) return vertex_edge_offsets_[v] + static_cast<std::int32_t>(i - lower);
-    const auto a = static_cast<std::size_t>(vertex_neighbors_[begin + i]);
+    const auto a = static_cast<std::size_t>(n.neighbors[begin + i]);
     return vertex_edge_offsets_[a] + upper_rank(a, static_cast<std::int32_t>(v));
   }
   /// The edge joining vertices a and b, or -1 when there is none (or a == b).
@@ -104,20 +109,25 @@ class Topology {
     const auto lo = static_cast<std::size_t>(a < b ? a : b);
     const std::int32_t hi = a < b ? b : a;
     const std::int32_t r = upper_rank(lo, hi);
-    const auto up = upper_neighbors(lo);
-    if (static_cast<std::size_t>(r) == up.size() || up[static_cast<std::size_t>(r)] != hi)
+    const std::int32_t e = vertex_edge_offsets_[lo] + r;
+    if (e == vertex_edge_offsets_[lo + 1] || edges_[static_cast<std::size_t>(e)][1] != hi)
       return -1;
-    return vertex_edge_offsets_[lo] + r;
+    return e;
   }
   /// The edges whose lower vertex is v: vertex_edge_begin(v) + i joins v and
   /// the i-th of v's neighbours above v.
   std::int32_t vertex_edge_begin(std::size_t v) const { return vertex_edge_offsets_[v]; }
   /// v's neighbours above v (the tail of vertex_neighbors(v)), increasing.
   std::span<const std::int32_t> upper_neighbors(std::size_t v) const {
-    const auto end = static_cast<std::size_t>(vertex_neighbor_offsets_[v + 1]);
+    const NeighborLists& n = neighbor_lists();
+    const auto end = static_cast<std::size_t>(n.offsets[v + 1]);
     const auto upper =
         static_cast<std::size_t>(vertex_edge_offsets_[v + 1] - vertex_edge_offsets_[v]);
-    return {vertex_neighbors_.data() + (end - upper), vertex_neighbors_.data() + end};
+    return {n.neighbors.data() + (end - upper), n.neighbors.data() + end};
+  }
+  /// Whether vertex_neighbors' lists have been built (tests, memory probes).
+  bool has_vertex_neighbors() const {
+    return neighbors_ && neighbors_->ready.load(std::memory_order_acquire);
   }
 
   /// Undirected edge e as (lower vertex, higher vertex). Edges are numbered in
@@ -154,20 +164,42 @@ class Topology {
   void reverse_face(std::size_t f, const Face& corners);
 
  private:
-  /// How many of v's higher neighbours are below b (a handful: a plain count).
+  /// How many of v's higher neighbours are below b (a handful: a plain
+  /// count over the second ends of v's edges).
   std::int32_t upper_rank(std::size_t v, std::int32_t b) const {
     std::int32_t r = 0;
-    for (const std::int32_t w : upper_neighbors(v)) r += w < b;
+    for (auto e = static_cast<std::size_t>(vertex_edge_offsets_[v]),
+              end = static_cast<std::size_t>(vertex_edge_offsets_[v + 1]);
+         e < end; ++e)
+      r += edges_[e][1] < b;
     return r;
   }
+
+  /// The vertex neighbour lists (CSR), built on first use from the edges.
+  struct NeighborLists {
+    std::vector<std::int32_t> offsets;
+    detail::FilledVector<std::int32_t> neighbors;
+  };
+  /// Shared by copies (the lists depend on the edges only, which
+  /// reverse_face keeps); `ready` is the fast path's check.
+  struct LazyNeighbors {
+    std::once_flag once;
+    std::atomic<bool> ready{false};
+    NeighborLists lists;
+  };
+  const NeighborLists& neighbor_lists() const {
+    LazyNeighbors& n = *neighbors_;
+    if (!n.ready.load(std::memory_order_acquire)) build_neighbor_lists(n);
+    return n.lists;
+  }
+  void build_neighbor_lists(LazyNeighbors& n) const;
 
   // Arrays that the constructor fills completely are not zeroed first.
   std::vector<std::int32_t> vertex_face_offsets_;
   detail::FilledVector<std::int32_t> vertex_faces_;
   detail::FilledVector<std::uint8_t> vertex_face_corners_;
   detail::FilledVector<std::array<std::int32_t, 2>> vertex_face_opposite_;
-  std::vector<std::int32_t> vertex_neighbor_offsets_;
-  detail::FilledVector<std::int32_t> vertex_neighbors_;
+  std::shared_ptr<LazyNeighbors> neighbors_ = std::make_shared<LazyNeighbors>();
   // First edge of each vertex (edges numbered by lower vertex), size nv + 1.
   std::vector<std::int32_t> vertex_edge_offsets_;
   detail::FilledVector<std::array<std::int32_t, 2>> edges_;
