@@ -8,7 +8,11 @@
 #include <cstdint>
 #include <map>
 #include <set>
+#include <thread>
 #include <vector>
+
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
 
 #include "fabrica/core/topology.hpp"
 #include "fabrica/io/mesh_io.hpp"
@@ -126,4 +130,79 @@ TEST(TopologyReal, OpenNonManifoldMeshMatchesAReferenceBuild) {
 
 TEST(TopologyReal, DegenerateFacesToo) {
   expect_reference_topology(irregular_aneurysm(true));
+}
+
+namespace {
+
+/// Every vertex's neighbour list of `t` against the reference's, with each
+/// entry's edge.
+void expect_reference_neighbors(const Topology& t, const ReferenceTopology& ref) {
+  for (std::size_t v = 0; v < ref.neighbors.size(); ++v) {
+    const auto nb = t.vertex_neighbors(v);
+    ASSERT_EQ(std::vector<std::int32_t>(nb.begin(), nb.end()),
+              std::vector<std::int32_t>(ref.neighbors[v].begin(), ref.neighbors[v].end()))
+        << v;
+    const auto vi = static_cast<std::int32_t>(v);
+    for (std::size_t i = 0; i < nb.size(); ++i) {
+      const std::array<std::int32_t, 2> pair{std::min(vi, nb[i]), std::max(vi, nb[i])};
+      ASSERT_EQ(t.edge(static_cast<std::size_t>(t.vertex_edge(v, i))), pair);
+      ASSERT_EQ(t.find_edge(vi, nb[i]), t.vertex_edge(v, i));
+    }
+    const auto up = t.upper_neighbors(v);
+    ASSERT_TRUE(
+        std::equal(up.begin(), up.end(), nb.end() - static_cast<std::ptrdiff_t>(up.size())));
+    for (std::size_t i = 0; i < up.size(); ++i)
+      ASSERT_EQ(t.edge(static_cast<std::size_t>(t.vertex_edge_begin(v)) + i)[1], up[i]);
+  }
+}
+
+}  // namespace
+
+// The neighbour lists are built on first use (from the edges): on a real
+// closed mesh, at one and two threads, they equal the lists of the faces'
+// edges, and nothing before the first call builds them.
+TEST(TopologyReal, LazyNeighborsMatchTheFacesOnIgea) {
+  const TriangleMesh m = io::read_mesh(test::bundled_data() / "meshes/classic/c3d_igea.ply").mesh;
+  const ReferenceTopology ref(m);
+  for (const int threads : {1, 2}) {
+    const tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
+                                    static_cast<std::size_t>(threads));
+    const Topology t(m);
+    EXPECT_FALSE(t.has_vertex_neighbors());
+    // find_edge does not need them.
+    EXPECT_EQ(t.find_edge(m.faces[0][0], m.faces[0][1]), t.face_edge(0, 2));
+    EXPECT_FALSE(t.has_vertex_neighbors());
+    expect_reference_neighbors(t, ref);
+    EXPECT_TRUE(t.has_vertex_neighbors());
+  }
+}
+
+// Many threads asking at once for the lists of a fresh topology (and of a
+// copy, which shares them) all get the same, complete lists.
+TEST(TopologyReal, LazyNeighborsConcurrentFirstUse) {
+  const TriangleMesh m = irregular_aneurysm(true);
+  const ReferenceTopology ref(m);
+  for (int round = 0; round < 4; ++round) {
+    const Topology t(m);
+    const Topology copy = t;
+    std::vector<std::size_t> sums(8, 0);
+    std::vector<std::thread> threads;
+    for (std::size_t k = 0; k < sums.size(); ++k)
+      threads.emplace_back([&, k] {
+        const Topology& mine = k % 2 ? copy : t;
+        for (std::size_t v = 0; v < m.positions.size(); ++v)
+          for (const auto w : mine.vertex_neighbors(v)) sums[k] += static_cast<std::size_t>(w) + v;
+      });
+    for (auto& th : threads) th.join();
+    for (std::size_t k = 1; k < sums.size(); ++k) EXPECT_EQ(sums[k], sums[0]);
+    EXPECT_TRUE(t.has_vertex_neighbors());
+    EXPECT_TRUE(copy.has_vertex_neighbors());
+    expect_reference_neighbors(copy, ref);
+  }
+  // From TBB tasks too.
+  const Topology t(m);
+  std::vector<std::size_t> degree(m.positions.size());
+  tbb::parallel_for(std::size_t{0}, m.positions.size(),
+                    [&](std::size_t v) { degree[v] = t.vertex_neighbors(v).size(); });
+  for (std::size_t v = 0; v < degree.size(); ++v) EXPECT_EQ(degree[v], ref.neighbors[v].size());
 }
