@@ -65,6 +65,28 @@ TriangleMesh irregular_aneurysm(bool degenerate) {
   return m;
 }
 
+/// Every vertex's neighbour list of `t` against the reference's, with each
+/// entry's edge.
+void expect_reference_neighbors(const Topology& t, const ReferenceTopology& ref) {
+  for (std::size_t v = 0; v < ref.neighbors.size(); ++v) {
+    const auto nb = t.vertex_neighbors(v);
+    ASSERT_EQ(std::vector<std::int32_t>(nb.begin(), nb.end()),
+              std::vector<std::int32_t>(ref.neighbors[v].begin(), ref.neighbors[v].end()))
+        << v;
+    const auto vi = static_cast<std::int32_t>(v);
+    for (std::size_t i = 0; i < nb.size(); ++i) {
+      const std::array<std::int32_t, 2> pair{std::min(vi, nb[i]), std::max(vi, nb[i])};
+      ASSERT_EQ(t.edge(static_cast<std::size_t>(t.vertex_edge(v, i))), pair);
+      ASSERT_EQ(t.find_edge(vi, nb[i]), t.vertex_edge(v, i));
+    }
+    const auto up = t.upper_neighbors(v);
+    ASSERT_TRUE(
+        std::equal(up.begin(), up.end(), nb.end() - static_cast<std::ptrdiff_t>(up.size())));
+    for (std::size_t i = 0; i < up.size(); ++i)
+      ASSERT_EQ(t.edge(static_cast<std::size_t>(t.vertex_edge_begin(v)) + i)[1], up[i]);
+  }
+}
+
 void expect_reference_topology(const TriangleMesh& m) {
   const auto n = static_cast<std::int32_t>(m.positions.size()) - 3;
   const Topology t(m);
@@ -88,16 +110,8 @@ void expect_reference_topology(const TriangleMesh& m) {
   }
   EXPECT_GT(boundary, 0u);
   EXPECT_GT(nonmanifold, 0u);
+  expect_reference_neighbors(t, ref);
   for (std::size_t v = 0; v < m.positions.size(); ++v) {
-    const auto nb = t.vertex_neighbors(v);
-    ASSERT_EQ(std::vector<std::int32_t>(nb.begin(), nb.end()),
-              std::vector<std::int32_t>(ref.neighbors[v].begin(), ref.neighbors[v].end()))
-        << v;
-    const auto vi = static_cast<std::int32_t>(v);
-    for (std::size_t i = 0; i < nb.size(); ++i) {
-      const std::array<std::int32_t, 2> pair{std::min(vi, nb[i]), std::max(vi, nb[i])};
-      ASSERT_EQ(t.edge(static_cast<std::size_t>(t.vertex_edge(v, i))), pair);
-    }
     const auto vf = t.vertex_faces(v);
     ASSERT_EQ(std::vector<std::int32_t>(vf.begin(), vf.end()), ref.vertex_faces[v]) << v;
     EXPECT_EQ(t.is_boundary_vertex(v), boundary_vertex[v] != 0) << v;
@@ -131,32 +145,6 @@ TEST(TopologyReal, OpenNonManifoldMeshMatchesAReferenceBuild) {
 TEST(TopologyReal, DegenerateFacesToo) {
   expect_reference_topology(irregular_aneurysm(true));
 }
-
-namespace {
-
-/// Every vertex's neighbour list of `t` against the reference's, with each
-/// entry's edge.
-void expect_reference_neighbors(const Topology& t, const ReferenceTopology& ref) {
-  for (std::size_t v = 0; v < ref.neighbors.size(); ++v) {
-    const auto nb = t.vertex_neighbors(v);
-    ASSERT_EQ(std::vector<std::int32_t>(nb.begin(), nb.end()),
-              std::vector<std::int32_t>(ref.neighbors[v].begin(), ref.neighbors[v].end()))
-        << v;
-    const auto vi = static_cast<std::int32_t>(v);
-    for (std::size_t i = 0; i < nb.size(); ++i) {
-      const std::array<std::int32_t, 2> pair{std::min(vi, nb[i]), std::max(vi, nb[i])};
-      ASSERT_EQ(t.edge(static_cast<std::size_t>(t.vertex_edge(v, i))), pair);
-      ASSERT_EQ(t.find_edge(vi, nb[i]), t.vertex_edge(v, i));
-    }
-    const auto up = t.upper_neighbors(v);
-    ASSERT_TRUE(
-        std::equal(up.begin(), up.end(), nb.end() - static_cast<std::ptrdiff_t>(up.size())));
-    for (std::size_t i = 0; i < up.size(); ++i)
-      ASSERT_EQ(t.edge(static_cast<std::size_t>(t.vertex_edge_begin(v)) + i)[1], up[i]);
-  }
-}
-
-}  // namespace
 
 // The neighbour lists are built on first use (from the edges): on a real
 // closed mesh, at one and two threads, they equal the lists of the faces'
