@@ -12,19 +12,40 @@ namespace fabrica::viewer {
 
 namespace {
 
-/// How far chain vertex `k` is off the drawn segment from `a` to `b`, as a
-/// multiple of the tolerances (> 1: it must stay): its pixel distance to the
-/// segment over `tolerance_px`, or its strength's distance to the one
-/// interpolated at its foot over `strength_tolerance`, whichever is larger.
-double merge_error(const Vec2& a, const Vec2& b, float sa, float sb, const Vec2& p, float s,
-                   double tolerance_px, double strength_tolerance) {
+/// How far chain vertex `p` (strength `s`) is off the drawn segment from
+/// `a` to `b` (strengths `sa`, `sb`): its squared pixel distance to the
+/// segment and its strength's distance to the one interpolated at its foot.
+struct Offset {
+  double distance2, strength;
+};
+Offset offset_from(const Vec2& a, const Vec2& b, float sa, float sb, const Vec2& p, float s) {
   const Vec2 ab = b - a;
   const double len2 = ab.squaredNorm();
   const double t = len2 > 0.0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
-  const double distance = (a + t * ab - p).norm();
-  const double strength = std::fabs(static_cast<double>(s) - (sa + t * (sb - sa)));
-  return std::max(distance / tolerance_px, strength / strength_tolerance);
+  return {(a + t * ab - p).squaredNorm(), std::fabs(static_cast<double>(s) - (sa + t * (sb - sa)))};
 }
+
+/// The offset as a multiple of the tolerances (> 1: the vertex must stay):
+/// the pixel distance over `tolerance_px` or the strength's over
+/// `strength_tolerance`, whichever is larger.
+double merge_error(const Offset& o, double tolerance_px, double strength_tolerance) {
+  return std::max(std::sqrt(o.distance2) / tolerance_px, o.strength / strength_tolerance);
+}
+
+/// Bounds below which an offset's merge_error is surely at most `worst`:
+/// (worst * tolerance)^2 and worst * tolerance less a relative 1e-9, far
+/// more than the rounding of the square root and the divisions (a few
+/// units of 2^-53), so the test skips them without changing a decision.
+/// Non-finite values fail it and take the exact path.
+struct Bounds {
+  double distance2, strength;
+  Bounds(double worst, double tolerance_px, double strength_tolerance) {
+    const double d = worst * tolerance_px;
+    distance2 = d * d * (1.0 - 1e-9);
+    strength = worst * strength_tolerance * (1.0 - 1e-9);
+  }
+  bool below(const Offset& o) const { return o.distance2 < distance2 && o.strength < strength; }
+};
 
 }  // namespace
 
@@ -33,34 +54,42 @@ std::size_t merge_collinear(LineSet& lines, const Camera& camera, double toleran
   if (!(tolerance_px > 0.0) || !(strength_tolerance > 0.0)) return 0;
   const Projector project(camera);
   std::size_t removed = 0;
-  std::vector<Vec2> pixel;
-  std::vector<char> front, keep;
-  std::vector<std::pair<std::size_t, std::size_t>> spans;
+  // The chain of a polyline as flat arrays (pixel, strength, front of the
+  // eye, kept), with the first vertex again at index n for a loop (its
+  // closing edge), so the simplification reads them without wrapping.
+  // Kept between calls: the lines worker merges every moving frame.
+  thread_local std::vector<Vec2> pixel;
+  thread_local std::vector<float> strength;
+  thread_local std::vector<char> keep;
+  thread_local std::vector<std::pair<std::size_t, std::size_t>> spans;
   for (Polyline& pl : lines.polylines) {
     const std::size_t n = pl.vertices.size();
     if (n < 3) continue;
-    // The chain: the vertices, and the first again for a loop (its closing edge).
     const std::size_t m = pl.closed ? n + 1 : n;
-    auto vertex = [&](std::size_t i) -> const LineVertex& { return pl.vertices[i % n]; };
-    pixel.resize(n);
-    front.assign(n, 0);
-    for (std::size_t i = 0; i < n; ++i) {
-      const ProjectedPoint q = project(pl.vertices[i].position);
-      pixel[i] = q.pixel;
-      front[i] = q.depth > 0.0 && std::isfinite(q.pixel.x()) && std::isfinite(q.pixel.y());
-    }
+    pixel.resize(m);
+    strength.resize(m);
+    keep.assign(m, 0);
+    keep[0] = keep[m - 1] = 1;
     // Ends, and every vertex not in front of the eye with its neighbours,
     // stay; each run between two kept vertices is simplified on its own
     // (Douglas-Peucker: keep the worst vertex while one is off by more than
     // the tolerances).
-    keep.assign(m, 0);
-    keep[0] = keep[m - 1] = 1;
-    for (std::size_t i = 0; i < m; ++i)
-      if (!front[i % n]) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const LineVertex& v = pl.vertices[i];
+      const ProjectedPoint q = project(v.position);
+      pixel[i] = q.pixel;
+      strength[i] = v.strength;
+      if (!(q.depth > 0.0 && std::isfinite(q.pixel.x()) && std::isfinite(q.pixel.y()))) {
         keep[i] = 1;
         if (i > 0) keep[i - 1] = 1;
         if (i + 1 < m) keep[i + 1] = 1;
+        if (i == 0 && m > n) keep[n] = keep[n - 1] = 1;  // the loop's vertex 0 again, at n
       }
+    }
+    if (m > n) {
+      pixel[n] = pixel[0];
+      strength[n] = strength[0];
+    }
     spans.clear();
     for (std::size_t a = 0, b = 1; b < m; ++b)
       if (keep[b]) {
@@ -70,15 +99,18 @@ std::size_t merge_collinear(LineSet& lines, const Camera& camera, double toleran
     while (!spans.empty()) {
       const auto [a, b] = spans.back();
       spans.pop_back();
-      const LineVertex &va = vertex(a), &vb = vertex(b);
+      const Vec2 pa = pixel[a], pb = pixel[b];
+      const float sa = strength[a], sb = strength[b];
       double worst = 1.0;
+      Bounds bounds(worst, tolerance_px, strength_tolerance);
       std::size_t at = 0;
       for (std::size_t k = a + 1; k < b; ++k) {
-        const double e =
-            merge_error(pixel[a % n], pixel[b % n], va.strength, vb.strength, pixel[k % n],
-                        vertex(k).strength, tolerance_px, strength_tolerance);
+        const Offset o = offset_from(pa, pb, sa, sb, pixel[k], strength[k]);
+        if (bounds.below(o)) continue;  // not worse than `worst`
+        const double e = merge_error(o, tolerance_px, strength_tolerance);
         if (e > worst) {
           worst = e;
+          bounds = Bounds(worst, tolerance_px, strength_tolerance);
           at = k;
         }
       }
@@ -90,12 +122,12 @@ std::size_t merge_collinear(LineSet& lines, const Camera& camera, double toleran
     std::size_t kept = 0;
     for (std::size_t i = 0; i < n; ++i) kept += keep[i] ? 1 : 0;
     if (kept == n || (pl.closed && kept < 3)) continue;
-    std::vector<LineVertex> vertices;
-    vertices.reserve(kept);
+    // In place, in order (the vector keeps its storage).
+    std::size_t w = 0;
     for (std::size_t i = 0; i < n; ++i)
-      if (keep[i]) vertices.push_back(pl.vertices[i]);
+      if (keep[i]) pl.vertices[w++] = pl.vertices[i];
+    pl.vertices.resize(w);
     removed += n - kept;
-    pl.vertices = std::move(vertices);
     pl.edge_faces.clear();
   }
   return removed;

@@ -454,7 +454,8 @@ std::uint64_t Viewer::post_lines(const Camera& camera, bool force, bool lod) {
   return lines_version_;
 }
 
-render::Scene Viewer::build_scene(const LinesResult* lines, bool fading) {
+render::Scene Viewer::build_scene(const std::shared_ptr<const LinesResult>& lines, bool fading,
+                                  bool share_lines) {
   const double t = fade_from_.empty() ? 1.0 : std::min(1.0, ms_since(fade_start_) / 300.0);
   render::Scene scene;
   scene.background = background_;
@@ -474,14 +475,21 @@ render::Scene Viewer::build_scene(const LinesResult* lines, bool fading) {
         s.mesh_curvature =
             std::make_shared<render::RenderMesh>(render::make_render_mesh(*s.surface, true));
       st.mesh = s.mesh_curvature;
-    } else if (const auto lod = lod_mesh(lines, s.id)) {
+    } else if (const auto lod = lod_mesh(lines.get(), s.id)) {
       st.mesh = lod;  // its lines come from the same coarse mesh
     } else {
       st.mesh = s.mesh;
     }
     if (lines != nullptr) {
       const auto it = lines->lines.find(s.id);
-      if (it != lines->lines.end()) st.lines = it->second;
+      // A frame draws the worker's lines where they are (they live as long
+      // as the result); a scene kept or exported gets its own copy.
+      if (it != lines->lines.end()) {
+        if (share_lines)
+          st.shared_lines = std::shared_ptr<const LineSet>(lines, &it->second);
+        else
+          st.lines = it->second;
+      }
       const auto h = lines->hatching.find(s.id);
       if (h != lines->hatching.end()) st.polyline_layers.push_back(h->second);
     }
@@ -580,7 +588,7 @@ void Viewer::frame() {
         // Simplified while moving: the ghosts' transparency at half resolution too.
         render::RenderOptions ro = render_options(false);
         ro.ghosts_half_resolution = moving && simplify_while_moving_;
-        renderer_->render_to_framebuffer(build_scene(lines.get(), true), c, ro, picture_fbo_,
+        renderer_->render_to_framebuffer(build_scene(lines, true, true), c, ro, picture_fbo_,
                                          picture_w_, picture_h_);
         has_picture_ = true;
       } catch (const Error& e) {
@@ -655,7 +663,7 @@ render::Image Viewer::screenshot(int width, int height, bool transparent) {
   const std::uint64_t version = post_lines(c, true);
   const auto lines = lines_worker_.wait_for(version);
   const render::Image image =
-      renderer_->render(build_scene(lines.get()), c, render_options(transparent || transparent_));
+      renderer_->render(build_scene(lines), c, render_options(transparent || transparent_));
   lines_dirty_ = true;  // the next frame goes back to the window's camera
   return image;
 }
@@ -680,7 +688,7 @@ void Viewer::export_svg(const std::filesystem::path& path) {
     scene.add(std::move(spec), s.surface);
   }
   if (scene.surfaces.empty()) throw InputError("export-svg: nothing is shown");
-  const render::Scene drawn = build_scene(lines.get());
+  const render::Scene drawn = build_scene(lines);
   const double reference = render_options(false).line_reference_size;
   if (ext == ".pdf")
     render::write_scene_pdf(path, scene, drawn, camera_, reference);

@@ -191,7 +191,8 @@ class Viewer {
   std::uint64_t post_lines(const Camera& camera, bool force, bool lod = false);
   /// `fading`: opacities on their way after a role change (the window only;
   /// exports always draw the styles as they are).
-  render::Scene build_scene(const LinesResult* lines, bool fading = false);
+  render::Scene build_scene(const std::shared_ptr<const LinesResult>& lines, bool fading = false,
+                            bool share_lines = false);
   render::RenderOptions render_options(bool transparent) const;
   /// The window's picture (a texture and its framebuffer) at width x height.
   void ensure_picture(int width, int height);

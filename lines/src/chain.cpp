@@ -40,20 +40,36 @@ constexpr std::int32_t kMany = std::numeric_limits<std::int32_t>::min();
 // when two were seen, kMany when three or more. The table is kept per thread
 // between calls (its size is bounded by the mesh's element counts) and only
 // the touched entries are reset, so a call costs O(segments), not O(mesh).
-std::vector<std::int32_t> pair_ends_flat(const std::vector<LineSegment>& segs,
-                                         const std::int64_t table_offset[3],
-                                         std::size_t table_size) {
-  const std::size_t ends = 2 * segs.size();
-  std::vector<std::int32_t> partner(ends, -1);
+// An element at or past its kind's `bound` makes it give up (false, the
+// table reset) before pairing anything. No TBB call inside: the thread's
+// buffers are not shared with another call meanwhile.
+bool pair_ends_flat(const std::vector<LineSegment>& segs, const std::int64_t offset[3],
+                    const std::int64_t bound[3], std::size_t table_size,
+                    std::vector<std::int32_t>& partner) {
+  const std::size_t n = segs.size();
+  partner.assign(2 * n, -1);
   thread_local std::vector<std::int32_t> table;
+  thread_local std::vector<std::int32_t> slots;  // each end's table index, -1: not joinable
   if (table.size() < table_size) table.resize(table_size, kEmpty);
-  auto slot_of = [&](std::size_t j) -> std::int32_t& {
-    return table[static_cast<std::size_t>(table_offset[static_cast<int>(kind_of(segs, j))] +
-                                          element_of(segs, j))];
+  slots.resize(2 * n);
+  auto reset = [&](std::size_t ends) {
+    for (std::size_t j = 0; j < ends; ++j)
+      if (slots[j] >= 0) table[static_cast<std::size_t>(slots[j])] = kEmpty;
   };
-  for (std::size_t j = 0; j < ends; ++j) {
-    if (!joinable_end(segs, j)) continue;
-    std::int32_t& s = slot_of(j);
+  for (std::size_t j = 0; j < 2 * n; ++j) {
+    const LineSegment& seg = segs[j / 2];
+    const int side = static_cast<int>(j % 2);
+    const auto kind = static_cast<unsigned>(seg.kind[side]);
+    const std::int32_t element = seg.end[side].element;
+    slots[j] = -1;
+    if (kind >= 3 || element < 0) continue;  // interior, or no element: never joined
+    if (element >= bound[kind]) {
+      reset(j);
+      return false;
+    }
+    const auto index = static_cast<std::int32_t>(offset[kind] + element);
+    slots[j] = index;
+    std::int32_t& s = table[static_cast<std::size_t>(index)];
     const auto jj = static_cast<std::int32_t>(j);
     if (s == kEmpty) {
       s = jj;
@@ -73,10 +89,13 @@ std::vector<std::int32_t> pair_ends_flat(const std::vector<LineSegment>& segs,
       s = kMany;
     }
   }
-  for (std::size_t j = 0; j < ends; ++j)
-    if (joinable_end(segs, j)) slot_of(j) = kEmpty;
-  return partner;
+  reset(2 * n);
+  return true;
 }
+
+// A flat table of more entries than this (32 MB) is not kept per thread:
+// the pairing sorts instead (meshes with millions of edges).
+constexpr std::int64_t kMaxTable = std::int64_t{1} << 23;
 
 // The same pairing by sorting the keys: used when element ids are too large
 // for a flat table (not produced by the extractors, but possible for a soup
@@ -116,34 +135,41 @@ std::vector<std::int32_t> pair_ends(const std::vector<LineSegment>& segs, bool f
       auto& m = max_element[static_cast<int>(kind_of(segs, j))];
       m = std::max(m, static_cast<std::int64_t>(element_of(segs, j)));
     }
-  std::int64_t offset[3];
+  std::int64_t offset[3], bound[3];
   std::int64_t size = 0;
   for (int k = 0; k < 3; ++k) {
     offset[k] = size;
-    size += max_element[k] + 1;
+    bound[k] = max_element[k] + 1;
+    size += bound[k];
   }
   // Mesh element ids are bounded by the mesh size; fall back to sorting
   // when the table would be large in bytes (over 2^23 entries, 32 MB:
   // meshes with millions of edges) or the end indices overflow 31 bits.
-  if (force_sorted || size > (std::int64_t{1} << 23) || segs.size() >= (std::size_t{1} << 29))
+  std::vector<std::int32_t> partner;
+  if (force_sorted || size > kMaxTable || segs.size() >= (std::size_t{1} << 29) ||
+      !pair_ends_flat(segs, offset, bound, static_cast<std::size_t>(size), partner))
     return pair_ends_sorted(segs);
-  return pair_ends_flat(segs, offset, static_cast<std::size_t>(size));
+  return partner;
+}
+
+std::vector<std::int32_t> pair_ends(const std::vector<LineSegment>& segs,
+                                    const std::int64_t bound[3]) {
+  std::int64_t offset[3];
+  std::int64_t size = 0;
+  for (int k = 0; k < 3; ++k) {
+    offset[k] = size;
+    size += std::max<std::int64_t>(bound[k], 0);
+  }
+  std::vector<std::int32_t> partner;
+  if (size > kMaxTable || segs.size() >= (std::size_t{1} << 29) ||
+      !pair_ends_flat(segs, offset, bound, static_cast<std::size_t>(size), partner))
+    return pair_ends(segs);
+  return partner;
 }
 
 }  // namespace detail
 
 namespace {
-
-// A polyline vertex at end `side` of s, its place on the mesh recomputed
-// from the lean record.
-LineVertex to_vertex(const SegmentGeometry& geo, const LineSegment& s, int side) {
-  LineVertex v;
-  v.anchor = geo.anchor(s, side);
-  v.position = geo.position(s, side);
-  v.strength = s.end[side].strength;
-  v.visible = true;
-  return v;
-}
 
 // One chain as the segments it walks through and the side each is entered by.
 struct Step {
@@ -175,7 +201,12 @@ std::vector<Polyline> chain_segments(const SegmentSoup& soup, const ChainOptions
   std::vector<Polyline> out;
   if (n == 0) return out;
   const SegmentGeometry geo = soup.geometry();
-  const std::vector<std::int32_t> partner = detail::pair_ends(segs);
+  // The table's bounds: the mesh's edge, vertex and face counts (the ids of
+  // each end kind), so no pass over the ends looks for the largest ids.
+  const std::int64_t bound[3] = {static_cast<std::int64_t>(soup.surface->topology().edge_count()),
+                                 static_cast<std::int64_t>(soup.surface->vertex_count()),
+                                 static_cast<std::int64_t>(soup.surface->face_count())};
+  const std::vector<std::int32_t> partner = detail::pair_ends(segs, bound);
 
   // 1. Walk every chain (serial, indices only). Chain c is steps[first[c] ..
   //    first[c + 1]); closed[c] says whether it is a loop. Vertices of a
@@ -230,35 +261,51 @@ std::vector<Polyline> chain_segments(const SegmentSoup& soup, const ChainOptions
     const bool loop = closed[c] != 0;
     const std::size_t nv = loop ? m : m + 1;
     if (nv < 2) return;
-    std::vector<LineVertex> vertices(nv);
-    vertices[0] = to_vertex(geo, segs[st[0].segment], st[0].entry);
-    for (std::size_t k = 1; k < nv; ++k)
-      vertices[k] = to_vertex(geo, segs[st[k - 1].segment], 1 - st[k - 1].entry);
+    // The chain's vertices (entry end of the first step, then the exit end
+    // of every step), each resolved once from the lean record, into this
+    // thread's scratch: a chain the filters drop costs no allocation. No
+    // TBB call below, so no other chain runs on this thread meanwhile.
+    thread_local std::vector<LineVertex> scratch;
+    if (scratch.size() < nv) scratch.resize(nv);
+    LineVertex* vertices = scratch.data();
+    auto resolve = [&](std::size_t k, const LineSegment& s, int side) {
+      LineVertex& v = vertices[k];
+      geo.locate(s, side, v.anchor, v.position);
+      v.strength = s.end[side].strength;
+      v.visible = true;
+    };
+    resolve(0, segs[st[0].segment], st[0].entry);
+    for (std::size_t k = 1; k < nv; ++k) resolve(k, segs[st[k - 1].segment], 1 - st[k - 1].entry);
     auto position = [&](std::size_t k) -> const Vec3& { return vertices[k].position; };
+    // The filters add the same terms in the same order as Polyline::length()
+    // and projected_length(), and stop once the sum reaches the bound: the
+    // terms are >= 0 (or NaN, which keeps the chain either way), so a
+    // partial sum at the bound means the whole one is.
     if (options.min_length > 0.0) {
-      // Polyline::length(), same terms in the same order.
       double len = 0.0;
-      for (std::size_t i = 0; i + 1 < nv; ++i) len += (position(i + 1) - position(i)).norm();
-      if (loop && nv > 2) len += (position(0) - position(nv - 1)).norm();
+      for (std::size_t i = 0; i + 1 < nv && !(len >= options.min_length); ++i)
+        len += (position(i + 1) - position(i)).norm();
+      if (loop && nv > 2 && !(len >= options.min_length))
+        len += (position(0) - position(nv - 1)).norm();
       if (len < options.min_length) return;
     }
     if (projector) {
-      // projected_length(), same terms in the same order.
       double len = 0.0;
       Vec2 prev = (*projector)(position(0)).pixel;
       const Vec2 start = prev;
-      for (std::size_t i = 1; i < nv; ++i) {
+      std::size_t i = 1;
+      for (; i < nv && !(len >= options.min_length_px); ++i) {
         const Vec2 p = (*projector)(position(i)).pixel;
         len += (p - prev).norm();
         prev = p;
       }
-      if (loop) len += (start - prev).norm();
+      if (loop && i == nv && !(len >= options.min_length_px)) len += (start - prev).norm();
       if (len < options.min_length_px) return;
     }
     Polyline& pl = built[c];
     pl.family = soup.family;
     pl.closed = loop;
-    pl.vertices = std::move(vertices);
+    pl.vertices.assign(vertices, vertices + nv);
     pl.edge_faces.resize(m);
     for (std::size_t i = 0; i < m; ++i) pl.edge_faces[i] = segs[st[i].segment].face;
     keep[c] = 1;

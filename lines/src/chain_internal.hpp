@@ -14,5 +14,10 @@ namespace fabrica::detail {
 /// keys (`force_sorted`: always the sort; both give the same pairs).
 std::vector<std::int32_t> pair_ends(const std::vector<LineSegment>& segs,
                                     bool force_sorted = false);
+/// The same pairs, the table sized by the soup's mesh instead of a pass
+/// over the ends: `bound[kind]` = the number of edges, vertices and faces
+/// (an id at or past its bound falls back to pair_ends(segs)).
+std::vector<std::int32_t> pair_ends(const std::vector<LineSegment>& segs,
+                                    const std::int64_t bound[3]);
 
 }  // namespace fabrica::detail

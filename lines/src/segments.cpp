@@ -12,64 +12,30 @@ SegmentGeometry::SegmentGeometry(const Surface& surface)
       pos_(surface.positions().data()),
       topo_(&surface.topology()) {}
 
+// Both from locate() (inline in the header, shared with chaining); each
+// call leaves out what it does not return.
 SurfacePoint SegmentGeometry::anchor(const LineSegment& s, int i) const {
-  const SegmentEnd& e = s.end[i];
-  const Face& f = faces_[static_cast<std::size_t>(s.face)];
-  SurfacePoint p{s.face, Vec3::Zero()};
-  switch (s.kind[i]) {
-    case EndKind::edge: {
-      const auto& ev = topo_->edge(static_cast<std::size_t>(e.element));
-      for (int k = 0; k < 3; ++k) {
-        if (f[k] == ev[0]) p.bary[k] = 1.0 - e.t;
-        if (f[k] == ev[1]) p.bary[k] = e.t;
-      }
-      break;
-    }
-    case EndKind::vertex:
-      for (int k = 0; k < 3; ++k)
-        if (f[k] == e.element) p.bary[k] = 1.0;
-      break;
-    case EndKind::centroid:
-      p.bary = Vec3::Constant(1.0 / 3.0);
-      break;
-    case EndKind::interior: {
-      const double b0 = e.bary[0], b1 = e.bary[1];
-      p.bary = Vec3(b0, b1, 1.0 - b0 - b1);
-      break;
-    }
-  }
-  return p;
+  SurfacePoint a;
+  Vec3 p;
+  locate(s, i, a, p);
+  return a;
 }
 
 Vec3 SegmentGeometry::position(const LineSegment& s, int i) const {
-  const SegmentEnd& e = s.end[i];
-  switch (s.kind[i]) {
-    case EndKind::edge: {
-      const auto& ev = topo_->edge(static_cast<std::size_t>(e.element));
-      const Vec3 &a = pos_[ev[0]], &b = pos_[ev[1]];
-      const double u = 1.0 - e.t;
-      return Vec3(u * a[0] + e.t * b[0], u * a[1] + e.t * b[1], u * a[2] + e.t * b[2]);
-    }
-    case EndKind::vertex:
-      return pos_[static_cast<std::size_t>(e.element)];
-    case EndKind::centroid: {
-      const Face& f = faces_[static_cast<std::size_t>(s.face)];
-      const Vec3 &a = pos_[f[0]], &b = pos_[f[1]], &c = pos_[f[2]];
-      return Vec3((a[0] + b[0] + c[0]) / 3.0, (a[1] + b[1] + c[1]) / 3.0,
-                  (a[2] + b[2] + c[2]) / 3.0);
-    }
-    case EndKind::interior:
-      break;
-  }
-  const Face& f = faces_[static_cast<std::size_t>(s.face)];
-  const Vec3 b = anchor(s, i).bary;
-  return b[0] * pos_[f[0]] + b[1] * pos_[f[1]] + b[2] * pos_[f[2]];
+  SurfacePoint a;
+  Vec3 p;
+  locate(s, i, a, p);
+  return p;
 }
 
 ResolvedEnd SegmentGeometry::resolve(const LineSegment& s, int i) const {
-  return {anchor(s, i), position(s, i), s.end[i].element, s.kind[i], s.end[i].strength};
+  ResolvedEnd r;
+  locate(s, i, r.anchor, r.position);
+  r.element = s.end[i].element;
+  r.kind = s.kind[i];
+  r.strength = s.end[i].strength;
+  return r;
 }
-
 void SegmentGeometry::set_interior(LineSegment& s, int i, const double bary[3]) {
   s.kind[i] = EndKind::interior;
   s.end[i].element = -1;

@@ -1403,30 +1403,39 @@ struct Renderer::Impl {
     line_indices.clear();
     std::vector<LineBatch> batches;
     // Appends polyline `n` vertices long; position(i) and strength(i) give its vertices.
+    // Written in place (the arrays grow once per polyline, not per value).
     auto append_polyline = [&](std::size_t n, bool closed, auto position, auto strength) {
       if (n < 2) return;
       closed = closed && n >= 3;
       arc.assign(n, 0.0);
       for (std::size_t i = 1; i < n; ++i)
         arc[i] = arc[i - 1] + (position(i) - position(i - 1)).norm();
-      const double total = closed ? 0.0 : arc.back();
+      const auto total = static_cast<float>(closed ? 0.0 : arc.back());
       const auto base = static_cast<std::uint32_t>(line_vertices.size() / 13);
+      const std::size_t v0 = line_vertices.size();
+      line_vertices.resize(v0 + 26 * n);
+      float* out = line_vertices.data() + v0;
       for (std::size_t i = 0; i < n; ++i) {
         const Vec3 p = position(i);
         const Vec3 prev = i > 0 ? position(i - 1) : (closed ? position(n - 1) : p);
         const Vec3 next = i + 1 < n ? position(i + 1) : (closed ? position(0) : p);
+        const float s = strength(i), a = static_cast<float>(arc[i]);
         for (float side : {-1.0f, 1.0f}) {
           for (const Vec3* v : {&p, &prev, &next})
-            for (int c = 0; c < 3; ++c) line_vertices.push_back(static_cast<float>((*v)[c]));
-          line_vertices.push_back(side);
-          line_vertices.push_back(strength(i));
-          line_vertices.push_back(static_cast<float>(arc[i]));
-          line_vertices.push_back(static_cast<float>(total));
+            for (int c = 0; c < 3; ++c) *out++ = static_cast<float>((*v)[c]);
+          *out++ = side;
+          *out++ = s;
+          *out++ = a;
+          *out++ = total;
         }
       }
+      const std::size_t segments = n - 1 + (closed ? 1 : 0);
+      const std::size_t i0 = line_indices.size();
+      line_indices.resize(i0 + 6 * segments);
+      std::uint32_t* idx = line_indices.data() + i0;
       auto segment = [&](std::uint32_t a, std::uint32_t b) {
         const std::uint32_t a0 = base + 2 * a, a1 = a0 + 1, b0 = base + 2 * b, b1 = b0 + 1;
-        line_indices.insert(line_indices.end(), {a0, a1, b0, a1, b1, b0});
+        for (std::uint32_t v : {a0, a1, b0, a1, b1, b0}) *idx++ = v;
       };
       for (std::size_t i = 0; i + 1 < n; ++i)
         segment(static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(i + 1));
@@ -1449,7 +1458,7 @@ struct Renderer::Impl {
       }
       for (int wide = 0; wide < 2; ++wide) {
         const LineBatch batch{si, wide == 1, -1, static_cast<GLsizei>(line_indices.size()), 0};
-        for (const Polyline& pl : s.lines.polylines) {
+        for (const Polyline& pl : s.drawn_lines().polylines) {
           if (is_wide_family(pl.family) != (wide == 1)) continue;
           if (!s.style.families.empty() &&
               std::find(s.style.families.begin(), s.style.families.end(), pl.family) ==
@@ -1544,7 +1553,7 @@ void Renderer::draw(const Scene& scene, const Camera& camera, const RenderOption
     }
   };
   for (const auto& s : scene.structures) {
-    for (const auto& pl : s.lines.polylines)
+    for (const auto& pl : s.drawn_lines().polylines)
       for (const auto& v : pl.vertices) enclose(v.position);
     for (const auto& layer : s.polyline_layers)
       for (const auto& pl : layer.polylines)

@@ -476,3 +476,197 @@ TEST(LinesVisibility, GivenAndOwnDepthBufferAgree) {
   EXPECT_GT(hidden, 10u);
   EXPECT_GT(visible, 100u);
 }
+
+namespace {
+
+// The lean record's formulas written out plainly (docs/algorithms.md §11):
+// what SegmentGeometry::locate (chaining's inline resolve) must give, bit
+// for bit, for every kind of end.
+SurfacePoint reference_anchor(const Surface& surface, const LineSegment& s, int i) {
+  const SegmentEnd& e = s.end[i];
+  const Face& f = surface.mesh().faces[static_cast<std::size_t>(s.face)];
+  SurfacePoint p{s.face, Vec3::Zero()};
+  if (s.kind[i] == EndKind::edge) {
+    const auto& ev = surface.topology().edge(static_cast<std::size_t>(e.element));
+    for (int k = 0; k < 3; ++k) {
+      if (f[k] == ev[0]) p.bary[k] = 1.0 - e.t;
+      if (f[k] == ev[1]) p.bary[k] = e.t;
+    }
+  } else if (s.kind[i] == EndKind::vertex) {
+    for (int k = 0; k < 3; ++k)
+      if (f[k] == e.element) p.bary[k] = 1.0;
+  } else if (s.kind[i] == EndKind::centroid) {
+    p.bary = Vec3::Constant(1.0 / 3.0);
+  } else {
+    const double b0 = e.bary[0], b1 = e.bary[1];
+    p.bary = Vec3(b0, b1, 1.0 - b0 - b1);
+  }
+  return p;
+}
+
+Vec3 reference_position(const Surface& surface, const LineSegment& s, int i) {
+  const SegmentEnd& e = s.end[i];
+  const auto& pos = surface.mesh().positions;
+  const Face& f = surface.mesh().faces[static_cast<std::size_t>(s.face)];
+  if (s.kind[i] == EndKind::edge) {
+    const auto& ev = surface.topology().edge(static_cast<std::size_t>(e.element));
+    const Vec3 &a = pos[ev[0]], &b = pos[ev[1]];
+    Vec3 p;
+    for (int c = 0; c < 3; ++c) p[c] = (1.0 - e.t) * a[c] + e.t * b[c];
+    return p;
+  }
+  if (s.kind[i] == EndKind::vertex) return pos[static_cast<std::size_t>(e.element)];
+  const Vec3 &a = pos[f[0]], &b = pos[f[1]], &c = pos[f[2]];
+  if (s.kind[i] == EndKind::centroid) {
+    Vec3 p;
+    for (int k = 0; k < 3; ++k) p[k] = (a[k] + b[k] + c[k]) / 3.0;
+    return p;
+  }
+  const Vec3 w = reference_anchor(surface, s, i).bary;
+  Vec3 p;
+  for (int k = 0; k < 3; ++k) p[k] = w[0] * a[k] + w[1] * b[k] + w[2] * c[k];
+  return p;
+}
+
+bool same_bits(const Vec3& a, const Vec3& b) {
+  return std::memcmp(a.data(), b.data(), 24) == 0;
+}
+
+// The torus' soups of a view: edge, centroid and interior ends.
+std::vector<SegmentSoup> torus_soups(const Surface& s, const Camera& cam) {
+  LineOptions o;
+  o.families = {LineFamily::contour, LineFamily::suggestive, LineFamily::ridge, LineFamily::valley,
+                LineFamily::apparent};
+  LineExtractor ex(s, o);
+  return ex.extract(cam);
+}
+
+}  // namespace
+
+TEST(Chaining, InlineResolveGivesTheRecordsFormulasBitForBit) {
+  const Surface s(test::make_torus(2.0, 0.7, 96, 48, 0.02));
+  const Camera cam = look_at(Vec3(0.5, 5.0, 6.0), Vec3(0, 0, 0), 600, 400);
+  std::vector<SegmentSoup> soups = torus_soups(s, cam);
+  // Hand-made ends of every kind in the first faces: vertex ends at each
+  // corner, a centroid, an interior point, and edge ends along each side
+  // (both orders of the edge's vertices among the corners).
+  SegmentSoup made;
+  made.surface = &s;
+  for (std::int32_t face = 0; face < 8; ++face) {
+    const Face& f = s.mesh().faces[static_cast<std::size_t>(face)];
+    for (int k = 0; k < 3; ++k) {
+      LineSegment g;
+      g.face = face;
+      g.kind[0] = EndKind::vertex;
+      g.end[0].element = f[k];
+      g.kind[1] = EndKind::edge;
+      g.end[1].element = s.topology().face_edge(static_cast<std::size_t>(face), k);
+      g.end[1].t = 0.1 + 0.25 * k + 0.01 * face;
+      made.segments.push_back(g);
+    }
+    LineSegment g;
+    g.face = face;
+    g.kind[0] = EndKind::centroid;
+    g.end[0].element = face;
+    const double bary[3] = {0.2 + 0.01 * face, 0.3, 0.5 - 0.01 * face};
+    SegmentGeometry::set_interior(g, 1, bary);
+    made.segments.push_back(g);
+  }
+  soups.push_back(made);
+  std::size_t kinds[4] = {0, 0, 0, 0};
+  for (const SegmentSoup& soup : soups) {
+    const SegmentGeometry geo = soup.geometry();
+    for (const LineSegment& seg : soup.segments)
+      for (int i = 0; i < 2; ++i) {
+        ++kinds[static_cast<int>(seg.kind[i])];
+        SurfacePoint a;
+        Vec3 p;
+        geo.locate(seg, i, a, p);
+        const SurfacePoint ra = reference_anchor(s, seg, i);
+        const Vec3 rp = reference_position(s, seg, i);
+        ASSERT_EQ(a.face, ra.face);
+        ASSERT_TRUE(same_bits(a.bary, ra.bary)) << "kind " << int(seg.kind[i]);
+        ASSERT_TRUE(same_bits(p, rp)) << "kind " << int(seg.kind[i]);
+        ASSERT_TRUE(same_bits(geo.anchor(seg, i).bary, ra.bary));
+        ASSERT_TRUE(same_bits(geo.position(seg, i), rp));
+        const ResolvedEnd r = geo.resolve(seg, i);
+        ASSERT_TRUE(same_bits(r.position, rp));
+        ASSERT_EQ(r.element, seg.end[i].element);
+        ASSERT_EQ(r.strength, seg.end[i].strength);
+      }
+  }
+  for (int k = 0; k < 4; ++k) EXPECT_GT(kinds[k], 0u) << "no end of kind " << k;
+  EXPECT_GT(kinds[static_cast<int>(EndKind::edge)], 1000u);
+}
+
+TEST(Chaining, LengthFiltersKeepExactlyTheChainsReachingTheirBound) {
+  // The filters stop summing once the bound is reached: they must keep the
+  // chains whose whole length (projected_length, Polyline::length) is at
+  // least the bound, also for bounds equal to a chain's length and the
+  // next double above it.
+  const Surface s(test::make_torus(2.0, 0.7, 96, 48, 0.02));
+  const Camera cam = look_at(Vec3(0.5, 5.0, 6.0), Vec3(0, 0, 0), 600, 400);
+  const std::vector<SegmentSoup> soups = torus_soups(s, cam);
+  const LineSet all = chain_segments(soups);
+  ASSERT_GT(all.polylines.size(), 20u);
+  std::vector<double> px, mm;
+  for (const Polyline& pl : all.polylines) {
+    px.push_back(projected_length(pl, cam));
+    mm.push_back(pl.length());
+  }
+  auto bounds_of = [](std::vector<double> lengths) {
+    std::sort(lengths.begin(), lengths.end());
+    std::vector<double> b;
+    for (double q : {0.1, 0.3, 0.5, 0.7, 0.9}) {
+      const double l = lengths[static_cast<std::size_t>(q * double(lengths.size() - 1))];
+      b.push_back(l);
+      b.push_back(std::nextafter(l, std::numeric_limits<double>::infinity()));
+    }
+    return b;
+  };
+  bool any_closed = false;
+  for (const Polyline& pl : all.polylines) any_closed |= pl.closed;
+  EXPECT_TRUE(any_closed);
+  for (int in_pixels = 0; in_pixels < 2; ++in_pixels)
+    for (double bound : bounds_of(in_pixels ? px : mm)) {
+      ChainOptions co;
+      if (in_pixels) {
+        co.camera = cam;
+        co.min_length_px = bound;
+      } else {
+        co.min_length = bound;
+      }
+      std::vector<Polyline> expected;
+      for (std::size_t i = 0; i < all.polylines.size(); ++i)
+        if ((in_pixels ? px[i] : mm[i]) >= bound) expected.push_back(all.polylines[i]);
+      const LineSet kept = chain_segments(soups, co);
+      ASSERT_GT(expected.size(), 0u);
+      ASSERT_LT(expected.size(), all.polylines.size());
+      expect_same_lines(kept.polylines, expected);
+    }
+}
+
+TEST(Chaining, PairingTableSizedByTheMeshAgrees) {
+  const Surface s(test::make_torus(2.0, 0.7, 96, 48, 0.02));
+  const Camera cam = look_at(Vec3(0.5, 5.0, 6.0), Vec3(0, 0, 0), 600, 400);
+  std::vector<SegmentSoup> soups = torus_soups(s, cam);
+  const std::int64_t bound[3] = {static_cast<std::int64_t>(s.topology().edge_count()),
+                                 static_cast<std::int64_t>(s.vertex_count()),
+                                 static_cast<std::int64_t>(s.face_count())};
+  std::size_t joined = 0;
+  for (const SegmentSoup& soup : soups) {
+    const auto pairs = detail::pair_ends(soup.segments, bound);
+    EXPECT_EQ(pairs, detail::pair_ends(soup.segments));
+    EXPECT_EQ(pairs, detail::pair_ends(soup.segments, true));
+    for (std::int32_t p : pairs) joined += p >= 0;
+  }
+  EXPECT_GT(joined, 1000u);
+  // An element past its bound (a soup not of this mesh): the same pairs
+  // as without bounds, from the sort or a table of its own ids.
+  SegmentSoup& soup = soups.front();
+  ASSERT_GT(soup.segments.size(), 10u);
+  const std::int64_t small[3] = {bound[0] / 2, bound[1], bound[2]};
+  EXPECT_EQ(detail::pair_ends(soup.segments, small), detail::pair_ends(soup.segments, true));
+  // And the table is left empty: the next call pairs as before.
+  EXPECT_EQ(detail::pair_ends(soup.segments, bound), detail::pair_ends(soup.segments, true));
+}

@@ -5,7 +5,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
+#include <random>
 #include <vector>
 
 #include "fabrica/core/camera.hpp"
@@ -220,6 +222,142 @@ TEST(ViewerLines, MergeKeepsLoopsClosedAndPointsBehindTheEye) {
   same.polylines.push_back(loop);
   EXPECT_EQ(merge_collinear(same, c, 0.0, 0.1), 0u);
   EXPECT_EQ(same.polylines.front().vertices.size(), loop.vertices.size());
+}
+
+namespace {
+
+// merge_collinear as first written (session 13): the modulo-indexed chain,
+// merge_error with its square root and divisions for every vertex, a new
+// vertex array. The current one must give the same polylines bit for bit.
+double reference_error(const Vec2& a, const Vec2& b, float sa, float sb, const Vec2& p, float s,
+                       double tolerance_px, double strength_tolerance) {
+  const Vec2 ab = b - a;
+  const double len2 = ab.squaredNorm();
+  const double t = len2 > 0.0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+  const double distance = (a + t * ab - p).norm();
+  const double strength = std::fabs(static_cast<double>(s) - (sa + t * (sb - sa)));
+  return std::max(distance / tolerance_px, strength / strength_tolerance);
+}
+
+std::size_t reference_merge(LineSet& lines, const Camera& camera, double tolerance_px,
+                            double strength_tolerance) {
+  const Projector project(camera);
+  std::size_t removed = 0;
+  for (Polyline& pl : lines.polylines) {
+    const std::size_t n = pl.vertices.size();
+    if (n < 3) continue;
+    const std::size_t m = pl.closed ? n + 1 : n;
+    std::vector<Vec2> pixel(n);
+    std::vector<char> front(n), keep(m, 0);
+    for (std::size_t i = 0; i < n; ++i) {
+      const ProjectedPoint q = project(pl.vertices[i].position);
+      pixel[i] = q.pixel;
+      front[i] = q.depth > 0.0 && std::isfinite(q.pixel.x()) && std::isfinite(q.pixel.y());
+    }
+    keep[0] = keep[m - 1] = 1;
+    for (std::size_t i = 0; i < m; ++i)
+      if (!front[i % n]) {
+        keep[i] = 1;
+        if (i > 0) keep[i - 1] = 1;
+        if (i + 1 < m) keep[i + 1] = 1;
+      }
+    std::vector<std::pair<std::size_t, std::size_t>> spans;
+    for (std::size_t a = 0, b = 1; b < m; ++b)
+      if (keep[b]) {
+        if (b > a + 1) spans.emplace_back(a, b);
+        a = b;
+      }
+    while (!spans.empty()) {
+      const auto [a, b] = spans.back();
+      spans.pop_back();
+      double worst = 1.0;
+      std::size_t at = 0;
+      for (std::size_t k = a + 1; k < b; ++k) {
+        const double e = reference_error(
+            pixel[a % n], pixel[b % n], pl.vertices[a % n].strength, pl.vertices[b % n].strength,
+            pixel[k % n], pl.vertices[k % n].strength, tolerance_px, strength_tolerance);
+        if (e > worst) {
+          worst = e;
+          at = k;
+        }
+      }
+      if (at == 0) continue;
+      keep[at] = 1;
+      if (at > a + 1) spans.emplace_back(a, at);
+      if (b > at + 1) spans.emplace_back(at, b);
+    }
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < n; ++i) kept += keep[i] ? 1 : 0;
+    if (kept == n || (pl.closed && kept < 3)) continue;
+    std::vector<LineVertex> vertices;
+    for (std::size_t i = 0; i < n; ++i)
+      if (keep[i]) vertices.push_back(pl.vertices[i]);
+    removed += n - kept;
+    pl.vertices = std::move(vertices);
+    pl.edge_faces.clear();
+  }
+  return removed;
+}
+
+bool same_vertex(const LineVertex& a, const LineVertex& b) {
+  return a.anchor.face == b.anchor.face &&
+         std::memcmp(a.anchor.bary.data(), b.anchor.bary.data(), 24) == 0 &&
+         std::memcmp(a.position.data(), b.position.data(), 24) == 0 &&
+         std::memcmp(&a.strength, &b.strength, 4) == 0 && a.visible == b.visible;
+}
+
+}  // namespace
+
+TEST(ViewerLines, MergeGivesTheFirstImplementationsPolylinesBitForBit) {
+  // Random wiggly polylines (steps of a few pixels, sideways jitter around
+  // the tolerance, strength steps around theirs), open and closed, some
+  // crossing the eye's plane, at several tolerances: the optimised merge
+  // (flat arrays, exact bounds before the square root) keeps exactly the
+  // vertices the first one kept.
+  const Camera c = test_camera();
+  std::mt19937 rng(18);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  LineSet lines;
+  for (int p = 0; p < 300; ++p) {
+    std::vector<Vec2> pixels;
+    std::vector<float> strengths;
+    const int n = 3 + static_cast<int>(unit(rng) * 60.0);
+    Vec2 at(100.0 + 1000.0 * unit(rng), 100.0 + 600.0 * unit(rng));
+    double heading = 2.0 * M_PI * unit(rng);
+    float strength = static_cast<float>(unit(rng));
+    for (int i = 0; i < n; ++i) {
+      pixels.push_back(at);
+      strengths.push_back(strength);
+      heading += 0.3 * (unit(rng) - 0.5);
+      const double step = 0.5 + 4.0 * unit(rng), side = 1.2 * (unit(rng) - 0.5);
+      at += step * Vec2(std::cos(heading), std::sin(heading)) +
+            side * Vec2(-std::sin(heading), std::cos(heading));
+      if (unit(rng) < 0.2)
+        strength = std::clamp(strength + 0.3f * float(unit(rng) - 0.5), 0.f, 1.f);
+    }
+    Polyline pl = polyline_through(c, pixels, strengths);
+    pl.closed = p % 3 == 0;
+    if (p % 17 == 0)  // through the eye's plane (z = 10): points behind the eye
+      for (std::size_t i = 0; i < pl.vertices.size(); i += 4) pl.vertices[i].position.z() += 12.0;
+    lines.polylines.push_back(pl);
+  }
+  for (double tolerance : {0.25, 0.5, 1.0})
+    for (double strength_tolerance : {0.05, 0.1, 10.0}) {
+      LineSet mine = lines, first = lines;
+      const std::size_t removed = merge_collinear(mine, c, tolerance, strength_tolerance);
+      EXPECT_EQ(removed, reference_merge(first, c, tolerance, strength_tolerance));
+      EXPECT_GT(removed, 0u);
+      ASSERT_EQ(mine.polylines.size(), first.polylines.size());
+      for (std::size_t i = 0; i < mine.polylines.size(); ++i) {
+        const Polyline &a = mine.polylines[i], &b = first.polylines[i];
+        EXPECT_EQ(a.closed, b.closed);
+        EXPECT_EQ(a.edge_faces, b.edge_faces);
+        ASSERT_EQ(a.vertices.size(), b.vertices.size()) << "polyline " << i;
+        for (std::size_t k = 0; k < a.vertices.size(); ++k)
+          ASSERT_TRUE(same_vertex(a.vertices[k], b.vertices[k]))
+              << "polyline " << i << " vertex " << k;
+      }
+    }
 }
 
 namespace {

@@ -82,6 +82,10 @@ class SegmentGeometry {
   SurfacePoint anchor(const LineSegment& s, int i) const;
   Vec3 position(const LineSegment& s, int i) const;
   ResolvedEnd resolve(const LineSegment& s, int i) const;
+  /// anchor() and position() of end i at once, with one look-up of its
+  /// edge, vertex or face (the same values, bit for bit): chaining's per
+  /// polyline vertex path, inline.
+  void locate(const LineSegment& s, int i, SurfacePoint& anchor, Vec3& position) const;
 
   /// Sets end i of s to an interior point of its face with
   /// barycentrics `bary` (the stored precision: float).
@@ -92,6 +96,46 @@ class SegmentGeometry {
   const Vec3* pos_;
   const Topology* topo_;
 };
+
+inline void SegmentGeometry::locate(const LineSegment& s, int i, SurfacePoint& anchor,
+                                    Vec3& position) const {
+  const SegmentEnd& e = s.end[i];
+  const Face& f = faces_[static_cast<std::size_t>(s.face)];
+  anchor.face = s.face;
+  Vec3& b = anchor.bary;
+  switch (s.kind[i]) {
+    case EndKind::edge: {
+      // 1 - t at the edge's lower vertex, t at its higher one (t wins
+      // where both are the same corner), 0 at the third corner.
+      const auto& ev = topo_->edge(static_cast<std::size_t>(e.element));
+      const double t = e.t, u = 1.0 - t;
+      for (int k = 0; k < 3; ++k) b[k] = f[k] == ev[1] ? t : f[k] == ev[0] ? u : 0.0;
+      const Vec3 &p = pos_[ev[0]], &q = pos_[ev[1]];
+      position = Vec3(u * p[0] + t * q[0], u * p[1] + t * q[1], u * p[2] + t * q[2]);
+      return;
+    }
+    case EndKind::vertex:
+      for (int k = 0; k < 3; ++k) b[k] = f[k] == e.element ? 1.0 : 0.0;
+      position = pos_[static_cast<std::size_t>(e.element)];
+      return;
+    case EndKind::centroid: {
+      b = Vec3::Constant(1.0 / 3.0);
+      const Vec3 &p = pos_[f[0]], &q = pos_[f[1]], &r = pos_[f[2]];
+      position =
+          Vec3((p[0] + q[0] + r[0]) / 3.0, (p[1] + q[1] + r[1]) / 3.0, (p[2] + q[2] + r[2]) / 3.0);
+      return;
+    }
+    case EndKind::interior: {
+      const double b0 = e.bary[0], b1 = e.bary[1];
+      b = Vec3(b0, b1, 1.0 - b0 - b1);
+      break;
+    }
+    default:  // not a kind: no barycentrics (the combination below is 0)
+      b = Vec3::Zero();
+      break;
+  }
+  position = b[0] * pos_[f[0]] + b[1] * pos_[f[1]] + b[2] * pos_[f[2]];
+}
 
 /// All segments of one family, in a deterministic order (by face, then
 /// extraction order inside the face) at any thread count. `surface` is the

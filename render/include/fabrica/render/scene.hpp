@@ -88,6 +88,11 @@ struct Structure {
   StructureStyle style;
   std::shared_ptr<const RenderMesh> mesh;
   LineSet lines;  ///< already extracted (fabrica::lines), in the mesh's coordinates
+  /// When set, drawn instead of `lines`, without a copy (the viewer's frames
+  /// draw the lines its worker published, which it keeps alive).
+  std::shared_ptr<const LineSet> shared_lines;
+  /// The lines drawn: *shared_lines when set, else `lines`.
+  const LineSet& drawn_lines() const { return shared_lines ? *shared_lines : lines; }
   /// Drawn before (under) `lines`, in order.
   std::vector<PolylineLayer> polyline_layers;
 };
