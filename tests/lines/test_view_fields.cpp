@@ -218,6 +218,80 @@ TEST(LinesViewFields, SimdAndPortablePassesGiveTheSameBits) {
   }
 }
 
+// The AVX-512 vertex pass (two four-vertex blocks per register, where the
+// CPU has AVX-512) against the AVX2 and the portable ones: every field of
+// the vertex pass, the same bits, on meshes with vertices without valid
+// curvature (their block pairs take the AVX2 pass) and
+// vertex counts that are not a multiple of eight, with and without the
+// suggestive-contour numerator, the cull threshold and the test bits, in
+// perspective and orthographic views, from held and streamed vertex blocks.
+TEST(LinesViewFields, Avx512VertexPassMatchesAvx2AndPortable) {
+#if !defined(FABRICA_LINES_AVX512)
+  GTEST_SKIP() << "no AVX-512 passes in this build";
+#else
+  if (!detail::cpu_has_avx512()) GTEST_SKIP() << "this CPU has no AVX-512 (F, VL, DQ, BW)";
+  std::size_t odd_counts = 0, no_curvature = 0;
+  for (const char* rel : {"meshes/anatomy/bones/gfxmorph_femur.stl", "meshes/classic/c3d_cow.obj",
+                          "meshes/classic/libigl_camelhead.off"}) {
+    SCOPED_TRACE(rel);
+    const Surface surface = load(rel, std::string(rel).find("classic") != std::string::npos);
+    odd_counts += surface.vertex_count() % 8 != 0;
+    for (auto v : surface.curvature().valid) no_curvature += v == 0;
+    const LinePrecompute pre(surface);
+    for (int variant = 0; variant < 6; ++variant) {
+      SCOPED_TRACE(variant);
+      Camera c = camera_towards(surface, Vec3(0.3, -0.4, 1.0));
+      if (variant % 3 == 2) c.projection = Projection::orthographic;
+      ViewFieldsRequest req;
+      const bool cull = variant % 3 != 1;
+      req.apparent_cull_threshold = cull ? std::optional<double>(1.0e3) : std::nullopt;
+      req.suggestive_test_shift = cull ? std::optional<double>(0.05) : std::nullopt;
+      if (variant >= 3) req.sc_test = false;  // no numerator, no test bits
+      const bool stream = variant == 4;
+      auto fields = [&](bool avx512, bool avx2) {
+        const bool had512 = detail::avx512_enabled().exchange(avx512);
+        const bool had2 = detail::avx2_enabled().exchange(avx2);
+        ViewFields f;
+        detail::update_view_fields(f, surface, c, req, &pre, false, false, stream);
+        detail::avx2_enabled() = had2;
+        detail::avx512_enabled() = had512;
+        return f;
+      };
+      const ViewFields wide = fields(true, true), avx2 = fields(false, true),
+                       portable = fields(false, false);
+      for (const ViewFields* other : {&avx2, &portable}) {
+        EXPECT_SAME_FIELD(wide, *other, ndotv);
+        EXPECT_SAME_FIELD(wide, *other, kr);
+        if (req.sc_test) {
+          EXPECT_SAME_FIELD(wide, *other, sc_num);
+        }
+        EXPECT_SAME_FIELD(wide, *other, q1);
+        EXPECT_SAME_FIELD(wide, *other, t1);
+        EXPECT_SAME_FIELD(wide, *other, t1_world);
+        EXPECT_SAME_FIELD(wide, *other, signs);
+        EXPECT_SAME_FIELD(wide, *other, dt1q1);
+      }
+      // The test bits and the cull bit are set somewhere (and not
+      // everywhere), so they are compared.
+      std::size_t q1_above = 0, sc_off = 0;
+      for (auto b : wide.signs) {
+        q1_above += (b & kQ1Above) != 0;
+        sc_off += (b & (kScOffFront | kScOffBack)) != 0;
+      }
+      if (cull) {
+        EXPECT_GT(q1_above, 0u);
+        EXPECT_LT(q1_above, surface.vertex_count());
+      }
+      if (cull && req.sc_test) {
+        EXPECT_GT(sc_off, 0u);
+      }
+    }
+  }
+  EXPECT_GT(odd_counts, 0u);
+  EXPECT_GT(no_curvature, 0u);
+#endif
+}
+
 // The one-shot vertex pass packs its vertex blocks a few at a time instead
 // of reading LinePrecompute::vertex_blocks(): the same bits (on a mesh
 // whose vertex count is not a multiple of four, so the partial last block
