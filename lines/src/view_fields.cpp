@@ -78,6 +78,54 @@ struct VertexPassArgs {
   std::uint8_t* signs = nullptr;
 };
 
+// The entries of QᵀQ (view_dependent_curvature) in SIMD lanes, written once
+// for the AVX2 and AVX-512 vertex passes with the operators of GCC's vector
+// types (always inlined, so the caller's width and target); the same
+// operations in the same order as the scalar code. q1 = mean + sqrt(radicand).
+template <class V>
+[[gnu::always_inline]] inline void view_matrix_lanes(const V& k1, const V& k2, const V& sec,
+                                                     const V& hu2, const V& huv, const V& hw2,
+                                                     V& m11, V& m12, V& m22, V& mean, V& radicand) {
+  const V Q11 = k1 * (1.0 + sec * hu2);
+  const V Q12 = k1 * (sec * huv);
+  const V Q21 = k2 * (sec * huv);
+  const V Q22 = k2 * (1.0 + sec * hw2);
+  m11 = Q11 * Q11 + Q21 * Q21;
+  m12 = Q11 * Q12 + Q21 * Q22;
+  m22 = Q12 * Q12 + Q22 * Q22;
+  mean = 0.5 * (m11 + m22);
+  const V dm = m22 - m11;
+  radicand = m12 * m12 + (0.25 * dm) * dm;
+}
+
+// The suggestive-contour numerator of `vertex` (csc2 > 0, valid
+// derivatives) in SIMD lanes, the same operations in the same order.
+template <class V>
+[[gnu::always_inline]] inline void sc_numerator_lanes(const V& u, const V& w, const V& u2,
+                                                      const V& w2, const V& a, const V& b,
+                                                      const V& c, const V& d, const V& k1,
+                                                      const V& k2, const V& ndotv, const V& csc2,
+                                                      V& num) {
+  num = u2 * (u * a + 3.0 * w * b) + w2 * (3.0 * u * c + w * d);
+  num = num * csc2;
+  const V tr = (k2 - k1) * u * w * csc2;
+  num = num - 2.0 * ndotv * tr * tr;
+}
+
+// view_dependent_direction's two candidate vectors a = (m22 - q1, -m12)
+// and c = (m12, q1 - m11) and their squared norms, in SIMD lanes.
+template <class V>
+[[gnu::always_inline]] inline void direction_candidates(const V& m11, const V& m12, const V& m22,
+                                                        const V& q1, V& a0, V& a1, V& c0, V& c1,
+                                                        V& sa, V& sb) {
+  a0 = m22 - q1;
+  a1 = -m12;
+  c0 = m12;
+  c1 = q1 - m11;
+  sa = a0 * a0 + a1 * a1;
+  sb = c0 * c0 + c1 * c1;
+}
+
 // Blocks [b0, b1) whose four vertices all have valid curvature; the others
 // go to `other(b)`.
 // blocks[b - first] and valid[b - first] hold block b.
@@ -89,7 +137,7 @@ template <class Other>
   blocks -= first;  // (first <= b0: the pointer is only used for b >= b0)
   valid -= first;
   const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0);
-  const __m256d neg0 = _mm256_set1_pd(-0.0), three = _mm256_set1_pd(3.0);
+  const __m256d neg0 = _mm256_set1_pd(-0.0);
   const __m256i lane_bits = _mm256_set_epi64x(8, 4, 2, 1);
   for (std::size_t b = b0; b < b1; ++b) {
     // The blocks are read once per view: fetched ahead without temporal
@@ -134,16 +182,8 @@ template <class Other>
     if (A.want_sc) {
       const __m256d a = FABRICA_LD(k.a), bb = FABRICA_LD(k.b), c = FABRICA_LD(k.c),
                     d = FABRICA_LD(k.d);
-      __m256d num = _mm256_add_pd(
-          _mm256_mul_pd(
-              u2, _mm256_add_pd(_mm256_mul_pd(u, a), _mm256_mul_pd(_mm256_mul_pd(three, w), bb))),
-          _mm256_mul_pd(
-              w2, _mm256_add_pd(_mm256_mul_pd(_mm256_mul_pd(three, u), c), _mm256_mul_pd(w, d))));
-      num = _mm256_mul_pd(num, csc2);
-      const __m256d tr =
-          _mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(_mm256_sub_pd(k2, k1), u), w), csc2);
-      num = _mm256_sub_pd(
-          num, _mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(_mm256_set1_pd(2.0), ndotv), tr), tr));
+      __m256d num;
+      sc_numerator_lanes(u, w, u2, w2, a, bb, c, d, k1, k2, ndotv, csc2, num);
       const __m256i dbits = _mm256_set1_epi64x((valid[b] >> 4) & 0xF);
       const __m256d dvalid =
           _mm256_castsi256_pd(_mm256_cmpeq_epi64(_mm256_and_si256(dbits, lane_bits), lane_bits));
@@ -177,29 +217,17 @@ template <class Other>
       const __m256d hu2 = FABRICA_PICK(csc_pos, _mm256_mul_pd(u2, csc2), one);
       const __m256d huv = FABRICA_PICK(csc_pos, _mm256_mul_pd(_mm256_mul_pd(u, w), csc2), zero);
       const __m256d hw2 = FABRICA_PICK(csc_pos, _mm256_mul_pd(w2, csc2), zero);
-      const __m256d Q11 = _mm256_mul_pd(k1, _mm256_add_pd(one, _mm256_mul_pd(sec, hu2)));
-      const __m256d Q12 = _mm256_mul_pd(k1, _mm256_mul_pd(sec, huv));
-      const __m256d Q21 = _mm256_mul_pd(k2, _mm256_mul_pd(sec, huv));
-      const __m256d Q22 = _mm256_mul_pd(k2, _mm256_add_pd(one, _mm256_mul_pd(sec, hw2)));
-      const __m256d m11 = _mm256_add_pd(_mm256_mul_pd(Q11, Q11), _mm256_mul_pd(Q21, Q21));
-      const __m256d m12 = _mm256_add_pd(_mm256_mul_pd(Q11, Q12), _mm256_mul_pd(Q21, Q22));
-      const __m256d m22 = _mm256_add_pd(_mm256_mul_pd(Q12, Q12), _mm256_mul_pd(Q22, Q22));
-      const __m256d mean = _mm256_mul_pd(_mm256_set1_pd(0.5), _mm256_add_pd(m11, m22));
-      const __m256d dm = _mm256_sub_pd(m22, m11);
-      const __m256d q1 =
-          _mm256_add_pd(mean, _mm256_sqrt_pd(_mm256_add_pd(
-                                  _mm256_mul_pd(m12, m12),
-                                  _mm256_mul_pd(_mm256_mul_pd(_mm256_set1_pd(0.25), dm), dm))));
+      __m256d m11, m12, m22, mean, radicand;
+      view_matrix_lanes(k1, k2, sec, hu2, huv, hw2, m11, m12, m22, mean, radicand);
+      const __m256d q1 = _mm256_add_pd(mean, _mm256_sqrt_pd(radicand));
       _mm256_storeu_pd(A.q1 + i, q1);
       if (A.cull)
         sbits = _mm256_or_si256(
             sbits,
             detail::mask_bits4(_mm256_cmp_pd(q1, _mm256_set1_pd(A.cull_t), _CMP_NLE_UQ), kQ1Above));
       // t1: view_dependent_direction.
-      const __m256d a0 = _mm256_sub_pd(m22, q1), a1 = _mm256_xor_pd(m12, neg0);
-      const __m256d c0 = m12, c1 = _mm256_sub_pd(q1, m11);
-      const __m256d sa = _mm256_add_pd(_mm256_mul_pd(a0, a0), _mm256_mul_pd(a1, a1));
-      const __m256d sb = _mm256_add_pd(_mm256_mul_pd(c0, c0), _mm256_mul_pd(c1, c1));
+      __m256d a0, a1, c0, c1, sa, sb;
+      direction_candidates(m11, m12, m22, q1, a0, a1, c0, c1, sa, sb);
       const __m256d use_a = _mm256_cmp_pd(sa, sb, _CMP_GE_OQ);
       const __m256d f0 = FABRICA_PICK(use_a, a0, c0), f1 = FABRICA_PICK(use_a, a1, c1);
       const __m256d len =
@@ -271,7 +299,6 @@ template <class Other>
   blocks -= first;  // (first <= b0: the pointer is only used for b >= b0)
   valid -= first;
   const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0);
-  const __m512d three = _mm512_set1_pd(3.0);
   const __m512i t1_lo = _mm512_setr_epi64(0, 8, 1, 9, 2, 10, 3, 11);
   const __m512i t1_hi = _mm512_setr_epi64(4, 12, 5, 13, 6, 14, 7, 15);
   // t1_world's 24 words (x0 y0 z0 x1 ...) in three registers: x (index l)
@@ -335,16 +362,8 @@ template <class Other>
     __m512i sbits = _mm512_setzero_si512();
     if (A.want_sc) {
       const __m512d a = FABRICA_LD(a), bb = FABRICA_LD(b), c = FABRICA_LD(c), d = FABRICA_LD(d);
-      __m512d num = _mm512_add_pd(
-          _mm512_mul_pd(
-              u2, _mm512_add_pd(_mm512_mul_pd(u, a), _mm512_mul_pd(_mm512_mul_pd(three, w), bb))),
-          _mm512_mul_pd(
-              w2, _mm512_add_pd(_mm512_mul_pd(_mm512_mul_pd(three, u), c), _mm512_mul_pd(w, d))));
-      num = _mm512_mul_pd(num, csc2);
-      const __m512d tr =
-          _mm512_mul_pd(_mm512_mul_pd(_mm512_mul_pd(_mm512_sub_pd(k2, k1), u), w), csc2);
-      num = _mm512_sub_pd(
-          num, _mm512_mul_pd(_mm512_mul_pd(_mm512_mul_pd(_mm512_set1_pd(2.0), ndotv), tr), tr));
+      __m512d num;
+      sc_numerator_lanes(u, w, u2, w2, a, bb, c, d, k1, k2, ndotv, csc2, num);
       const auto dvalid = static_cast<__mmask8>(((valid[b] >> 4) & 0xF) | (valid[b + 1] & 0xF0));
       const __m512d sc = _mm512_maskz_mov_pd(dvalid & csc_pos, num);
       _mm512_storeu_pd(A.sc_num + i, sc);
@@ -372,30 +391,16 @@ template <class Other>
       const __m512d hu2 = _mm512_mask_mul_pd(one, csc_pos, u2, csc2);
       const __m512d huv = _mm512_maskz_mul_pd(csc_pos, _mm512_mul_pd(u, w), csc2);
       const __m512d hw2 = _mm512_maskz_mul_pd(csc_pos, w2, csc2);
-      const __m512d Q11 = _mm512_mul_pd(k1, _mm512_add_pd(one, _mm512_mul_pd(sec, hu2)));
-      const __m512d Q12 = _mm512_mul_pd(k1, _mm512_mul_pd(sec, huv));
-      const __m512d Q21 = _mm512_mul_pd(k2, _mm512_mul_pd(sec, huv));
-      const __m512d Q22 = _mm512_mul_pd(k2, _mm512_add_pd(one, _mm512_mul_pd(sec, hw2)));
-      const __m512d m11 = _mm512_add_pd(_mm512_mul_pd(Q11, Q11), _mm512_mul_pd(Q21, Q21));
-      const __m512d m12 = _mm512_add_pd(_mm512_mul_pd(Q11, Q12), _mm512_mul_pd(Q21, Q22));
-      const __m512d m22 = _mm512_add_pd(_mm512_mul_pd(Q12, Q12), _mm512_mul_pd(Q22, Q22));
-      const __m512d mean = _mm512_mul_pd(_mm512_set1_pd(0.5), _mm512_add_pd(m11, m22));
-      const __m512d dm = _mm512_sub_pd(m22, m11);
-      const __m512d q1 =
-          _mm512_add_pd(mean, _mm512_sqrt_pd(_mm512_add_pd(
-                                  _mm512_mul_pd(m12, m12),
-                                  _mm512_mul_pd(_mm512_mul_pd(_mm512_set1_pd(0.25), dm), dm))));
+      __m512d m11, m12, m22, mean, radicand;
+      view_matrix_lanes(k1, k2, sec, hu2, huv, hw2, m11, m12, m22, mean, radicand);
+      const __m512d q1 = _mm512_add_pd(mean, _mm512_sqrt_pd(radicand));
       _mm512_storeu_pd(A.q1 + i, q1);
       if (A.cull)
         sbits = or_bits8(sbits, _mm512_cmp_pd_mask(q1, _mm512_set1_pd(A.cull_t), _CMP_NLE_UQ),
                          kQ1Above);
       // t1: view_dependent_direction.
-      const __m512d a0 = _mm512_sub_pd(m22, q1);
-      const __m512d a1 = _mm512_castsi512_pd(
-          _mm512_xor_si512(_mm512_castpd_si512(m12), _mm512_set1_epi64(INT64_MIN)));
-      const __m512d c0 = m12, c1 = _mm512_sub_pd(q1, m11);
-      const __m512d sa = _mm512_add_pd(_mm512_mul_pd(a0, a0), _mm512_mul_pd(a1, a1));
-      const __m512d sb = _mm512_add_pd(_mm512_mul_pd(c0, c0), _mm512_mul_pd(c1, c1));
+      __m512d a0, a1, c0, c1, sa, sb;
+      direction_candidates(m11, m12, m22, q1, a0, a1, c0, c1, sa, sb);
       const __mmask8 use_a = _mm512_cmp_pd_mask(sa, sb, _CMP_GE_OQ);
       const __m512d f0 = _mm512_mask_blend_pd(use_a, c0, a0);
       const __m512d f1 = _mm512_mask_blend_pd(use_a, c1, a1);
