@@ -78,54 +78,6 @@ struct VertexPassArgs {
   std::uint8_t* signs = nullptr;
 };
 
-// The entries of QᵀQ (view_dependent_curvature) in SIMD lanes, written once
-// for the AVX2 and AVX-512 vertex passes with the operators of GCC's vector
-// types (always inlined, so the caller's width and target); the same
-// operations in the same order as the scalar code. q1 = mean + sqrt(radicand).
-template <class V>
-[[gnu::always_inline]] inline void view_matrix_lanes(const V& k1, const V& k2, const V& sec,
-                                                     const V& hu2, const V& huv, const V& hw2,
-                                                     V& m11, V& m12, V& m22, V& mean, V& radicand) {
-  const V Q11 = k1 * (1.0 + sec * hu2);
-  const V Q12 = k1 * (sec * huv);
-  const V Q21 = k2 * (sec * huv);
-  const V Q22 = k2 * (1.0 + sec * hw2);
-  m11 = Q11 * Q11 + Q21 * Q21;
-  m12 = Q11 * Q12 + Q21 * Q22;
-  m22 = Q12 * Q12 + Q22 * Q22;
-  mean = 0.5 * (m11 + m22);
-  const V dm = m22 - m11;
-  radicand = m12 * m12 + (0.25 * dm) * dm;
-}
-
-// The suggestive-contour numerator of `vertex` (csc2 > 0, valid
-// derivatives) in SIMD lanes, the same operations in the same order.
-template <class V>
-[[gnu::always_inline]] inline void sc_numerator_lanes(const V& u, const V& w, const V& u2,
-                                                      const V& w2, const V& a, const V& b,
-                                                      const V& c, const V& d, const V& k1,
-                                                      const V& k2, const V& ndotv, const V& csc2,
-                                                      V& num) {
-  num = u2 * (u * a + 3.0 * w * b) + w2 * (3.0 * u * c + w * d);
-  num = num * csc2;
-  const V tr = (k2 - k1) * u * w * csc2;
-  num = num - 2.0 * ndotv * tr * tr;
-}
-
-// view_dependent_direction's two candidate vectors a = (m22 - q1, -m12)
-// and c = (m12, q1 - m11) and their squared norms, in SIMD lanes.
-template <class V>
-[[gnu::always_inline]] inline void direction_candidates(const V& m11, const V& m12, const V& m22,
-                                                        const V& q1, V& a0, V& a1, V& c0, V& c1,
-                                                        V& sa, V& sb) {
-  a0 = m22 - q1;
-  a1 = -m12;
-  c0 = m12;
-  c1 = q1 - m11;
-  sa = a0 * a0 + a1 * a1;
-  sb = c0 * c0 + c1 * c1;
-}
-
 // Blocks [b0, b1) whose four vertices all have valid curvature; the others
 // go to `other(b)`.
 // blocks[b - first] and valid[b - first] hold block b.
@@ -137,7 +89,7 @@ template <class Other>
   blocks -= first;  // (first <= b0: the pointer is only used for b >= b0)
   valid -= first;
   const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0);
-  const __m256d neg0 = _mm256_set1_pd(-0.0);
+  const __m256d neg0 = _mm256_set1_pd(-0.0), three = _mm256_set1_pd(3.0);
   const __m256i lane_bits = _mm256_set_epi64x(8, 4, 2, 1);
   for (std::size_t b = b0; b < b1; ++b) {
     // The blocks are read once per view: fetched ahead without temporal
@@ -182,8 +134,16 @@ template <class Other>
     if (A.want_sc) {
       const __m256d a = FABRICA_LD(k.a), bb = FABRICA_LD(k.b), c = FABRICA_LD(k.c),
                     d = FABRICA_LD(k.d);
-      __m256d num;
-      sc_numerator_lanes(u, w, u2, w2, a, bb, c, d, k1, k2, ndotv, csc2, num);
+      __m256d num = _mm256_add_pd(
+          _mm256_mul_pd(
+              u2, _mm256_add_pd(_mm256_mul_pd(u, a), _mm256_mul_pd(_mm256_mul_pd(three, w), bb))),
+          _mm256_mul_pd(
+              w2, _mm256_add_pd(_mm256_mul_pd(_mm256_mul_pd(three, u), c), _mm256_mul_pd(w, d))));
+      num = _mm256_mul_pd(num, csc2);
+      const __m256d tr =
+          _mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(_mm256_sub_pd(k2, k1), u), w), csc2);
+      num = _mm256_sub_pd(
+          num, _mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(_mm256_set1_pd(2.0), ndotv), tr), tr));
       const __m256i dbits = _mm256_set1_epi64x((valid[b] >> 4) & 0xF);
       const __m256d dvalid =
           _mm256_castsi256_pd(_mm256_cmpeq_epi64(_mm256_and_si256(dbits, lane_bits), lane_bits));
@@ -217,17 +177,29 @@ template <class Other>
       const __m256d hu2 = FABRICA_PICK(csc_pos, _mm256_mul_pd(u2, csc2), one);
       const __m256d huv = FABRICA_PICK(csc_pos, _mm256_mul_pd(_mm256_mul_pd(u, w), csc2), zero);
       const __m256d hw2 = FABRICA_PICK(csc_pos, _mm256_mul_pd(w2, csc2), zero);
-      __m256d m11, m12, m22, mean, radicand;
-      view_matrix_lanes(k1, k2, sec, hu2, huv, hw2, m11, m12, m22, mean, radicand);
-      const __m256d q1 = _mm256_add_pd(mean, _mm256_sqrt_pd(radicand));
+      const __m256d Q11 = _mm256_mul_pd(k1, _mm256_add_pd(one, _mm256_mul_pd(sec, hu2)));
+      const __m256d Q12 = _mm256_mul_pd(k1, _mm256_mul_pd(sec, huv));
+      const __m256d Q21 = _mm256_mul_pd(k2, _mm256_mul_pd(sec, huv));
+      const __m256d Q22 = _mm256_mul_pd(k2, _mm256_add_pd(one, _mm256_mul_pd(sec, hw2)));
+      const __m256d m11 = _mm256_add_pd(_mm256_mul_pd(Q11, Q11), _mm256_mul_pd(Q21, Q21));
+      const __m256d m12 = _mm256_add_pd(_mm256_mul_pd(Q11, Q12), _mm256_mul_pd(Q21, Q22));
+      const __m256d m22 = _mm256_add_pd(_mm256_mul_pd(Q12, Q12), _mm256_mul_pd(Q22, Q22));
+      const __m256d mean = _mm256_mul_pd(_mm256_set1_pd(0.5), _mm256_add_pd(m11, m22));
+      const __m256d dm = _mm256_sub_pd(m22, m11);
+      const __m256d q1 =
+          _mm256_add_pd(mean, _mm256_sqrt_pd(_mm256_add_pd(
+                                  _mm256_mul_pd(m12, m12),
+                                  _mm256_mul_pd(_mm256_mul_pd(_mm256_set1_pd(0.25), dm), dm))));
       _mm256_storeu_pd(A.q1 + i, q1);
       if (A.cull)
         sbits = _mm256_or_si256(
             sbits,
             detail::mask_bits4(_mm256_cmp_pd(q1, _mm256_set1_pd(A.cull_t), _CMP_NLE_UQ), kQ1Above));
       // t1: view_dependent_direction.
-      __m256d a0, a1, c0, c1, sa, sb;
-      direction_candidates(m11, m12, m22, q1, a0, a1, c0, c1, sa, sb);
+      const __m256d a0 = _mm256_sub_pd(m22, q1), a1 = _mm256_xor_pd(m12, neg0);
+      const __m256d c0 = m12, c1 = _mm256_sub_pd(q1, m11);
+      const __m256d sa = _mm256_add_pd(_mm256_mul_pd(a0, a0), _mm256_mul_pd(a1, a1));
+      const __m256d sb = _mm256_add_pd(_mm256_mul_pd(c0, c0), _mm256_mul_pd(c1, c1));
       const __m256d use_a = _mm256_cmp_pd(sa, sb, _CMP_GE_OQ);
       const __m256d f0 = FABRICA_PICK(use_a, a0, c0), f1 = FABRICA_PICK(use_a, a1, c1);
       const __m256d len =
@@ -265,173 +237,6 @@ template <class Other>
     std::memcpy(A.signs + i, &four, 4);
   }
 }
-#endif
-
-#if defined(FABRICA_LINES_AVX512)
-// GCC 12's AVX-512 intrinsics start from _mm512_undefined_pd(), which it
-// then reports as maybe uninitialized (GCC bug 105593, fixed in 13).
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-// The vertex pass eight vertices at a time: two consecutive four-lane
-// blocks per 512-bit register (block b in the low half, b + 1 in the
-// high), every lane in vertex_pass_avx2's operations and order (the file
-// is built with -ffp-contract=off: the AVX-512 target has FMA), so the same
-// bits. Pairs with an invalid vertex, the partial last block, and an odd
-// block at the end of the range go to vertex_pass_avx2.
-[[gnu::target(FABRICA_AVX512_ISA), gnu::always_inline]] inline __m512d load_pair(const double* lo,
-                                                                                 const double* hi) {
-  return _mm512_insertf64x4(_mm512_castpd256_pd512(_mm256_load_pd(lo)), _mm256_load_pd(hi), 1);
-}
-
-// `value` in the lanes of `mask`, OR-ed into `acc` (64-bit lanes).
-[[gnu::target(FABRICA_AVX512_ISA), gnu::always_inline]] inline __m512i or_bits8(__m512i acc,
-                                                                                __mmask8 mask,
-                                                                                int value) {
-  return _mm512_mask_or_epi64(acc, mask, acc, _mm512_set1_epi64(value));
-}
-
-template <class Other>
-[[gnu::target(FABRICA_AVX512_ISA)]] void vertex_pass_avx512(
-    const LinePrecompute::VertexBlock* blocks, const std::uint8_t* valid, std::size_t first,
-    std::size_t b0, std::size_t b1, const VertexPassArgs& A, Other&& other) {
-  const LinePrecompute::VertexBlock* const base = blocks;
-  const std::uint8_t* const base_valid = valid;
-  blocks -= first;  // (first <= b0: the pointer is only used for b >= b0)
-  valid -= first;
-  const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0);
-  const __m512i t1_lo = _mm512_setr_epi64(0, 8, 1, 9, 2, 10, 3, 11);
-  const __m512i t1_hi = _mm512_setr_epi64(4, 12, 5, 13, 6, 14, 7, 15);
-  // t1_world's 24 words (x0 y0 z0 x1 ...) in three registers: x (index l)
-  // and y (8 + l) of lane l by a two-source permute, then z blended in.
-  const __m512i xy_idx[3] = {_mm512_setr_epi64(0, 8, 0, 1, 9, 0, 2, 10),
-                             _mm512_setr_epi64(0, 3, 11, 0, 4, 12, 0, 5),
-                             _mm512_setr_epi64(13, 0, 6, 14, 0, 7, 15, 0)};
-  const __m512i z_idx[3] = {_mm512_setr_epi64(0, 0, 0, 0, 0, 1, 0, 0),
-                            _mm512_setr_epi64(2, 0, 0, 3, 0, 0, 4, 0),
-                            _mm512_setr_epi64(0, 5, 0, 0, 6, 0, 0, 7)};
-  const __mmask8 z_mask[3] = {0x24, 0x49, 0x92};
-  for (std::size_t b = b0; b < b1; b += 2) {
-    // As in vertex_pass_avx2: eight blocks ahead, not kept in the caches.
-    constexpr std::size_t kAhead = 8;
-    if (b + kAhead + 1 < b1) {
-      const char* ahead = reinterpret_cast<const char*>(blocks + b + kAhead);
-      for (std::size_t l = 0; l < 2 * sizeof(LinePrecompute::VertexBlock); l += 64)
-        _mm_prefetch(ahead + l, _MM_HINT_NTA);
-    }
-    if (b + 2 > b1 || (valid[b] & valid[b + 1] & 0xF) != 0xF || 4 * b + 8 > A.nv) {
-      vertex_pass_avx2(base, base_valid, first, b, std::min(b1, b + 2), A, other);
-      continue;
-    }
-    const LinePrecompute::VertexBlock& K = blocks[b];
-    const LinePrecompute::VertexBlock& L = blocks[b + 1];
-    const std::size_t i = 4 * b;
-#define FABRICA_LD(x) load_pair(K.x, L.x)
-#define FABRICA_DOT(ax, ay, az, bx, by, bz) \
-  _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(ax, bx), _mm512_mul_pd(ay, by)), _mm512_mul_pd(az, bz))
-    __m512d vx, vy, vz;
-    if (A.view.perspective) {
-      const __m512d dx = _mm512_sub_pd(_mm512_set1_pd(A.view.eye[0]), FABRICA_LD(p[0]));
-      const __m512d dy = _mm512_sub_pd(_mm512_set1_pd(A.view.eye[1]), FABRICA_LD(p[1]));
-      const __m512d dz = _mm512_sub_pd(_mm512_set1_pd(A.view.eye[2]), FABRICA_LD(p[2]));
-      const __m512d z = FABRICA_DOT(dx, dy, dz, dx, dy, dz);
-      const __m512d sz = _mm512_sqrt_pd(z);
-      const __mmask8 ok = _mm512_cmp_pd_mask(z, zero, _CMP_GT_OQ);
-      vx = _mm512_mask_div_pd(dx, ok, dx, sz);
-      vy = _mm512_mask_div_pd(dy, ok, dy, sz);
-      vz = _mm512_mask_div_pd(dz, ok, dz, sz);
-    } else {
-      vx = _mm512_set1_pd(A.view.view[0]);
-      vy = _mm512_set1_pd(A.view.view[1]);
-      vz = _mm512_set1_pd(A.view.view[2]);
-    }
-    const __m512d ndotv =
-        FABRICA_DOT(vx, vy, vz, FABRICA_LD(n[0]), FABRICA_LD(n[1]), FABRICA_LD(n[2]));
-    const __m512d u =
-        FABRICA_DOT(vx, vy, vz, FABRICA_LD(e1[0]), FABRICA_LD(e1[1]), FABRICA_LD(e1[2]));
-    const __m512d w =
-        FABRICA_DOT(vx, vy, vz, FABRICA_LD(e2[0]), FABRICA_LD(e2[1]), FABRICA_LD(e2[2]));
-    const __m512d k1 = FABRICA_LD(k1), k2 = FABRICA_LD(k2);
-    const __m512d u2 = _mm512_mul_pd(u, u), w2 = _mm512_mul_pd(w, w);
-    const __m512d kr = _mm512_add_pd(_mm512_mul_pd(k1, u2), _mm512_mul_pd(k2, w2));
-    const __m512d sin2 = _mm512_add_pd(u2, w2);
-    const __m512d csc2 = _mm512_maskz_div_pd(
-        _mm512_cmp_pd_mask(sin2, _mm512_set1_pd(1e-300), _CMP_GT_OQ), one, sin2);
-    const __mmask8 csc_pos = _mm512_cmp_pd_mask(csc2, zero, _CMP_GT_OQ);
-    _mm512_storeu_pd(A.ndotv + i, ndotv);
-    _mm512_storeu_pd(A.kr + i, kr);
-    __m512i sbits = _mm512_setzero_si512();
-    if (A.want_sc) {
-      const __m512d a = FABRICA_LD(a), bb = FABRICA_LD(b), c = FABRICA_LD(c), d = FABRICA_LD(d);
-      __m512d num;
-      sc_numerator_lanes(u, w, u2, w2, a, bb, c, d, k1, k2, ndotv, csc2, num);
-      const auto dvalid = static_cast<__mmask8>(((valid[b] >> 4) & 0xF) | (valid[b + 1] & 0xF0));
-      const __m512d sc = _mm512_maskz_mov_pd(dvalid & csc_pos, num);
-      _mm512_storeu_pd(A.sc_num + i, sc);
-      if (A.sc_bits) {
-        const __m512d n = _mm512_sub_pd(sc, _mm512_mul_pd(_mm512_set1_pd(A.sc_shift), ndotv));
-        sbits = or_bits8(
-            sbits,
-            _mm512_cmp_pd_mask(n, zero, _CMP_LE_OQ) & _mm512_cmp_pd_mask(ndotv, zero, _CMP_GE_OQ),
-            kScOffFront);
-        sbits = or_bits8(
-            sbits,
-            _mm512_cmp_pd_mask(n, zero, _CMP_GE_OQ) & _mm512_cmp_pd_mask(ndotv, zero, _CMP_LE_OQ),
-            kScOffBack);
-      }
-    }
-    sbits = or_bits8(sbits, _mm512_cmp_pd_mask(ndotv, zero, _CMP_GT_OQ), kNdotvPositive);
-    sbits = or_bits8(sbits, _mm512_cmp_pd_mask(ndotv, zero, _CMP_LT_OQ), kNdotvNegative);
-    sbits = or_bits8(sbits, _mm512_cmp_pd_mask(ndotv, zero, _CMP_NLE_UQ), kNdotvNotBack);
-    sbits = or_bits8(sbits, _mm512_cmp_pd_mask(kr, zero, _CMP_GT_OQ), kKrPositive);
-    sbits = or_bits8(sbits, _mm512_cmp_pd_mask(kr, zero, _CMP_LT_OQ), kKrNegative);
-    if (A.want_app) {
-      const __m512d an = _mm512_abs_pd(ndotv);
-      const __m512d sec = _mm512_maskz_sub_pd(_mm512_cmp_pd_mask(an, zero, _CMP_GT_OQ),
-                                              _mm512_div_pd(one, an), one);
-      const __m512d hu2 = _mm512_mask_mul_pd(one, csc_pos, u2, csc2);
-      const __m512d huv = _mm512_maskz_mul_pd(csc_pos, _mm512_mul_pd(u, w), csc2);
-      const __m512d hw2 = _mm512_maskz_mul_pd(csc_pos, w2, csc2);
-      __m512d m11, m12, m22, mean, radicand;
-      view_matrix_lanes(k1, k2, sec, hu2, huv, hw2, m11, m12, m22, mean, radicand);
-      const __m512d q1 = _mm512_add_pd(mean, _mm512_sqrt_pd(radicand));
-      _mm512_storeu_pd(A.q1 + i, q1);
-      if (A.cull)
-        sbits = or_bits8(sbits, _mm512_cmp_pd_mask(q1, _mm512_set1_pd(A.cull_t), _CMP_NLE_UQ),
-                         kQ1Above);
-      // t1: view_dependent_direction.
-      __m512d a0, a1, c0, c1, sa, sb;
-      direction_candidates(m11, m12, m22, q1, a0, a1, c0, c1, sa, sb);
-      const __mmask8 use_a = _mm512_cmp_pd_mask(sa, sb, _CMP_GE_OQ);
-      const __m512d f0 = _mm512_mask_blend_pd(use_a, c0, a0);
-      const __m512d f1 = _mm512_mask_blend_pd(use_a, c1, a1);
-      const __m512d len =
-          _mm512_sqrt_pd(_mm512_add_pd(_mm512_mul_pd(f0, f0), _mm512_mul_pd(f1, f1)));
-      const __mmask8 ok = _mm512_cmp_pd_mask(len, zero, _CMP_GT_OQ);
-      const __m512d t0 = _mm512_mask_div_pd(one, ok, f0, len);
-      const __m512d t1 = _mm512_maskz_div_pd(ok, f1, len);
-      double* t1p = A.t1[i].data();
-      _mm512_storeu_pd(t1p, _mm512_permutex2var_pd(t0, t1_lo, t1));
-      _mm512_storeu_pd(t1p + 8, _mm512_permutex2var_pd(t0, t1_hi, t1));
-      // t1_world = t1[0] e1 + t1[1] e2, stored as 8 × (x, y, z).
-      __m512d wc[3];
-      for (int c = 0; c < 3; ++c)
-        wc[c] = _mm512_add_pd(_mm512_mul_pd(t0, FABRICA_LD(e1[c])),
-                              _mm512_mul_pd(t1, FABRICA_LD(e2[c])));
-      // Output word j (0..23) is component j % 3 of lane j / 3: x and y
-      // from a two-source permute, z blended in by a one-source one.
-      double* wp = A.t1_world[i].data();
-      for (int part = 0; part < 3; ++part) {
-        const __m512d v = _mm512_permutex2var_pd(wc[0], xy_idx[part], wc[1]);
-        _mm512_storeu_pd(wp + 8 * part,
-                         _mm512_mask_permutexvar_pd(v, z_mask[part], z_idx[part], wc[2]));
-      }
-    }
-#undef FABRICA_LD
-#undef FABRICA_DOT
-    _mm_storel_epi64(reinterpret_cast<__m128i*>(A.signs + i), _mm512_cvtepi64_epi8(sbits));
-  }
-}
-#pragma GCC diagnostic pop
 #endif
 
 }  // namespace
@@ -574,21 +379,11 @@ void detail::update_view_fields(ViewFields& fields, const Surface& surface, cons
       auto other = [&](std::size_t b) {
         for (std::size_t i = 4 * b; i < std::min(nv, 4 * b + 4); ++i) vertex_and_direction(i);
       };
-      [[maybe_unused]] const bool wide = detail::cpu_has_avx512();
-      auto pass = [&](const LinePrecompute::VertexBlock* blocks, const std::uint8_t* valid,
-                      std::size_t first, std::size_t b0, std::size_t b1) {
-#if defined(FABRICA_LINES_AVX512)
-        if (wide) {
-          vertex_pass_avx512(blocks, valid, first, b0, b1, args, other);
-          return;
-        }
-#endif
-        vertex_pass_avx2(blocks, valid, first, b0, b1, args, other);
-      };
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, (nv + 3) / 4, 512),
                         [&](const tbb::blocked_range<std::size_t>& r) {
                           if (vb) {
-                            pass(vb->block.data(), vb->valid.data(), 0, r.begin(), r.end());
+                            vertex_pass_avx2(vb->block.data(), vb->valid.data(), 0, r.begin(),
+                                             r.end(), args, other);
                             return;
                           }
                           constexpr std::size_t kPacked = 64;
@@ -597,7 +392,7 @@ void detail::update_view_fields(ViewFields& fields, const Surface& surface, cons
                           for (std::size_t b = r.begin(); b < r.end(); b += kPacked) {
                             const std::size_t e = std::min(r.end(), b + kPacked);
                             precompute->pack_vertex_blocks(b, e, packed, packed_valid);
-                            pass(packed, packed_valid, b, b, e);
+                            vertex_pass_avx2(packed, packed_valid, b, b, e, args, other);
                           }
                         });
     } else
