@@ -8,7 +8,9 @@
 // file: the inline helpers it shares with the other files (the headers'
 // and the standard library's) stay x86-64 baseline code, so the linker can
 // never keep an AVX-512 copy of one for the portable callers. Also
-// -ffp-contract=off (its targets have no FMA anyway). Called by
+// -ffp-contract=off, which the bits need: GCC's avx512f target implies FMA,
+// and without the flag GCC 12 -O3 fuses an _mm512_mul_pd feeding an
+// _mm512_add_pd into vfmadd (one rounding instead of two). Called by
 // zero_crossing_scalar.cpp only when detail::cpu_has_avx512(). (An AVX-512
 // keep_crossed was no faster than the AVX2 one, and a four-vertex D_t1 q1
 // batch slower than the two-vertex one: docs/PERFORMANCE.md.)
