@@ -236,9 +236,9 @@ std::vector<LineSet> visible_lines(const SceneSurfaces& scene, const Scene& draw
   const DepthBuffer& opaque_depth = opaque.faces.empty() || all_opaque ? depth_all : depth_opaque;
   std::vector<LineSet> out;
   for (std::size_t i = 0; i < scene.surfaces.size(); ++i) {
-    LineSet ls = clip_of(i) ? keep_lines(drawn.structures[i].lines,
+    LineSet ls = clip_of(i) ? keep_lines(drawn.structures[i].drawn_lines(),
                                          [&](const Vec3& p) { return clip_of(i)->keeps(p); })
-                            : drawn.structures[i].lines;
+                            : drawn.structures[i].drawn_lines();
     if (cut && drawn.structures[i].role == Role::context)
       ls = keep_lines(ls, [&](const Vec3& p) { return cut->keep(p) >= 0.5; });
     compute_visibility(ls, *scene.surfaces[i], camera, {},
