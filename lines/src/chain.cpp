@@ -124,46 +124,42 @@ std::vector<std::int32_t> pair_ends_sorted(const std::vector<LineSegment>& segs)
   return partner;
 }
 
-}  // namespace
-
-namespace detail {
-
-std::vector<std::int32_t> pair_ends(const std::vector<LineSegment>& segs, bool force_sorted) {
-  std::int64_t max_element[3] = {-1, -1, -1};
-  for (std::size_t j = 0; j < 2 * segs.size(); ++j)
-    if (joinable_end(segs, j)) {
-      auto& m = max_element[static_cast<int>(kind_of(segs, j))];
-      m = std::max(m, static_cast<std::int64_t>(element_of(segs, j)));
-    }
-  std::int64_t offset[3], bound[3];
-  std::int64_t size = 0;
-  for (int k = 0; k < 3; ++k) {
-    offset[k] = size;
-    bound[k] = max_element[k] + 1;
-    size += bound[k];
-  }
-  // Mesh element ids are bounded by the mesh size; fall back to sorting
-  // when the table would be large in bytes (over 2^23 entries, 32 MB:
-  // meshes with millions of edges) or the end indices overflow 31 bits.
-  std::vector<std::int32_t> partner;
-  if (force_sorted || size > kMaxTable || segs.size() >= (std::size_t{1} << 29) ||
-      !pair_ends_flat(segs, offset, bound, static_cast<std::size_t>(size), partner))
-    return pair_ends_sorted(segs);
-  return partner;
-}
-
-std::vector<std::int32_t> pair_ends(const std::vector<LineSegment>& segs,
-                                    const std::int64_t bound[3]) {
+// The flat table's pairing with bound[kind] entries for each end kind (its
+// ids 0 .. bound - 1). False, nothing paired, when the table would be large
+// in bytes (over kMaxTable entries: meshes with millions of edges), the end
+// indices overflow 31 bits, or an id is at or past its bound.
+bool pair_ends_table(const std::vector<LineSegment>& segs, const std::int64_t bound[3],
+                     std::vector<std::int32_t>& partner) {
   std::int64_t offset[3];
   std::int64_t size = 0;
   for (int k = 0; k < 3; ++k) {
     offset[k] = size;
     size += std::max<std::int64_t>(bound[k], 0);
   }
+  return size <= kMaxTable && segs.size() < (std::size_t{1} << 29) &&
+         pair_ends_flat(segs, offset, bound, static_cast<std::size_t>(size), partner);
+}
+
+}  // namespace
+
+namespace detail {
+
+std::vector<std::int32_t> pair_ends(const std::vector<LineSegment>& segs, bool force_sorted) {
+  std::int64_t bound[3] = {0, 0, 0};  // the largest id of each kind, plus one
+  for (std::size_t j = 0; j < 2 * segs.size(); ++j)
+    if (joinable_end(segs, j)) {
+      auto& b = bound[static_cast<int>(kind_of(segs, j))];
+      b = std::max(b, static_cast<std::int64_t>(element_of(segs, j)) + 1);
+    }
   std::vector<std::int32_t> partner;
-  if (size > kMaxTable || segs.size() >= (std::size_t{1} << 29) ||
-      !pair_ends_flat(segs, offset, bound, static_cast<std::size_t>(size), partner))
-    return pair_ends(segs);
+  if (force_sorted || !pair_ends_table(segs, bound, partner)) return pair_ends_sorted(segs);
+  return partner;
+}
+
+std::vector<std::int32_t> pair_ends(const std::vector<LineSegment>& segs,
+                                    const std::int64_t bound[3]) {
+  std::vector<std::int32_t> partner;
+  if (!pair_ends_table(segs, bound, partner)) return pair_ends(segs);
   return partner;
 }
 

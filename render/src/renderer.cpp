@@ -24,6 +24,7 @@ namespace {
 
 constexpr int kTileMargin = 2;  // pixels rendered around each tile (3x3 filters, AA)
 constexpr int kMaxImageSide = 32768;
+constexpr std::size_t kLineVertexFloats = 13;  // one line quad corner (lines.vert)
 const std::string kLicMaxStepsDefine = "LIC_MAX_STEPS " + std::to_string(kLicMaxSteps);
 
 struct GpuMesh {
@@ -1403,7 +1404,9 @@ struct Renderer::Impl {
     line_indices.clear();
     std::vector<LineBatch> batches;
     // Appends polyline `n` vertices long; position(i) and strength(i) give its vertices.
-    // Written in place (the arrays grow once per polyline, not per value).
+    // Written in place (the arrays grow once per polyline, not per value):
+    // per polyline vertex two quad corners (sides -1 and 1) of kLineVertexFloats
+    // each: position, previous, next, then side, strength, arc length, total.
     auto append_polyline = [&](std::size_t n, bool closed, auto position, auto strength) {
       if (n < 2) return;
       closed = closed && n >= 3;
@@ -1411,9 +1414,9 @@ struct Renderer::Impl {
       for (std::size_t i = 1; i < n; ++i)
         arc[i] = arc[i - 1] + (position(i) - position(i - 1)).norm();
       const auto total = static_cast<float>(closed ? 0.0 : arc.back());
-      const auto base = static_cast<std::uint32_t>(line_vertices.size() / 13);
+      const auto base = static_cast<std::uint32_t>(line_vertices.size() / kLineVertexFloats);
       const std::size_t v0 = line_vertices.size();
-      line_vertices.resize(v0 + 26 * n);
+      line_vertices.resize(v0 + 2 * kLineVertexFloats * n);
       float* out = line_vertices.data() + v0;
       for (std::size_t i = 0; i < n; ++i) {
         const Vec3 p = position(i);
@@ -1476,7 +1479,7 @@ struct Renderer::Impl {
       g.BindBuffer(GL_ARRAY_BUFFER, line_vbo);
       upload_growing(GL_ARRAY_BUFFER, line_vertices.data(), line_vertices.size() * sizeof(float),
                      line_vbo_bytes);
-      const GLsizei stride = 13 * sizeof(float);
+      const auto stride = static_cast<GLsizei>(kLineVertexFloats * sizeof(float));
       for (GLuint loc = 0; loc < 4; ++loc) {
         g.EnableVertexAttribArray(loc);
         g.VertexAttribPointer(loc, loc == 3 ? 4 : 3, GL_FLOAT, GL_FALSE, stride,
