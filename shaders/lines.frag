@@ -5,6 +5,10 @@
 uniform vec4 u_line_color;
 uniform int u_fade_by_strength;
 uniform sampler2D u_depth;
+// 1: the scene's depth is the nearer of u_depth and u_depth2 (the ghosts'
+// nearest depth drawn with their transparency, at u_depth's resolution).
+uniform sampler2D u_depth2;
+uniform int u_two_depths;
 uniform int u_hidden_mode;
 uniform float u_hidden_opacity;
 uniform float u_depth_tolerance;
@@ -24,17 +28,24 @@ float linear_depth(float z) {
   float zn = 2.0 * z - 1.0;
   return 2.0 * n * f / (f + n - zn * (f - n));
 }
+// The scene's depth at texel q (clamped to the texture).
+float scene_depth(ivec2 q, ivec2 size) {
+  q = clamp(q, ivec2(0), size);
+  float d = texelFetch(u_depth, q, 0).r;
+  if (u_two_depths == 1) d = min(d, texelFetch(u_depth2, q, 0).r);
+  return d;
+}
 void main() {
   float coverage = clamp(v_half_width + 0.5 - abs(v_across), 0.0, 1.0);
   if (coverage <= 0.0) discard;
   ivec2 p = ivec2(gl_FragCoord.xy) >> u_depth_shift;
   ivec2 size = textureSize(u_depth, 0) - 1;
   float scene = 0.0;
-  scene = max(scene, texelFetch(u_depth, clamp(p, ivec2(0), size), 0).r);
-  scene = max(scene, texelFetch(u_depth, clamp(p + ivec2(1, 0), ivec2(0), size), 0).r);
-  scene = max(scene, texelFetch(u_depth, clamp(p + ivec2(-1, 0), ivec2(0), size), 0).r);
-  scene = max(scene, texelFetch(u_depth, clamp(p + ivec2(0, 1), ivec2(0), size), 0).r);
-  scene = max(scene, texelFetch(u_depth, clamp(p + ivec2(0, -1), ivec2(0), size), 0).r);
+  scene = max(scene, scene_depth(p, size));
+  scene = max(scene, scene_depth(p + ivec2(1, 0), size));
+  scene = max(scene, scene_depth(p + ivec2(-1, 0), size));
+  scene = max(scene, scene_depth(p + ivec2(0, 1), size));
+  scene = max(scene, scene_depth(p + ivec2(0, -1), size));
   bool hidden = scene < 1.0 && linear_depth(gl_FragCoord.z) > linear_depth(scene) + u_depth_tolerance;
   float alpha = u_line_color.a * coverage * cutaway().x;
   if (u_fade_by_strength == 1) alpha *= clamp(v_strength, 0.0, 1.0);

@@ -5,6 +5,10 @@
 // the composite's revealage prod(1 - alpha_i) = exp(-sum).
 layout(location = 0) out vec4 o_accum;
 layout(location = 1) out vec4 o_reveal;
+// Target 2 where bound (the renderer's half-resolution ghosts, blended by
+// GL_MIN): the fragment's depth, so the ghosts' nearest depth needs no pass
+// of its own.
+layout(location = 2) out vec4 o_depth;
 // The weight of eq. 10 with (1 - z)^3 as two products (not pow: cheaper on
 // a software rasteriser).
 float oit_weight(float a) {
@@ -20,6 +24,7 @@ void main() {
   float a = clamp(u_color.a, 0.0, 0.999);
   o_accum = vec4(shade() * a, a) * oit_weight(a);
   o_reveal = vec4(u_reveal, 0.0, 0.0, 0.0);
+  o_depth = vec4(gl_FragCoord.z);
 }
 #else
 // The cutaway (cutaway.glsl) scales the opacity; an opaque structure comes
@@ -31,5 +36,6 @@ void main() {
   if (a <= 0.0) discard;
   o_accum = vec4(mix(shade(), u_cut_rim_color.rgb, cut.y) * a, a) * oit_weight(a);
   o_reveal = vec4(-log(1.0 - a), 0.0, 0.0, 0.0);
+  o_depth = vec4(gl_FragCoord.z);
 }
 #endif

@@ -13,6 +13,16 @@ void load_gl_functions(GlFunctions& table, GlProcLoader loader, void* user,
                                                   " (OpenGL 3.3 core is required)");
   FABRICA_GL_FUNCTIONS(FABRICA_GL_LOAD)
 #undef FABRICA_GL_LOAD
+  // A driver may hand out entry points its context's version lacks.
+  GLint major = 0;
+  table.GetIntegerv(GL_MAJOR_VERSION, &major);
+  while (table.GetError() != GL_NO_ERROR) {
+  }
+  const bool gl4 = major >= 4;
+#define FABRICA_GL_LOAD_OPTIONAL(type, name) \
+  table.name = gl4 ? reinterpret_cast<type>(loader("gl" #name, user)) : nullptr;
+  FABRICA_GL_OPTIONAL_FUNCTIONS(FABRICA_GL_LOAD_OPTIONAL)
+#undef FABRICA_GL_LOAD_OPTIONAL
 }
 
 void check_gl_error(const GlFunctions& gl, const char* what) {

@@ -183,6 +183,9 @@ struct FrameState {
   PixelRect cut_region;        // the focus's pixels widened by the cutaway's reach
   bool cut_fade_only = false;  // the transparency pass draws only the cut's fade
   bool ghost_half = false;     // the transparency pass at half resolution (pass_transparent)
+  // With ghost_half: the ghosts' nearest depth drawn by the transparency
+  // pass itself (ghost_depth_in_one_pass), not by a depth pass of its own.
+  bool ghost_depth_merged = false;
 };
 
 void check_size(const Camera& camera) {
@@ -253,6 +256,9 @@ struct Renderer::Impl {
   // ghosts_half_resolution): its own accumulation targets (filtered
   // linearly by the composite) and a copy of depth A, half_w x half_h.
   GLuint half_fbo = 0, half_accum = 0, half_reveal = 0, half_depth = 0;
+  // Where the driver blends buffers with their own equations: the ghosts'
+  // nearest depth (R32F, blended by GL_MIN) as half_fbo's third target.
+  GLuint half_ghost_depth = 0;
   // True while half_depth holds depth A copied down by this tile's
   // transparency pass (which tests it without writing): the ghosts' depth
   // pass then draws into it without copying it again.
@@ -499,15 +505,15 @@ struct Renderer::Impl {
     GLuint fbos[] = {main_fbo,   overlay_fbo, oit_fbo,     depthb_fbo, ar_fbo,
                      ar_out_fbo, lic_fbo,     lic_out_fbo, half_fbo};
     g.DeleteFramebuffers(9, fbos);
-    GLuint textures[] = {main_color, depth_a,   accum,      reveal,      depth_b,
-                         ar_color,   lic_color, half_accum, half_reveal, half_depth};
-    g.DeleteTextures(10, textures);
+    GLuint textures[] = {main_color, depth_a,    accum,       reveal,     depth_b,         ar_color,
+                         lic_color,  half_accum, half_reveal, half_depth, half_ghost_depth};
+    g.DeleteTextures(11, textures);
     GLuint renderbuffers[] = {ar_depth, lic_depth};
     g.DeleteRenderbuffers(2, renderbuffers);
     main_fbo = overlay_fbo = oit_fbo = depthb_fbo = ar_fbo = ar_out_fbo = 0;
     main_color = depth_a = accum = reveal = depth_b = ar_color = ar_depth = 0;
     lic_fbo = lic_out_fbo = lic_color = lic_depth = 0;
-    half_fbo = half_accum = half_reveal = half_depth = 0;
+    half_fbo = half_accum = half_reveal = half_depth = half_ghost_depth = 0;
     half_w = half_h = 0;
     release_cutaway();
     target_w = target_h = 0;
@@ -573,7 +579,19 @@ struct Renderer::Impl {
       g.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
       g.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
     }
+    if (ghost_depth_in_one_pass()) {
+      half_ghost_depth = make_texture(GL_R32F, GL_RED, GL_FLOAT, half_w, half_h);
+      g.FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT2, GL_TEXTURE_2D, half_ghost_depth,
+                             0);
+      check_fbo("half-resolution transparency framebuffer");
+    }
   }
+
+  // Whether the transparency pass at half resolution draws the ghosts'
+  // nearest depth as a third target blended by GL_MIN (per-buffer blend
+  // equations, OpenGL 4.0), saving the ghosts' depth pass: one pass over
+  // their triangles instead of two.
+  bool ghost_depth_in_one_pass() const { return gl().BlendEquationi != nullptr; }
 
   void ensure_depth_b() {
     if (depthb_fbo != 0) return;
@@ -1123,6 +1141,15 @@ struct Renderer::Impl {
              std::min(q.y1, cut_rect.y1)};
       g.Scissor(q.x0, q.y0, std::max(0, q.x1 - q.x0), std::max(0, q.y1 - q.y0));
     };
+    if (F.ghost_depth_merged) {
+      // The ghosts' nearest depth: cleared to the far plane everywhere
+      // (their lines' taps may reach past the scissor), then blended by
+      // GL_MIN (the depth test keeps only what is in front of depth A).
+      const GLenum three[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
+      g.DrawBuffers(3, three);
+      const float far[4] = {1, 1, 1, 1};
+      g.ClearBufferfv(GL_COLOR, 2, far);
+    }
     g.Enable(GL_SCISSOR_TEST);
     scissor(F.cut_fade_only);
     const float zero[4] = {0, 0, 0, 0};
@@ -1132,6 +1159,7 @@ struct Renderer::Impl {
     g.DepthMask(GL_FALSE);
     g.Enable(GL_BLEND);
     g.BlendFunc(GL_ONE, GL_ONE);
+    if (F.ghost_depth_merged) g.BlendEquationi(2, GL_MIN);
     ProgramSwitch programs(*this, F, t);
     for (std::size_t i = 0; i < F.scene.structures.size(); ++i) {
       const Structure& s = F.scene.structures[i];
@@ -1147,6 +1175,11 @@ struct Renderer::Impl {
       draw_mesh(*F.gpu[i]);
     }
     g.Disable(GL_CLIP_DISTANCE0);
+    if (F.ghost_depth_merged) {
+      g.BlendEquation(GL_FUNC_ADD);  // every buffer's
+      const GLenum two[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+      g.DrawBuffers(2, two);
+    }
     g.BindFramebuffer(GL_FRAMEBUFFER, overlay_fbo);
     if (half) {
       g.Viewport(0, 0, t.render_w, t.render_h);
@@ -1248,6 +1281,10 @@ struct Renderer::Impl {
   // structures sample it at half their pixel coordinates, pass_lines).
   void pass_depth_b(const FrameState& F, const Tile& t) {
     if (!F.lines_need_depth_b) return;
+    if (F.ghost_depth_merged) {  // drawn by the transparency pass; half_depth stays depth A
+      half_depth_is_a = false;
+      return;
+    }
     const GlFunctions& g = gl();
     const int w = F.ghost_half ? (t.render_w + 1) / 2 : t.render_w;
     const int h = F.ghost_half ? (t.render_h + 1) / 2 : t.render_h;
@@ -1310,6 +1347,7 @@ struct Renderer::Impl {
     p.set("u_near_far", F.M.near_plane, F.M.far_plane);
     p.set("u_depth_tolerance", static_cast<float>(F.tolerance));
     p.set("u_depth", 0);
+    p.set("u_depth2", 1);
     g.ActiveTexture(GL_TEXTURE0);
     g.BindVertexArray(line_vao);
     for (const auto& b : F.batches) {
@@ -1319,6 +1357,14 @@ struct Renderer::Impl {
       const bool half = F.ghost_half && !opaque(s);
       g.BindTexture(GL_TEXTURE_2D, opaque(s) ? depth_a : half ? half_depth : depth_b);
       p.set("u_depth_shift", half ? 1 : 0);
+      // Merged: depth B is the nearer of depth A (half_depth) and the ghosts'.
+      const bool two = half && F.ghost_depth_merged;
+      p.set("u_two_depths", two ? 1 : 0);
+      if (two) {
+        g.ActiveTexture(GL_TEXTURE1);
+        g.BindTexture(GL_TEXTURE_2D, half_ghost_depth);
+        g.ActiveTexture(GL_TEXTURE0);
+      }
       const double w = ls.width * (b.wide ? ls.contour_width_factor : 1.0) * F.line_scale;
       p.set("u_width", static_cast<float>(w));
       p.set("u_taper", static_cast<float>(ls.taper));
@@ -1669,6 +1715,12 @@ void Renderer::draw(const Scene& scene, const Camera& camera, const RenderOption
   F.bg_alpha = options.transparent_background ? 0.0f : scene.background.a;
   // Half-resolution ghosts: one tile, no cutaway (its fade is per pixel).
   F.ghost_half = options.ghosts_half_resolution && tiles.size() == 1 && !F.cut;
+  // The ghosts' depth with their transparency: when every structure the
+  // depth pass would draw (all not opaque) is one the transparency pass draws.
+  F.ghost_depth_merged =
+      F.ghost_half && F.lines_need_depth_b && I.ghost_depth_in_one_pass() &&
+      std::all_of(scene.structures.begin(), scene.structures.end(),
+                  [](const Structure& s) { return Impl::opaque(s) || Impl::ghosted(s); });
   const GlFunctions& g = I.gl();
   for (const Tile& t : tiles) {
     I.pass_cutaway(F, t);

@@ -108,9 +108,15 @@ namespace fabrica::render {
   X(PFNGLENDQUERYPROC, EndQuery)                                 \
   X(PFNGLGETQUERYOBJECTUI64VPROC, GetQueryObjectui64v)
 
+// Entry points of later versions, used for faster paths where the context
+// has them (null otherwise; never required): per-buffer blend equations
+// (OpenGL 4.0; the ghosts' depth drawn with their transparency, renderer).
+#define FABRICA_GL_OPTIONAL_FUNCTIONS(X) X(PFNGLBLENDEQUATIONIPROC, BlendEquationi)
+
 struct GlFunctions {
 #define FABRICA_GL_DECLARE(type, name) type name = nullptr;
   FABRICA_GL_FUNCTIONS(FABRICA_GL_DECLARE)
+  FABRICA_GL_OPTIONAL_FUNCTIONS(FABRICA_GL_DECLARE)
 #undef FABRICA_GL_DECLARE
 };
 
@@ -118,7 +124,9 @@ struct GlFunctions {
 using GlProcLoader = void* (*)(const char* name, void* user);
 
 /// Fills `table` from `loader`. Throws Error(unavailable) naming the first
-/// entry point the driver does not provide, prefixed with `backend`.
+/// required entry point the driver does not provide, prefixed with `backend`.
+/// The optional ones are left null where the driver lacks them or the
+/// context's version is older than theirs (4.0); the context must be current.
 void load_gl_functions(GlFunctions& table, GlProcLoader loader, void* user,
                        const std::string& backend);
 
