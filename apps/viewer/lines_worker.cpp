@@ -3,6 +3,7 @@
 #include <chrono>
 
 #include "fabrica/core/error.hpp"
+#include "loader.hpp"
 #include "structure_lines.hpp"
 
 namespace fabrica::viewer {
@@ -60,6 +61,7 @@ void LinesWorker::run() {
       try {
         LineSource& source = item.lod ? *item.lod : *item.source;
         if (!source.drawer) {  // a moving level's, the first time
+          if (!source.surface) source.surface = prepared_surface(*source.unprepared);
           source.surface->precompute();
           source.drawer = std::make_unique<LineDrawer>(*source.surface);
         }

@@ -32,6 +32,10 @@ namespace fabrica::viewer {
 struct LineSource {
   std::shared_ptr<const Surface> surface;
   std::unique_ptr<LineDrawer> drawer;
+  /// A moving level's mesh as clustered: prepared (repaired, topology) into
+  /// `surface` by the worker the first time it draws the level's lines
+  /// (only with coarse lines while moving), where `surface` is null.
+  std::shared_ptr<const TriangleMesh> unprepared;
 };
 
 /// A coarse copy of a mesh with its own line precomputation: while the

@@ -41,14 +41,14 @@ std::vector<io::LabelInfo> label_table_beside(const std::filesystem::path& path)
 /// `mesh` prepared for lines (io::prepare_for_lines) as a Surface, handed the
 /// topology the preparation built (fabrica::to_surface) instead of building
 /// it again.
+}  // namespace
+
 std::shared_ptr<Surface> prepared_surface(TriangleMesh mesh) {
   PreparedMesh prepared;
   prepared.mesh = std::move(mesh);
   prepared.repair = io::prepare_for_lines(prepared.mesh, {}, prepared.topology);
   return std::make_shared<Surface>(to_surface(std::move(prepared)));
 }
-
-}  // namespace
 
 bool is_volume_file(const std::filesystem::path& path) {
   const std::string n = lower(path.filename().string());
@@ -200,19 +200,22 @@ LoadedStructure Loader::build(TriangleMesh mesh, const std::string& name) {
     s.mesh_lod = std::make_shared<render::RenderMesh>(std::move(lod_mesh));
   }
   // Levels for an opaque structure while moving, each clustered from the
-  // one before, with their own line precomputation.
+  // one before. Drawn with normals from the clustered mesh alone; the
+  // level's surface and line precomputation are left to the lines worker,
+  // which makes them the first time it draws the level's lines (only with
+  // coarse lines while moving; LineSource::unprepared): loading pays for
+  // the clustering only.
   const TriangleMesh* source = &s.surface->mesh();
-  TriangleMesh level;
-  while (source->face_count() / 4 >= kMovingLevelMinFaces) {
-    TriangleMesh next = render::cluster_simplify(*source, source->face_count() / 4);
-    if (next.face_count() >= source->face_count()) break;
-    // The level's line precomputation is left to the lines worker, which
-    // makes it the first time it draws the level's lines (only with
-    // coarse lines while moving; LineSource::drawer).
+  std::shared_ptr<const TriangleMesh> level;
+  while (source->face_count() / kMovingLevelFactor >= kMovingLevelMinFaces) {
+    if (cancelled()) throw Cancelled{};
+    auto next = std::make_shared<const TriangleMesh>(
+        render::cluster_simplify(*source, source->face_count() / kMovingLevelFactor));
+    if (next->face_count() >= source->face_count()) break;
     MovingLevel m;
     m.lines = std::make_shared<LineSource>();
-    m.lines->surface = prepared_surface(next);
-    render::RenderMesh drawn = render::make_render_mesh(*m.lines->surface, false);
+    m.lines->unprepared = next;
+    render::RenderMesh drawn = render::make_render_mesh(*next);
     // Its own edge length: the lines' depth tolerance grows with it while
     // moving (the full mesh's lines lie within about an edge of it).
     // Clustering leaves a closed mesh nearly closed (the igea's first level:
@@ -223,7 +226,7 @@ LoadedStructure Loader::build(TriangleMesh mesh, const std::string& name) {
     m.mesh = std::make_shared<render::RenderMesh>(std::move(drawn));
     s.moving_levels.push_back(std::move(m));
     level = std::move(next);
-    source = &level;
+    source = level.get();
   }
   return s;
 }

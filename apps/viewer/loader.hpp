@@ -38,13 +38,21 @@ struct LoadedStructure {
   std::shared_ptr<const render::RenderMesh> mesh_lod;
   std::shared_ptr<LineSource> lines_lod;
   /// Coarser copies for drawing the structure opaque while the camera
-  /// moves, each about a quarter of the faces of the one before, finest
-  /// first (empty for small meshes); see moving_level.
+  /// moves, each about 1 / kMovingLevelFactor of the faces of the one
+  /// before, finest first (empty for small meshes); see moving_level.
   std::vector<MovingLevel> moving_levels;
 };
 
 /// Coarse levels stop at this many faces (moving_levels).
 constexpr std::size_t kMovingLevelMinFaces = 8000;
+/// Each level has about this fraction of the faces of the one before (its
+/// edges about sqrt(2) times as long): the level a moving camera picks has
+/// edges of kMovingEdgePx / sqrt(2) to kMovingEdgePx pixels.
+constexpr std::size_t kMovingLevelFactor = 2;
+
+/// A mesh made ready for lines as a loaded one is (io::prepare_for_lines:
+/// repair and topology), as a Surface (not yet precomputed).
+std::shared_ptr<Surface> prepared_surface(TriangleMesh mesh);
 
 /// Faces of a ghosted structure's level of detail; meshes of more than
 /// kLodMinFaces faces (one and a half times as many) get one.

@@ -97,6 +97,23 @@ RenderMesh make_render_mesh(const TriangleMesh& mesh, const std::vector<Vec3>& n
   return m;
 }
 
+RenderMesh make_render_mesh(const TriangleMesh& mesh) {
+  std::vector<Vec3> normals(mesh.positions.size(), Vec3::Zero());
+  const auto n = static_cast<std::int64_t>(mesh.positions.size());
+  for (const auto& f : mesh.faces) {
+    if (f[0] < 0 || f[1] < 0 || f[2] < 0 || f[0] >= n || f[1] >= n || f[2] >= n)
+      continue;  // make_render_mesh(mesh, normals) reports it
+    const Vec3 &a = mesh.positions[f[0]], &b = mesh.positions[f[1]], &c = mesh.positions[f[2]];
+    const Vec3 area = (b - a).cross(c - a);  // twice the area, along the face's normal
+    for (int k = 0; k < 3; ++k) normals[f[k]] += area;
+  }
+  for (Vec3& v : normals) {
+    const double len = v.norm();
+    v = len > 0.0 && std::isfinite(len) ? Vec3(v / len) : Vec3::Zero();
+  }
+  return make_render_mesh(mesh, normals);
+}
+
 void set_curvature(RenderMesh& m, const std::vector<double>& k1, const std::vector<double>& k2,
                    const std::vector<Vec3>& e1, const std::vector<Vec3>& e2) {
   const std::size_t n = m.vertex_count();

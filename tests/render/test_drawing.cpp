@@ -12,6 +12,7 @@
 #include <set>
 
 #include "fabrica/core/error.hpp"
+#include "fabrica/core/surface.hpp"
 #include "fabrica/render/renderer.hpp"
 #include "render_test_util.hpp"
 
@@ -446,6 +447,38 @@ TEST(RenderDrawing, BackFaceCullingOfClosedMeshesKeepsThePicture) {
       EXPECT_EQ(ia.pixel(2, 2)[1], 255);
     }
   }
+}
+
+// A render mesh from a mesh alone (a moving level's, no topology): unit
+// normals along the sphere's radius (within the facets' tilt), the same as
+// the Surface's to a few degrees, positions and indices as given, and the
+// same bounding sphere and closedness.
+TEST(RenderMeshLod, NormalsFromTheMeshAloneFollowTheSurface) {
+  const fabrica::TriangleMesh sphere = fabrica::test::make_icosphere(10.0, 4);
+  const fabrica::Surface surface(sphere);
+  const fr::RenderMesh alone = fr::make_render_mesh(sphere);
+  const fr::RenderMesh from_surface = fr::make_render_mesh(surface, false);
+  ASSERT_EQ(alone.normals.size(), 3 * sphere.positions.size());
+  EXPECT_EQ(alone.positions, from_surface.positions);
+  EXPECT_EQ(alone.indices, from_surface.indices);
+  EXPECT_EQ(alone.closed_outward, from_surface.closed_outward);
+  EXPECT_TRUE(alone.closed_outward);
+  EXPECT_DOUBLE_EQ(alone.radius, from_surface.radius);
+  EXPECT_DOUBLE_EQ(alone.mean_edge_length, from_surface.mean_edge_length);
+  for (std::size_t i = 0; i < sphere.positions.size(); ++i) {
+    const Vec3 n(alone.normals[3 * i], alone.normals[3 * i + 1], alone.normals[3 * i + 2]);
+    const Vec3 m(from_surface.normals[3 * i], from_surface.normals[3 * i + 1],
+                 from_surface.normals[3 * i + 2]);
+    EXPECT_NEAR(n.norm(), 1.0, 1e-6) << i;
+    EXPECT_GT(n.dot(sphere.positions[i].normalized()), std::cos(2.0 * M_PI / 180.0)) << i;
+    EXPECT_GT(n.dot(m), std::cos(2.0 * M_PI / 180.0)) << i;
+  }
+  // A vertex no face uses: a zero normal, not NaN.
+  fabrica::TriangleMesh extra = sphere;
+  extra.positions.push_back(Vec3(50, 0, 0));
+  const fr::RenderMesh with_extra = fr::make_render_mesh(extra);
+  for (int c = 0; c < 3; ++c)
+    EXPECT_EQ(with_extra.normals[with_extra.normals.size() - 3 + c], 0.0f);
 }
 
 // Level of detail (render::cluster_simplify): about the asked number of

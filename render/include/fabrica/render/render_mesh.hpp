@@ -56,6 +56,11 @@ RenderMesh make_render_mesh(const TriangleMesh& mesh, const std::vector<Vec3>& v
 /// curvatures and directions and feature size.
 RenderMesh make_render_mesh(const Surface& surface, bool with_curvature);
 
+/// From a mesh alone, without a topology or repair (a level of detail's):
+/// vertex normals the normalised sums of the incident faces' area vectors
+/// (zero where none or where they cancel).
+RenderMesh make_render_mesh(const TriangleMesh& mesh);
+
 /// A coarse copy of `mesh` with about `target_faces` faces (at most 25% more)
 /// by vertex clustering on a uniform grid (docs/algorithms.md §16): the
 /// viewer draws ghosted context with it while the camera moves. Returns `mesh` itself when it has
