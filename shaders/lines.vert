@@ -13,6 +13,7 @@ uniform float u_width;           // full width in pixels
 uniform float u_taper;           // fraction of the length tapered at each end
 uniform int u_width_by_strength;
 uniform float u_px_per_mm;       // for dash lengths
+uniform float u_aa_margin;       // pixels past the half width (1, or 0.5: tight quads)
 out float v_across;              // signed distance from the centre line, pixels
 out float v_half_width;
 out float v_strength;
@@ -49,7 +50,7 @@ void main() {
   }
   float strength_width = u_width_by_strength == 1 ? mix(0.4, 1.0, v_strength) : 1.0;
   float h = 0.5 * u_width * taper * strength_width;
-  float extent = h + 1.0;  // one pixel of margin for anti-aliasing
+  float extent = h + u_aa_margin;  // margin for the anti-aliased edge
   float len = extent / max(dot(m, n1), 0.5);  // miter, limited to twice the width
   vec2 q = sp + m * len * side;
   v_across = side * extent;

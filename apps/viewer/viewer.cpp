@@ -588,6 +588,7 @@ void Viewer::frame() {
         // Simplified while moving: the ghosts' transparency at half resolution too.
         render::RenderOptions ro = render_options(false);
         ro.ghosts_half_resolution = moving && simplify_while_moving_;
+        ro.tight_line_quads = moving && simplify_while_moving_;
         renderer_->render_to_framebuffer(build_scene(lines, true, true), c, ro, picture_fbo_,
                                          picture_w_, picture_h_);
         has_picture_ = true;

@@ -1150,11 +1150,13 @@ struct Renderer::Impl {
       const float far[4] = {1, 1, 1, 1};
       g.ClearBufferfv(GL_COLOR, 2, far);
     }
-    g.Enable(GL_SCISSOR_TEST);
-    scissor(F.cut_fade_only);
+    // Cleared whole, not scissored (nothing outside the scissor is read):
+    // a driver can then clear without drawing (llvmpipe marks its tiles).
     const float zero[4] = {0, 0, 0, 0};
     g.ClearBufferfv(GL_COLOR, 0, zero);
     g.ClearBufferfv(GL_COLOR, 1, zero);
+    g.Enable(GL_SCISSOR_TEST);
+    scissor(F.cut_fade_only);
     g.Enable(GL_DEPTH_TEST);
     g.DepthMask(GL_FALSE);
     g.Enable(GL_BLEND);
@@ -1346,6 +1348,7 @@ struct Renderer::Impl {
     p.set("u_px_per_mm", static_cast<float>(F.M.px_per_mm));
     p.set("u_near_far", F.M.near_plane, F.M.far_plane);
     p.set("u_depth_tolerance", static_cast<float>(F.tolerance));
+    p.set("u_aa_margin", F.options.tight_line_quads ? 0.5f : 1.0f);
     p.set("u_depth", 0);
     p.set("u_depth2", 1);
     g.ActiveTexture(GL_TEXTURE0);
