@@ -1719,9 +1719,11 @@ void Renderer::draw(const Scene& scene, const Camera& camera, const RenderOption
   // Half-resolution ghosts: one tile, no cutaway (its fade is per pixel).
   F.ghost_half = options.ghosts_half_resolution && tiles.size() == 1 && !F.cut;
   // The ghosts' depth with their transparency: when every structure the
-  // depth pass would draw (all not opaque) is one the transparency pass draws.
+  // depth pass would draw (all not opaque) is one the transparency pass
+  // draws, and that pass runs (the ghosts reach into the picture).
   F.ghost_depth_merged =
-      F.ghost_half && F.lines_need_depth_b && I.ghost_depth_in_one_pass() &&
+      F.ghost_half && F.lines_need_depth_b && I.ghost_depth_in_one_pass() && F.any_transparent &&
+      !is_empty(F.ghost_region) &&
       std::all_of(scene.structures.begin(), scene.structures.end(),
                   [](const Structure& s) { return Impl::opaque(s) || Impl::ghosted(s); });
   const GlFunctions& g = I.gl();
