@@ -78,6 +78,19 @@ fr::Scene ghost_over_focus(const fr::Color& background) {
   return scene;
 }
 
+// A sphere drawn with `shading` whose lines (every family, untapered,
+// `width` pixels at the reference size) the test adds to
+// structures[0].lines.
+fr::Scene sphere_with_lines(fr::Shading shading, double width) {
+  fr::Scene scene;
+  scene.structures.push_back(sphere_structure());
+  scene.structures[0].style.shading = shading;
+  scene.structures[0].style.families.clear();  // draw every family
+  scene.structures[0].style.lines.width = width;
+  scene.structures[0].style.lines.taper = 0.0;
+  return scene;
+}
+
 }  // namespace
 
 TEST(RenderDrawing, LambertSphereMatchesAnalyticProfile) {
@@ -131,13 +144,8 @@ TEST(RenderDrawing, ToonShadingHasTheRequestedBands) {
 // a polygonal circle (sharp joins every 10 degrees) differs in very few
 // pixels, and the ink across the line is the same width.
 TEST(RenderDrawing, TightLineQuadsDrawTheSameLines) {
-  fr::Scene scene;
-  scene.structures.push_back(sphere_structure());
-  scene.structures[0].style.shading = fr::Shading::none;
-  scene.structures[0].style.families.clear();
+  fr::Scene scene = sphere_with_lines(fr::Shading::none, 12.0);  // 3 px at 256
   auto& ls = scene.structures[0].style.lines;
-  ls.width = 12.0;  // 3 px at 256
-  ls.taper = 0.0;
   auto& lines = scene.structures[0].lines.polylines;
   lines.push_back(straight_line(Vec3(-8, 0, 11), Vec3(8, 0, 11)));
   lines.push_back(straight_line(Vec3(-8, -6, 11), Vec3(8, -5, 11)));
@@ -167,13 +175,8 @@ TEST(RenderDrawing, TightLineQuadsDrawTheSameLines) {
 }
 
 TEST(RenderDrawing, LineWidthScalesWithImageSize) {
-  fr::Scene scene;
-  scene.structures.push_back(sphere_structure());
-  scene.structures[0].style.shading = fr::Shading::none;
-  scene.structures[0].style.families.clear();  // draw every family
-  auto& ls = scene.structures[0].style.lines;
-  ls.width = 8.0;  // pixels at the 1024-pixel reference
-  ls.taper = 0.0;
+  // 8 pixels at the 1024-pixel reference.
+  fr::Scene scene = sphere_with_lines(fr::Shading::none, 8.0);
   scene.structures[0].lines.polylines.push_back(straight_line(Vec3(-8, 0, 11), Vec3(8, 0, 11)));
   double widths[3];
   const int sizes[3] = {256, 1024, 2048};
@@ -191,12 +194,7 @@ TEST(RenderDrawing, LineWidthScalesWithImageSize) {
 }
 
 TEST(RenderDrawing, FadeByStrengthAndTaper) {
-  fr::Scene scene;
-  scene.structures.push_back(sphere_structure());
-  scene.structures[0].style.shading = fr::Shading::none;
-  scene.structures[0].style.families.clear();
-  scene.structures[0].style.lines.width = 8.0;
-  scene.structures[0].style.lines.taper = 0.0;
+  fr::Scene scene = sphere_with_lines(fr::Shading::none, 8.0);
   auto pl = straight_line(Vec3(-8, 0, 11), Vec3(8, 0, 11));
   for (auto& v : pl.vertices) v.strength = 0.5f;
   scene.structures[0].lines.polylines.push_back(pl);
@@ -211,13 +209,8 @@ TEST(RenderDrawing, FadeByStrengthAndTaper) {
 }
 
 TEST(RenderDrawing, HiddenLinesOmittedDashedOrShown) {
-  fr::Scene scene;
-  scene.structures.push_back(sphere_structure());
-  scene.structures[0].style.shading = fr::Shading::flat;
-  scene.structures[0].style.families.clear();
+  fr::Scene scene = sphere_with_lines(fr::Shading::flat, 6.0);
   auto& ls = scene.structures[0].style.lines;
-  ls.width = 6.0;
-  ls.taper = 0.0;
   // Behind the sphere (z = -11), crossing it: hidden where |x| < 10.
   scene.structures[0].lines.polylines.push_back(
       straight_line(Vec3(-4, 0, -11), Vec3(4, 0, -11), 64));
