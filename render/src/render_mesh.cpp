@@ -19,6 +19,8 @@ void bounding_sphere(RenderMesh& m) {
     hi = hi.cwiseMax(p);
   }
   m.center = 0.5 * (lo + hi);
+  m.box_min = lo;
+  m.box_max = hi;
   double r2 = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
     const Vec3 p(m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]);

@@ -73,9 +73,10 @@ struct PixelRect {
   int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
 };
 
-// Pixels the meshes can cover: their bounding spheres' enclosing cubes
-// projected, 2 px wider for rounding; the whole image when a corner is not
-// in front of the eye. projected_boxes: the same for boxes.
+// Pixels the meshes can cover: their vertices' boxes (or their bounding
+// spheres' enclosing cubes) projected, 2 px wider for rounding; the whole
+// image when a corner is not in front of the eye. projected_boxes: the
+// same for boxes.
 PixelRect projected_boxes(const Matrices& m, const std::vector<BoundingBox>& boxes, int width,
                           int height) {
   const PixelRect whole{0, 0, width, height};
@@ -107,9 +108,16 @@ PixelRect projected_boxes(const Matrices& m, const std::vector<BoundingBox>& box
 PixelRect projected_rect(const Matrices& m, const std::vector<const RenderMesh*>& meshes, int width,
                          int height) {
   std::vector<BoundingBox> boxes;
-  for (const RenderMesh* mesh : meshes)
-    boxes.push_back(
-        {mesh->center - Vec3::Constant(mesh->radius), mesh->center + Vec3::Constant(mesh->radius)});
+  for (const RenderMesh* mesh : meshes) {
+    // The vertices' box where known (up to sqrt(3) times tighter across
+    // than the sphere's enclosing cube: fewer pixels for the passes that
+    // are scissored to it), else the sphere's cube.
+    if ((mesh->box_min.array() <= mesh->box_max.array()).all())
+      boxes.push_back({mesh->box_min, mesh->box_max});
+    else
+      boxes.push_back({mesh->center - Vec3::Constant(mesh->radius),
+                       mesh->center + Vec3::Constant(mesh->radius)});
+  }
   return projected_boxes(m, boxes, width, height);
 }
 

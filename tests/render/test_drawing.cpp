@@ -556,6 +556,36 @@ TEST(RenderMeshLod, ClusterSimplifyKeepsTheShapeWithFewerFaces) {
 // surfaces: 2 x 2 pi (80 + 40) px = 3.8 % of 200 x 200; measured 3.1 %,
 // mean 1.2), and inside the ghost, away from edges, within 3 levels. Off,
 // nothing changes; a picture of several tiles ignores it.
+// The passes scissored to where structures can be (the ghosts'
+// transparency and composite, the hybrid ridges) bound a mesh by its
+// vertices' box (RenderMesh::box_min/box_max, set by make_render_mesh),
+// tighter than its sphere's cube for a flat ghost seen obliquely: the same
+// pixels as with the sphere's bound, at full and half resolution, with a
+// hybrid focus too.
+TEST(RenderDrawing, BoxBoundsDrawTheSamePixelsAsSphereBounds) {
+  const auto flat = std::make_shared<fr::RenderMesh>(*fabrica::test::sphere_render_mesh(10.0, 4));
+  for (std::size_t i = 1; i < flat->positions.size(); i += 3) flat->positions[i] *= 0.3f;
+  flat->box_min.y() *= 0.3;
+  flat->box_max.y() *= 0.3;
+  ASSERT_LT(flat->box_max.y(), 3.01);
+  const auto unbounded = std::make_shared<fr::RenderMesh>(*flat);
+  unbounded->box_min = Vec3::Constant(1.0);
+  unbounded->box_max = Vec3::Constant(-1.0);
+  fr::Scene scene = ghost_over_focus({1.0f, 1.0f, 1.0f, 1.0f});
+  scene.structures[1].style.hybrid_apparent_ridges = true;
+  Camera camera = ortho_camera(160, 12.5);
+  camera.eye = Vec3(0, 60, 80);  // from above and in front: the flat ghost's box is low
+  for (bool half : {false, true}) {
+    fr::RenderOptions options;
+    options.ghosts_half_resolution = half;
+    scene.structures[0].mesh = flat;
+    const fr::Image boxed = renderer().render(scene, camera, options);
+    scene.structures[0].mesh = unbounded;
+    const fr::Image sphered = renderer().render(scene, camera, options);
+    EXPECT_EQ(fr::compare_images(boxed, sphered, 0).max_abs, 0) << half;
+  }
+}
+
 TEST(RenderDrawing, HalfResolutionGhostsStayCloseToTheFullPicture) {
   fr::Scene scene = ghost_over_focus({1.0f, 1.0f, 1.0f, 1.0f});
   fr::Structure& ghost = scene.structures[0];

@@ -30,6 +30,10 @@ struct RenderMesh {
   std::vector<float> lic_field, lic_level;
   Vec3 center = Vec3::Zero();  ///< bounding sphere
   double radius = 0.0;
+  /// The vertices' axis-aligned bounding box (box_min > box_max: not known;
+  /// the renderer then bounds the mesh by its sphere). The sphere's centre
+  /// is the box's centre.
+  Vec3 box_min = Vec3::Constant(1.0), box_max = Vec3::Constant(-1.0);
   double mean_edge_length = 0.0;
   double feature_size = 0.0;  ///< rtsc feature size (0 = unknown)
   /// Closed (every edge in exactly two faces), consistently oriented and
