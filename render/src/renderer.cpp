@@ -1110,6 +1110,27 @@ struct Renderer::Impl {
     lic_stage2(F.lic_kernel, static_cast<float>(F.options.lic.strength), t, F.lic_region, false);
   }
 
+  // A line batch's style (its structure's lines or a polyline layer's) and
+  // full width in pixels of the picture.
+  static const LineStyle& batch_style(const FrameState& F, const LineBatch& b) {
+    const Structure& s = F.scene.structures[b.structure];
+    return b.layer < 0 ? s.style.lines : s.polyline_layers[static_cast<std::size_t>(b.layer)].style;
+  }
+  static double batch_width(const FrameState& F, const LineBatch& b) {
+    const LineStyle& ls = batch_style(F, b);
+    return ls.width * (b.wide ? ls.contour_width_factor : 1.0) * F.line_scale;
+  }
+  // How far (pixels) the lines of structures that are not opaque reach from
+  // their centre lines: the widest one's half width plus a pixel of
+  // anti-aliasing (lines.vert).
+  static double ghost_line_reach(const FrameState& F) {
+    double reach = 0.0;
+    for (const auto& b : F.batches)
+      if (!opaque(F.scene.structures[b.structure]))
+        reach = std::max(reach, 0.5 * batch_width(F, b) + 1.0);
+    return std::isfinite(reach) ? reach : 0.0;
+  }
+
   // Ghosted structures: weighted blended OIT, then composite.
   void pass_transparent(const FrameState& F, const Tile& t) {
     half_depth_is_a = false;
@@ -1129,8 +1150,21 @@ struct Renderer::Impl {
       ensure_oit_half();
       g.BindFramebuffer(GL_READ_FRAMEBUFFER, main_fbo);
       g.BindFramebuffer(GL_DRAW_FRAMEBUFFER, half_fbo);
-      g.BlitFramebuffer(0, 0, t.render_w, t.render_h, 0, 0, (t.render_w + 1) / 2,
-                        (t.render_h + 1) / 2, GL_DEPTH_BUFFER_BIT, GL_NEAREST);
+      // Only what the ghosts and their lines can read: r widened by their
+      // lines' reach (half width, anti-aliasing, the 5-tap cross at half
+      // resolution), on even pixels (an exact 2:1 copy; a tile of odd size
+      // is copied whole, as its last half pixel covers one).
+      const int reach = static_cast<int>(std::ceil(ghost_line_reach(F))) + 4;
+      if (t.render_w % 2 == 0 && t.render_h % 2 == 0) {
+        const int x0 = std::max(0, (r.x0 - reach) & ~1), y0 = std::max(0, (r.y0 - reach) & ~1);
+        const int x1 = std::min(t.render_w, (r.x1 + reach + 1) & ~1);
+        const int y1 = std::min(t.render_h, (r.y1 + reach + 1) & ~1);
+        g.BlitFramebuffer(x0, y0, x1, y1, x0 / 2, y0 / 2, x1 / 2, y1 / 2, GL_DEPTH_BUFFER_BIT,
+                          GL_NEAREST);
+      } else {
+        g.BlitFramebuffer(0, 0, t.render_w, t.render_h, 0, 0, (t.render_w + 1) / 2,
+                          (t.render_h + 1) / 2, GL_DEPTH_BUFFER_BIT, GL_NEAREST);
+      }
       half_depth_is_a = true;
       g.BindFramebuffer(GL_FRAMEBUFFER, half_fbo);
       g.Viewport(0, 0, (t.render_w + 1) / 2, (t.render_h + 1) / 2);
@@ -1363,8 +1397,7 @@ struct Renderer::Impl {
     g.BindVertexArray(line_vao);
     for (const auto& b : F.batches) {
       const Structure& s = F.scene.structures[b.structure];
-      const LineStyle& ls =
-          b.layer < 0 ? s.style.lines : s.polyline_layers[static_cast<std::size_t>(b.layer)].style;
+      const LineStyle& ls = batch_style(F, b);
       const bool half = F.ghost_half && !opaque(s);
       g.BindTexture(GL_TEXTURE_2D, opaque(s) ? depth_a : half ? half_depth : depth_b);
       p.set("u_depth_shift", half ? 1 : 0);
@@ -1376,8 +1409,7 @@ struct Renderer::Impl {
         g.BindTexture(GL_TEXTURE_2D, half_ghost_depth);
         g.ActiveTexture(GL_TEXTURE0);
       }
-      const double w = ls.width * (b.wide ? ls.contour_width_factor : 1.0) * F.line_scale;
-      p.set("u_width", static_cast<float>(w));
+      p.set("u_width", static_cast<float>(batch_width(F, b)));
       p.set("u_taper", static_cast<float>(ls.taper));
       p.set("u_width_by_strength", ls.width_by_strength ? 1 : 0);
       p.set("u_line_color", ls.color.r, ls.color.g, ls.color.b, ls.color.a);

@@ -560,8 +560,11 @@ TEST(RenderMeshLod, ClusterSimplifyKeepsTheShapeWithFewerFaces) {
 // transparency and composite, the hybrid ridges) bound a mesh by its
 // vertices' box (RenderMesh::box_min/box_max, set by make_render_mesh),
 // tighter than its sphere's cube for a flat ghost seen obliquely: the same
-// pixels as with the sphere's bound, at full and half resolution, with a
-// hybrid focus too.
+// pixels as with the sphere's bound, with a hybrid focus too. At half
+// resolution depth A is copied down only around that rectangle, and which
+// of each 2x2 pixels' depths a nearest 2:1 copy takes may differ with the
+// copied rectangle (its sample points fall on texel edges): a few pixels
+// along the focus's outline under the ghost differ, no more.
 TEST(RenderDrawing, BoxBoundsDrawTheSamePixelsAsSphereBounds) {
   const auto flat = std::make_shared<fr::RenderMesh>(*fabrica::test::sphere_render_mesh(10.0, 4));
   for (std::size_t i = 1; i < flat->positions.size(); i += 3) flat->positions[i] *= 0.3f;
@@ -582,7 +585,11 @@ TEST(RenderDrawing, BoxBoundsDrawTheSamePixelsAsSphereBounds) {
     const fr::Image boxed = renderer().render(scene, camera, options);
     scene.structures[0].mesh = unbounded;
     const fr::Image sphered = renderer().render(scene, camera, options);
-    EXPECT_EQ(fr::compare_images(boxed, sphered, 0).max_abs, 0) << half;
+    const fr::ImageDifference d = fr::compare_images(boxed, sphered, 16);
+    if (!half)
+      EXPECT_EQ(d.max_abs, 0);
+    else
+      EXPECT_LE(d.fraction_over, 0.01) << d.max_abs;  // measured 0.6 %
   }
 }
 
