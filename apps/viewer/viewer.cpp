@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "fabrica/core/error.hpp"
 #include "fabrica/io/mesh_io.hpp"
@@ -549,6 +550,15 @@ void Viewer::frame() {
   // Lines: this frame's camera goes to the worker; the frame draws lines at
   // most one frame old (waits for the previous frame's job if need be).
   std::shared_ptr<const LinesResult> lines;
+  // While the camera moves the picture is drawn straight into the window
+  // after the panels are laid out (no copy through the window's picture,
+  // which is drawn again once the camera stops).
+  struct DirectDraw {
+    render::Scene scene;
+    Camera camera;
+    render::RenderOptions options;
+  };
+  std::optional<DirectDraw> direct;
   const bool any =
       std::any_of(structures_.begin(), structures_.end(), [](const auto& s) { return s.visible; });
   stats_.ms_gpu_submit = 0.0;
@@ -582,16 +592,21 @@ void Viewer::frame() {
       }
       drawn_scaled_ = scaled;
       try {
-        // Drawn on the GPU into the window's picture (no read back): the
-        // window shows the background colour even for transparent exports.
-        ensure_picture(camera_.width, camera_.height);
         // Simplified while moving: the ghosts' transparency at half resolution too.
         render::RenderOptions ro = render_options(false);
         ro.ghosts_half_resolution = moving && simplify_while_moving_;
         ro.tight_line_quads = moving && simplify_while_moving_;
-        renderer_->render_to_framebuffer(build_scene(lines, true, true), c, ro, picture_fbo_,
-                                         picture_w_, picture_h_);
-        has_picture_ = true;
+        if (moving) {
+          direct = DirectDraw{build_scene(lines, true, true), c, ro};
+          has_picture_ = false;
+        } else {
+          // Drawn on the GPU into the window's picture (no read back): the
+          // window shows the background colour even for transparent exports.
+          ensure_picture(camera_.width, camera_.height);
+          renderer_->render_to_framebuffer(build_scene(lines, true, true), c, ro, picture_fbo_,
+                                           picture_w_, picture_h_);
+          has_picture_ = true;
+        }
       } catch (const Error& e) {
         report_error(e.what());
       }
@@ -610,11 +625,20 @@ void Viewer::frame() {
   ImGui::Render();
   const auto t2 = Clock::now();
   const auto& g = window_->gl();
+  bool drawn_direct = false;
+  if (direct) {
+    try {
+      renderer_->render_to_framebuffer(direct->scene, direct->camera, direct->options, 0, fw, fh);
+      drawn_direct = true;
+    } catch (const Error& e) {
+      report_error(e.what());
+    }
+  }
   g.BindFramebuffer(GL_FRAMEBUFFER, 0);
   g.Viewport(0, 0, fw, fh);
   g.ClearColor(background_.r, background_.g, background_.b, 1.0f);
-  g.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-  if (has_picture_ && any && picture_w_ == fw && picture_h_ == fh) {
+  if (!drawn_direct) g.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  if (!drawn_direct && has_picture_ && any && picture_w_ == fw && picture_h_ == fh) {
     g.BindFramebuffer(GL_READ_FRAMEBUFFER, picture_fbo_);
     g.BlitFramebuffer(0, 0, fw, fh, 0, 0, fw, fh, GL_COLOR_BUFFER_BIT, GL_NEAREST);
     g.BindFramebuffer(GL_FRAMEBUFFER, 0);
