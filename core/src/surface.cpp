@@ -119,6 +119,8 @@ Surface::Surface(TriangleMesh mesh, Topology topology, SurfaceOptions options)
     : Surface(std::move(mesh), options) {
   check_handed_topology(topology, mesh_);
   Cache& c = *cache_;
+  // The parts no curvature fit reads are rebuilt if asked for (as below).
+  topology.release_derived_parts();
   std::call_once(c.topology_once, [&] { c.topology = std::move(topology); });
 }
 
@@ -128,8 +130,15 @@ Surface& Surface::operator=(Surface&&) noexcept = default;
 
 const Topology& Surface::topology() const {
   Cache& c = *cache_;
-  std::call_once(c.topology_once,
-                 [&] { tbb::this_task_arena::isolate([&] { c.topology = Topology(mesh_); }); });
+  std::call_once(c.topology_once, [&] {
+    tbb::this_task_arena::isolate([&] {
+      c.topology = Topology(mesh_);
+      // The opposite corners and the edges' faces: rebuilt on
+      // first use (most paths never read them after the
+      // constructor; docs/PERFORMANCE.md, peak memory).
+      c.topology.release_derived_parts();
+    });
+  });
   return c.topology;
 }
 
