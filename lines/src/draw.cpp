@@ -126,10 +126,10 @@ LineDrawing draw_lines(const Surface& surface, const Camera& camera,
   // One drawing, so nothing is kept for a next view, and the three phases'
   // working memory is not alive at once (docs/PERFORMANCE.md, peak memory):
   // the extractor (line precompute, view fields, about half the peak on
-  // igea) is freed once the segments are extracted, and the soups once
-  // chained; only then is the depth buffer rendered (its raster scratch,
-  // projected corners and binned triangles, ~3x the buffer, in the memory
-  // they left), so neither the buffer nor the scratch adds to the
+  // igea) is freed once the segments are extracted; only then is the depth
+  // buffer rendered (its raster scratch, projected corners and binned
+  // triangles, ~3x the buffer, in the memory it left), and the soups are
+  // freed once chained, so neither the buffer nor the scratch adds to the
   // extraction's peak.
   validate(options);
   // Built first, so that bad options are reported before anything is
@@ -159,13 +159,17 @@ LineDrawing draw_lines(const Surface& surface, const Camera& camera,
   const double feature_size = extractor->feature_size();
   std::vector<SegmentSoup> soups = extractor->extract(camera);
   extractor.reset();
-  LineDrawing drawing = chain_soups(std::move(soups), feature_size, camera, options);
+  // The depth raster before chaining: its buffer and scratch (corners,
+  // binned triangles: ~15 MB on igea) go in the large holes the view fields
+  // left, which the chained lines' many small blocks would break up (after
+  // chaining the raster grew the heap by ~5 MB; docs/PERFORMANCE.md).
   DepthBuffer depth;
   if (options.visibility) {
     validate_camera(camera);  // (the extraction did; not when it has no family)
     render_depth(surface.mesh(), camera, depth);
     depth.scratch = detail::RasterScratchSlot();
   }
+  LineDrawing drawing = chain_soups(std::move(soups), feature_size, camera, options);
   smooth_and_hide(drawing, surface, camera, options, options.visibility ? &depth : nullptr);
   return drawing;
 }

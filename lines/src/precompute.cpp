@@ -3,6 +3,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <memory>
@@ -35,8 +36,18 @@ void call_once_isolated(std::once_flag& flag, Fn&& fn) {
 }  // namespace
 
 struct LinePrecompute::Cache {
-  std::once_flag k1_once, ridge_once, demarcating_once, gradient_once, laplacian_once, ring_once;
-  std::once_flag ridge_keys_once, demarcating_keys_once;
+  std::once_flag gradient_once, laplacian_once, ring_once;
+  // The raw lines and their inputs, in one part that release_raw_lines()
+  // replaces with a fresh one (never while another thread reads it): its
+  // once flags then build them again on the next use.
+  struct Raw {
+    std::once_flag k1_once, ridge_once, demarcating_once, ridge_keys_once, demarcating_keys_once;
+    std::vector<double> abs_k1;
+    std::vector<LineSegment> ridges, valleys, demarcating;
+    std::vector<RawKey> ridge_keys, valley_keys, demarcating_keys;
+  };
+  std::unique_ptr<Raw> raw = std::make_unique<Raw>();
+  std::atomic<bool> raw_released{false};
   // The per-view passes' inputs can be released (release_view_inputs) and
   // are then rebuilt on the next use: a flag under a mutex, not a once_flag.
   std::mutex tangent_ring_mutex, blocks_mutex;
@@ -46,10 +57,7 @@ struct LinePrecompute::Cache {
   // With a streamed ring (only its layout in tangent_ring): each corner's
   // rank in its vertex's fan (RingBuilder::layout).
   std::unique_ptr<std::uint8_t[]> ring_order;
-  std::vector<RawKey> ridge_keys, valley_keys, demarcating_keys;
   CornerRing ring;
-  std::vector<double> abs_k1;
-  std::vector<LineSegment> ridges, valleys, demarcating;
   GradientOperator gradient;
   std::vector<Vec3> normal_laplacian;
   std::mutex above_mutex;
@@ -61,12 +69,12 @@ LinePrecompute::LinePrecompute(const Surface& surface)
 LinePrecompute::~LinePrecompute() = default;
 
 const std::vector<double>& LinePrecompute::abs_k1() const {
-  call_once_isolated(cache_->k1_once, [&] {
+  call_once_isolated(cache_->raw->k1_once, [&] {
     const auto& curv = surface_->curvature();
-    cache_->abs_k1.resize(curv.k1.size());
-    for (std::size_t i = 0; i < curv.k1.size(); ++i) cache_->abs_k1[i] = std::abs(curv.k1[i]);
+    cache_->raw->abs_k1.resize(curv.k1.size());
+    for (std::size_t i = 0; i < curv.k1.size(); ++i) cache_->raw->abs_k1[i] = std::abs(curv.k1[i]);
   });
-  return cache_->abs_k1;
+  return cache_->raw->abs_k1;
 }
 
 const LinePrecompute::CornerRing& LinePrecompute::corner_ring() const {
@@ -451,6 +459,18 @@ void LinePrecompute::release_vertex_blocks() const {
   cache_->blocks_ready = false;
 }
 
+void LinePrecompute::release_raw_lines() const {
+  Cache& c = *cache_;
+  c.raw = std::make_unique<Cache::Raw>();
+  c.raw_released.store(true, std::memory_order_release);
+  std::lock_guard lock(c.above_mutex);
+  for (auto& a : c.above) a.reset();
+}
+
+bool LinePrecompute::raw_lines_released() const {
+  return cache_->raw_released.load(std::memory_order_acquire);
+}
+
 void LinePrecompute::release_tangent_ring() const {
   std::lock_guard lock(cache_->tangent_ring_mutex);
   cache_->tangent_ring = TangentRing{};
@@ -552,16 +572,16 @@ class TangentRotation {
 }  // namespace
 
 const std::vector<LineSegment>& LinePrecompute::raw_ridges() const {
-  call_once_isolated(cache_->ridge_once, [&] {
+  call_once_isolated(cache_->raw->ridge_once, [&] {
     const auto& k1 = abs_k1();
-    compute_ridges_and_valleys(*surface_, k1, cache_->ridges, cache_->valleys);
+    compute_ridges_and_valleys(*surface_, k1, cache_->raw->ridges, cache_->raw->valleys);
   });
-  return cache_->ridges;
+  return cache_->raw->ridges;
 }
 
 const std::vector<LineSegment>& LinePrecompute::raw_valleys() const {
   (void)raw_ridges();
-  return cache_->valleys;
+  return cache_->raw->valleys;
 }
 
 namespace {
@@ -580,22 +600,23 @@ std::vector<LinePrecompute::RawKey> raw_keys(const Surface& s,
 }  // namespace
 
 const std::vector<LinePrecompute::RawKey>& LinePrecompute::raw_ridge_keys() const {
-  call_once_isolated(cache_->ridge_keys_once, [&] {
-    cache_->ridge_keys = raw_keys(*surface_, raw_ridges());
-    cache_->valley_keys = raw_keys(*surface_, raw_valleys());
+  call_once_isolated(cache_->raw->ridge_keys_once, [&] {
+    cache_->raw->ridge_keys = raw_keys(*surface_, raw_ridges());
+    cache_->raw->valley_keys = raw_keys(*surface_, raw_valleys());
   });
-  return cache_->ridge_keys;
+  return cache_->raw->ridge_keys;
 }
 
 const std::vector<LinePrecompute::RawKey>& LinePrecompute::raw_valley_keys() const {
   (void)raw_ridge_keys();
-  return cache_->valley_keys;
+  return cache_->raw->valley_keys;
 }
 
 const std::vector<LinePrecompute::RawKey>& LinePrecompute::raw_demarcating_keys() const {
-  call_once_isolated(cache_->demarcating_keys_once,
-                     [&] { cache_->demarcating_keys = raw_keys(*surface_, raw_demarcating()); });
-  return cache_->demarcating_keys;
+  call_once_isolated(cache_->raw->demarcating_keys_once, [&] {
+    cache_->raw->demarcating_keys = raw_keys(*surface_, raw_demarcating());
+  });
+  return cache_->raw->demarcating_keys;
 }
 
 std::shared_ptr<const LinePrecompute::RawAbove> LinePrecompute::raw_above(LineFamily family,
@@ -673,7 +694,7 @@ std::shared_ptr<const LinePrecompute::RawAbove> LinePrecompute::raw_above(LineFa
 }
 
 const std::vector<LineSegment>& LinePrecompute::raw_demarcating() const {
-  call_once_isolated(cache_->demarcating_once, [&] {
+  call_once_isolated(cache_->raw->demarcating_once, [&] {
     // Direction of maximal normal-curvature variation g = argmax C(u,u,u)
     // (Kolomenkin et al. 2008), by sampling 72 angles with parabolic
     // refinement; the scalar is the normal curvature along g.
@@ -713,7 +734,7 @@ const std::vector<LineSegment>& LinePrecompute::raw_demarcating() const {
     // Face filter (Kolomenkin et al., as SynDraw): directions of g must agree
     // within 45 degrees at the three corners. Strength: interpolated C(g,g,g).
     const double cos45 = std::sqrt(0.5);
-    auto& out = cache_->demarcating;
+    auto& out = cache_->raw->demarcating;
     out.reserve(raw.size());
     const SegmentGeometry geo(s);
     for (auto& seg : raw) {
@@ -729,7 +750,7 @@ const std::vector<LineSegment>& LinePrecompute::raw_demarcating() const {
       out.push_back(seg);
     }
   });
-  return cache_->demarcating;
+  return cache_->raw->demarcating;
 }
 
 const GradientOperator& LinePrecompute::gradient_operator() const {
