@@ -132,19 +132,21 @@ LineDrawing draw_lines(const Surface& surface, const Camera& camera,
   // freed once chained, so neither the buffer nor the scratch adds to the
   // extraction's peak.
   validate(options);
-  // Built first, so that bad options are reported before anything is
-  // computed, as LineDrawer does (its precompute is filled on extraction).
-  auto extractor = std::make_unique<LineExtractor>(surface, options.lines);
-  extractor->set_one_shot(true);  // its per-view inputs freed as each pass is through
-  // The face normals and areas that the Surface computed for the curvature
-  // fits are freed once the derivatives exist, unless a family of this
-  // drawing reads them (creases, mesh-edge contours, and the gradient
-  // operator of PELs and Laplacian lines), which would compute them again.
+  // The face normals and areas that the Surface computes for the curvature
+  // fits are not kept (asked before the extractor computes the curvature:
+  // the fits then read float copies, and the doubles are freed before
+  // them), unless a family of this drawing reads them (creases, mesh-edge
+  // contours, and the gradient operator of PELs and Laplacian lines),
+  // which would compute them again.
   const auto& fam = options.lines.families;
   const auto has = [&](LineFamily f) { return std::find(fam.begin(), fam.end(), f) != fam.end(); };
   if (!has(LineFamily::crease) && !has(LineFamily::pel) && !has(LineFamily::laplacian) &&
       !(has(LineFamily::contour) && options.lines.contour.mesh_edges))
     surface.release_face_quantities();
+  // Built first, so that bad options are reported before anything is
+  // computed, as LineDrawer does (its precompute is filled on extraction).
+  auto extractor = std::make_unique<LineExtractor>(surface, options.lines);
+  extractor->set_one_shot(true);  // its per-view inputs freed as each pass is through
   // The families whose view fields read the curvature derivatives: these
   // are computed now, so that the curvature fits' scratch (~45 bytes per
   // corner) and the face quantities are freed before the depth raster and
