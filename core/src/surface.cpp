@@ -119,8 +119,6 @@ Surface::Surface(TriangleMesh mesh, Topology topology, SurfaceOptions options)
     : Surface(std::move(mesh), options) {
   check_handed_topology(topology, mesh_);
   Cache& c = *cache_;
-  // The parts no curvature fit reads are rebuilt if asked for (as below).
-  topology.release_derived_parts();
   std::call_once(c.topology_once, [&] { c.topology = std::move(topology); });
 }
 
@@ -130,15 +128,8 @@ Surface& Surface::operator=(Surface&&) noexcept = default;
 
 const Topology& Surface::topology() const {
   Cache& c = *cache_;
-  std::call_once(c.topology_once, [&] {
-    tbb::this_task_arena::isolate([&] {
-      c.topology = Topology(mesh_);
-      // The opposite corners and the edges' faces: rebuilt on
-      // first use (most paths never read them after the
-      // constructor; docs/PERFORMANCE.md, peak memory).
-      c.topology.release_derived_parts();
-    });
-  });
+  std::call_once(c.topology_once,
+                 [&] { tbb::this_task_arena::isolate([&] { c.topology = Topology(mesh_); }); });
   return c.topology;
 }
 
@@ -146,17 +137,19 @@ namespace {
 
 // Faces [begin, end): normal, area, corner areas and, with `weights`, the
 // normal weight of each corner.
-FABRICA_MULTIVERSION
-void face_geometry_range(const TriangleMesh& mesh, const SurfaceOptions& opt, Vec3* face_normals,
-                         double* face_areas, Vec3* corner_areas, std::array<double, 3>* weights,
-                         float* records, std::size_t begin, std::size_t end) {
+// (kRecords: the fits' float records instead of the face areas.)
+template <bool kRecords>
+FABRICA_MULTIVERSION void face_geometry_range(const TriangleMesh& mesh, const SurfaceOptions& opt,
+                                              Vec3* face_normals, double* face_areas,
+                                              Vec3* corner_areas, std::array<double, 3>* weights,
+                                              float* records, std::size_t begin, std::size_t end) {
   for (std::size_t f = begin; f < end; ++f) {
     const auto t = detail::triangle_shape(mesh, mesh.faces[f]);
-    if (face_areas) face_areas[f] = 0.5 * t.twice_area;
+    if constexpr (!kRecords) face_areas[f] = 0.5 * t.twice_area;
     const Vec3 n = t.degenerate ? Vec3::Zero() : Vec3(t.cross / t.twice_area);
     face_normals[f] = n;
     corner_areas[f] = detail::corner_areas(t, opt.mixed_areas);
-    if (records) {
+    if constexpr (kRecords) {
       // The fits' face record (FitArrays::face_records): what they would
       // round the doubles to.
       float* r = records + detail::kFaceRecord * f;
@@ -211,9 +204,13 @@ void compute_face_and_vertex(const TriangleMesh& mesh, const Topology& topo,
                        });
   auto face_pass = [&] {
     detail::parallel_chunks(nf, kFaceGrain, [&](std::size_t begin, std::size_t end) {
-      face_geometry_range(mesh, opt, face_normals.data(), records ? nullptr : face_areas.data(),
-                          corner_areas.data(), vertex_normals ? weights.data() : nullptr,
-                          records ? scratch->face_records.data() : nullptr, begin, end);
+      if (records)
+        face_geometry_range<true>(mesh, opt, face_normals.data(), nullptr, corner_areas.data(),
+                                  weights.data(), scratch->face_records.data(), begin, end);
+      else
+        face_geometry_range<false>(mesh, opt, face_normals.data(), face_areas.data(),
+                                   corner_areas.data(), vertex_normals ? weights.data() : nullptr,
+                                   nullptr, begin, end);
     });
   };
   if (!vertex_normals) {

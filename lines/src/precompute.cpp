@@ -158,14 +158,18 @@ namespace {
 // of each vertex, which depend on nothing else.
 class RingBuilder {
  public:
-  /// Each face's opposite corners of one vertex, when read from the faces.
-  using Opposite = std::vector<std::array<std::int32_t, 2>>;
+  /// Room for one vertex's opposite corners when read from the faces (a
+  /// fixed array for up to 64 faces, not initialised; more in `large`).
+  struct Opposite {
+    std::array<std::array<std::int32_t, 2>, 64> small;
+    std::vector<std::array<std::int32_t, 2>> large;
+  };
 
   /// With `from_faces`, each vertex's opposite corners are read from the
   /// mesh's faces (the same values as Topology::vertex_face_opposite, which
-  /// is then not built: as cheap as building it, 8 bytes per corner less),
-  /// else from the topology; by default from the topology only when it
-  /// holds them.
+  /// is then not built: 8 bytes per corner less, for the one-shot streamed
+  /// ring), else from the topology; by default from the topology only when
+  /// it holds them.
   explicit RingBuilder(const Surface& surface)
       : RingBuilder(surface, !surface.topology().has_vertex_face_opposite()) {}
   RingBuilder(const Surface& surface, bool from_faces)
@@ -173,20 +177,29 @@ class RingBuilder {
         pos_(surface.positions()),
         curv_(surface.curvature()),
         faces_(from_faces ? &surface.faces() : nullptr),
-        face_base_(surface.vertex_count() ? topo_.vertex_faces(0).data() : nullptr) {}
+        face_base_(surface.vertex_count() ? topo_.vertex_faces(0).data() : nullptr),
+        opposite_base_(!from_faces && surface.vertex_count() ? topo_.vertex_face_opposite(0).data()
+                                                             : nullptr) {}
 
   // Vertex i's opposite corners, in `scratch` when read from the faces.
   std::span<const std::array<std::int32_t, 2>> opposite(std::size_t i, Opposite& scratch) const {
-    if (!faces_) return topo_.vertex_face_opposite(i);
     const auto fs = topo_.vertex_faces(i);
-    const auto cs = topo_.vertex_face_corners(i);
-    scratch.resize(fs.size());
-    for (std::size_t j = 0; j < fs.size(); ++j) {
-      const Face& f = (*faces_)[static_cast<std::size_t>(fs[j])];
-      const int c = cs[j];
-      scratch[j] = {f[c == 2 ? 0 : c + 1], f[c == 0 ? 2 : c - 1]};
+    // (The topology's, read in place like vertex_faces.)
+    if (!faces_) return {opposite_base_ + (fs.data() - face_base_), fs.size()};
+    const std::uint8_t* const cs = topo_.vertex_face_corners(i).data();
+    const std::size_t k = fs.size();
+    std::array<std::int32_t, 2>* out = scratch.small.data();
+    if (k > scratch.small.size()) {
+      scratch.large.resize(k);
+      out = scratch.large.data();
     }
-    return {scratch.data(), scratch.size()};
+    const Face* const faces = faces_->data();
+    for (std::size_t j = 0; j < k; ++j) {
+      const Face& f = faces[static_cast<std::size_t>(fs[j])];
+      const int c = cs[j];
+      out[j] = {f[c == 2 ? 0 : c + 1], f[c == 0 ? 2 : c - 1]};
+    }
+    return {out, k};
   }
 
   // Topology::vertex_face_opposite read in place (CSR like vertex_faces:
@@ -318,6 +331,7 @@ class RingBuilder {
   const PrincipalCurvatures& curv_;
   const std::vector<Face>* faces_;
   const std::int32_t* face_base_;
+  const std::array<std::int32_t, 2>* opposite_base_;
 };
 
 // Sizes t's entry arrays for `total` entries and writes their kPad entries
@@ -344,19 +358,26 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
   // Isolated: a thread waiting inside takes no outer task that could ask
   // for the ring again (the mutex is held).
   tbb::this_task_arena::isolate([&] {
+    // (From the topology's opposite corners unless they were released:
+    // then from the faces, rather than building them.)
     const RingBuilder build(*surface_);
     TangentRing& t = cache_->tangent_ring;
     const std::unique_ptr<std::uint8_t[]> order = build.layout(t);
     cache_->ring_order.reset();
     const std::size_t nv = surface_->vertex_count();
     size_ring_entries(t, static_cast<std::size_t>(t.offset[nv]));
-    detail::parallel_range(nv, [&](std::size_t i) {
-      const auto n = static_cast<std::size_t>(t.offset[i]);
-      thread_local RingBuilder::Opposite scratch;
-      build.entries(i, t.fan[i], static_cast<std::size_t>(t.offset[i + 1]) - n, order.get(),
-                    t.vertex.data() + n, t.rank.data() + n, t.x.data() + n, t.y.data() + n,
-                    scratch);
-    });
+    // (Each vertex's entries depend on nothing else: any partition; the
+    // scratch once per range.)
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 2048),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        RingBuilder::Opposite scratch;
+                        for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                          const auto n = static_cast<std::size_t>(t.offset[i]);
+                          build.entries(i, t.fan[i], static_cast<std::size_t>(t.offset[i + 1]) - n,
+                                        order.get(), t.vertex.data() + n, t.rank.data() + n,
+                                        t.x.data() + n, t.y.data() + n, scratch);
+                        }
+                      });
   });
   cache_->tangent_ring_ready = true;
   return cache_->tangent_ring;

@@ -136,6 +136,18 @@ void expect_reference_topology(const TriangleMesh& m) {
     }
 }
 
+/// Eight threads reading `t` and `copy` (alternately) at once, each summing
+/// what `sum` gives for its topology: every sum the same.
+template <class Sum>
+void expect_same_concurrent_sums(const Topology& t, const Topology& copy, const Sum& sum) {
+  std::vector<std::size_t> sums(8, 0);
+  std::vector<std::thread> threads;
+  for (std::size_t k = 0; k < sums.size(); ++k)
+    threads.emplace_back([&, k] { sums[k] = sum(k % 2 ? copy : t); });
+  for (auto& th : threads) th.join();
+  for (std::size_t k = 1; k < sums.size(); ++k) EXPECT_EQ(sums[k], sums[0]);
+}
+
 }  // namespace
 
 TEST(TopologyReal, OpenNonManifoldMeshMatchesAReferenceBuild) {
@@ -173,16 +185,12 @@ TEST(TopologyReal, LazyNeighborsConcurrentFirstUse) {
   for (int round = 0; round < 4; ++round) {
     const Topology t(m);
     const Topology copy = t;
-    std::vector<std::size_t> sums(8, 0);
-    std::vector<std::thread> threads;
-    for (std::size_t k = 0; k < sums.size(); ++k)
-      threads.emplace_back([&, k] {
-        const Topology& mine = k % 2 ? copy : t;
-        for (std::size_t v = 0; v < m.positions.size(); ++v)
-          for (const auto w : mine.vertex_neighbors(v)) sums[k] += static_cast<std::size_t>(w) + v;
-      });
-    for (auto& th : threads) th.join();
-    for (std::size_t k = 1; k < sums.size(); ++k) EXPECT_EQ(sums[k], sums[0]);
+    expect_same_concurrent_sums(t, copy, [&](const Topology& mine) {
+      std::size_t sum = 0;
+      for (std::size_t v = 0; v < m.positions.size(); ++v)
+        for (const auto w : mine.vertex_neighbors(v)) sum += static_cast<std::size_t>(w) + v;
+      return sum;
+    });
     EXPECT_TRUE(t.has_vertex_neighbors());
     EXPECT_TRUE(copy.has_vertex_neighbors());
     expect_reference_neighbors(copy, ref);
@@ -266,19 +274,15 @@ TEST(TopologyReal, ReleasedPartsConcurrentFirstUse) {
     Topology t = eager;
     t.release_derived_parts();
     const Topology copy = t;
-    std::vector<std::size_t> sums(8, 0);
-    std::vector<std::thread> threads;
-    for (std::size_t k = 0; k < sums.size(); ++k)
-      threads.emplace_back([&, k] {
-        const Topology& mine = k % 2 ? copy : t;
-        for (std::size_t v = 0; v < m.positions.size(); ++v)
-          for (const auto& o : mine.vertex_face_opposite(v))
-            sums[k] += static_cast<std::size_t>(o[0]) * 3 + static_cast<std::size_t>(o[1]) + v;
-        for (std::size_t e = 0; e < mine.edge_count(); ++e)
-          for (const auto f : mine.edge_faces(e)) sums[k] += static_cast<std::size_t>(f) ^ e;
-      });
-    for (auto& th : threads) th.join();
-    for (std::size_t k = 1; k < sums.size(); ++k) EXPECT_EQ(sums[k], sums[0]);
+    expect_same_concurrent_sums(t, copy, [&](const Topology& mine) {
+      std::size_t sum = 0;
+      for (std::size_t v = 0; v < m.positions.size(); ++v)
+        for (const auto& o : mine.vertex_face_opposite(v))
+          sum += static_cast<std::size_t>(o[0]) * 3 + static_cast<std::size_t>(o[1]) + v;
+      for (std::size_t e = 0; e < mine.edge_count(); ++e)
+        for (const auto f : mine.edge_faces(e)) sum += static_cast<std::size_t>(f) ^ e;
+      return sum;
+    });
     EXPECT_TRUE(copy.has_vertex_face_opposite());
     EXPECT_TRUE(t.has_edge_faces());
     expect_rebuilt_parts(m, eager, copy);
