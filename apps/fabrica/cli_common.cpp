@@ -153,6 +153,10 @@ MeshCache& mesh_cache() {
 
 }  // namespace
 
+namespace {
+std::atomic<bool> keep_drawers{false};
+}  // namespace
+
 std::shared_ptr<const LoadedSurface> load_prepared_surface(const std::filesystem::path& path,
                                                            const PrepareOptions& options) {
   std::error_code ec_size, ec_time;
@@ -178,6 +182,13 @@ std::shared_ptr<const LoadedSurface> load_prepared_surface(const std::filesystem
   auto loaded = std::make_shared<LoadedSurface>();
   loaded->messages = prepared.messages();
   loaded->info = std::move(prepared.info);
+  // One drawing per load (`fabrica lines`, hatch): the topology's opposite
+  // corners and edges' faces (12 bytes per corner on a closed mesh) are not
+  // kept; the one-shot line extraction reads neither (its tangent ring reads
+  // the faces), and a reader that asks rebuilds them (Topology::
+  // release_derived_parts). A drawer kept for many views keeps them (its
+  // ring reads them at every first view).
+  if (!keep_drawers.load() && prepared.topology) prepared.topology->release_derived_parts();
   // With the topology the preparation built: the Surface does not build it again.
   loaded->surface = std::make_shared<const Surface>(to_surface(std::move(prepared)));
   if (cacheable) {
@@ -187,10 +198,6 @@ std::shared_ptr<const LoadedSurface> load_prepared_surface(const std::filesystem
   }
   return loaded;
 }
-
-namespace {
-std::atomic<bool> keep_drawers{false};
-}  // namespace
 
 void keep_line_drawers(bool keep) {
   keep_drawers = keep;

@@ -272,7 +272,8 @@ FitArrays fit_arrays(const CurvatureInputs& in, const std::uint8_t* valid,
           valid,
           scratch.vertices.data(),
           scratch.corner_slot.data(),
-          scratch.fit_slots.data()};
+          scratch.fit_slots.data(),
+          scratch.face_records.size() ? scratch.face_records.data() : nullptr};
 }
 
 /// One fit (II or C) step by step (FitSchedule): the face pass over the

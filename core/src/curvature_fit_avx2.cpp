@@ -64,12 +64,11 @@ struct Avx2Lanes {
     return {_mm256_set_m128(_mm256_cvtpd_ps(_mm256_sub_pd(a.c[k][1], b.c[k][1])),
                             _mm256_cvtpd_ps(_mm256_sub_pd(a.c[k][0], b.c[k][0])))};
   }
-  /// The twelve floats of each lane's record (out[f] = field f of the eight
-  /// lanes): eight row loads of floats 0-7 and eight of floats 8-11,
-  /// transposed (cheaper than twelve gathers).
-  static void load_records(const float* base, const std::int32_t* rec, Avx2Lanes (&out)[12]) {
+  /// Floats 0-7 at base + i[l] of the eight lanes, transposed: out[f] =
+  /// field f of the eight lanes (eight row loads).
+  static void load_rows8(const float* base, const std::int32_t* i, Avx2Lanes (&out)[8]) {
     __m256 r[8];
-    for (int l = 0; l < 8; ++l) r[l] = _mm256_loadu_ps(base + rec[l]);
+    for (int l = 0; l < 8; ++l) r[l] = _mm256_loadu_ps(base + i[l]);
     __m256 t[8];
     for (int q = 0; q < 2; ++q) {
       t[4 * q + 0] = _mm256_unpacklo_ps(r[4 * q + 0], r[4 * q + 1]);
@@ -88,6 +87,21 @@ struct Avx2Lanes {
       out[f].v = _mm256_permute2f128_ps(u[f], u[f + 4], 0x20);
       out[f + 4].v = _mm256_permute2f128_ps(u[f], u[f + 4], 0x31);
     }
+  }
+  /// The first six floats at base + i[l] per lane (a face record; two more
+  /// floats are read and dropped).
+  static void load_six(const float* base, const std::int32_t* i, Avx2Lanes (&out)[6]) {
+    Avx2Lanes all[8];
+    load_rows8(base, i, all);
+    for (int f = 0; f < 6; ++f) out[f] = all[f];
+  }
+  /// The twelve floats of each lane's record (out[f] = field f of the eight
+  /// lanes): eight row loads of floats 0-7 and eight of floats 8-11,
+  /// transposed (cheaper than twelve gathers).
+  static void load_records(const float* base, const std::int32_t* rec, Avx2Lanes (&out)[12]) {
+    Avx2Lanes first[8];
+    load_rows8(base, rec, first);
+    for (int f = 0; f < 8; ++f) out[f] = first[f];
     // Floats 8-11: lanes j and j + 4 share a register, then a 4x4
     // transpose inside each half.
     __m256 h[4];

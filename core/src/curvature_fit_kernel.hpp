@@ -52,7 +52,15 @@ struct FitArrays {
   const FitVertex* vertices;
   const std::array<std::int32_t, 3>* corner_slot;  ///< per face: each corner's slot
   FitSlot* slots;
+  /// When set, read instead of face_normals and corner_areas: per face the
+  /// normal and the corner areas as float (kFaceRecord floats; the values
+  /// the fits would round them to: the same bits), with two readable floats
+  /// after the last face's.
+  const float* face_records = nullptr;
 };
+
+/// Floats per face in FitArrays::face_records (normal, corner areas).
+constexpr std::size_t kFaceRecord = 6;
 
 // Internal linkage: this header is compiled both for the baseline and with
 // -mavx2, and the two copies of its inline code must never be merged.
@@ -98,6 +106,11 @@ struct FloatLanes {
     FloatLanes r;
     for (int l = 0; l < kLanes; ++l) r.v[l] = static_cast<float>(a.c[k][l] - b.c[k][l]);
     return r;
+  }
+  /// The first six floats at base + i[l] per lane: out[f][l] = base[i[l] + f].
+  static void load_six(const float* base, const std::int32_t* i, FloatLanes (&out)[6]) {
+    for (int l = 0; l < kLanes; ++l)
+      for (int f = 0; f < 6; ++f) out[f].v[l] = base[i[l] + f];
   }
   /// The twelve floats of each lane's record: out[f][l] = base[rec[l] + f].
   static void load_records(const float* base, const std::int32_t* rec, FloatLanes (&out)[12]) {
@@ -244,6 +257,7 @@ struct Block {
   alignas(32) std::int32_t pos[3][kLanes];   ///< 3 * vertex of corner k
   alignas(32) std::int32_t rec[3][kLanes];   ///< 12 * vertex of corner k (FitVertex floats)
   alignas(32) std::int32_t face3[kLanes];    ///< 3 * face
+  alignas(32) std::int32_t face6[kLanes];    ///< kFaceRecord * face
   alignas(32) std::int32_t slot[3][kLanes];  ///< corner k's slot
   alignas(32) float usable[kLanes];          ///< 1: normal not zero, three vertices valid
 };
@@ -253,8 +267,15 @@ inline void load_block(const FitArrays& a, std::size_t first, std::size_t end, B
   for (int l = 0; l < kLanes; ++l) {
     const std::size_t f = first + static_cast<std::size_t>(l < blk.count ? l : blk.count - 1);
     const Face& face = a.faces[f];
-    const double* nT = a.face_normals + 3 * f;
-    bool ok = !(nT[0] == 0.0 && nT[1] == 0.0 && nT[2] == 0.0);
+    // (A unit normal is not zero in float either.)
+    bool ok;
+    if (a.face_records) {
+      const float* nT = a.face_records + kFaceRecord * f;
+      ok = !(nT[0] == 0.0f && nT[1] == 0.0f && nT[2] == 0.0f);
+    } else {
+      const double* nT = a.face_normals + 3 * f;
+      ok = !(nT[0] == 0.0 && nT[1] == 0.0 && nT[2] == 0.0);
+    }
     for (int k = 0; k < 3; ++k) {
       blk.pos[k][l] = 3 * face[k];
       blk.rec[k][l] = 12 * face[k];
@@ -262,6 +283,7 @@ inline void load_block(const FitArrays& a, std::size_t first, std::size_t end, B
       ok = ok && a.valid[face[k]] != 0;
     }
     blk.face3[l] = static_cast<std::int32_t>(3 * f);
+    blk.face6[l] = static_cast<std::int32_t>(kFaceRecord * f);
     blk.usable[l] = ok ? 1.0f : 0.0f;
   }
 }
@@ -286,11 +308,18 @@ inline FaceFrame<L> face_frame(const FitArrays& a, const Block& blk) {
     const auto& tail = p[(k + 1) % 3];
     F.e[k] = {L::diff(head, tail, 0), L::diff(head, tail, 1), L::diff(head, tail, 2)};
   }
-  typename L::Double3 d;
-  L::load3(a.face_normals, blk.face3, d);
-  F.nT = {L::to_float(d, 0), L::to_float(d, 1), L::to_float(d, 2)};
-  L::load3(a.corner_areas, blk.face3, d);
-  for (int k = 0; k < 3; ++k) F.w[k] = L::to_float(d, k);
+  if (a.face_records) {
+    L r[6];
+    L::load_six(a.face_records, blk.face6, r);
+    F.nT = {r[0], r[1], r[2]};
+    for (int k = 0; k < 3; ++k) F.w[k] = r[3 + k];
+  } else {
+    typename L::Double3 d;
+    L::load3(a.face_normals, blk.face3, d);
+    F.nT = {L::to_float(d, 0), L::to_float(d, 1), L::to_float(d, 2)};
+    L::load3(a.corner_areas, blk.face3, d);
+    for (int k = 0; k < 3; ++k) F.w[k] = L::to_float(d, k);
+  }
   const L inv = L::splat(1.0f) / sqrt(dot(F.e[0], F.e[0]));
   F.t = {F.e[0].x * inv, F.e[0].y * inv, F.e[0].z * inv};
   F.b = cross(F.nT, F.t);

@@ -58,6 +58,11 @@ struct FaceFitScratch {
   ScratchArray<std::array<std::int32_t, 3>> corner_slot;
   ScratchArray<FitSlot> fit_slots;
   ScratchArray<FitVertex> vertices;
+  /// Empty, or the fits' face inputs as float (FitArrays::face_records:
+  /// kFaceRecord floats per face and two more), when the Surface frees its
+  /// double face quantities before the fits (release_face_quantities asked
+  /// for before the vertex normals).
+  ScratchArray<float> face_records;
   bool frames_ready = false;  ///< vertices hold (n, u, v) for the II fit
 };
 

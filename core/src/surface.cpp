@@ -137,16 +137,27 @@ namespace {
 
 // Faces [begin, end): normal, area, corner areas and, with `weights`, the
 // normal weight of each corner.
-FABRICA_MULTIVERSION
-void face_geometry_range(const TriangleMesh& mesh, const SurfaceOptions& opt, Vec3* face_normals,
-                         double* face_areas, Vec3* corner_areas, std::array<double, 3>* weights,
-                         std::size_t begin, std::size_t end) {
+// (kRecords: the fits' float records instead of the face areas.)
+template <bool kRecords>
+FABRICA_MULTIVERSION void face_geometry_range(const TriangleMesh& mesh, const SurfaceOptions& opt,
+                                              Vec3* face_normals, double* face_areas,
+                                              Vec3* corner_areas, std::array<double, 3>* weights,
+                                              float* records, std::size_t begin, std::size_t end) {
   for (std::size_t f = begin; f < end; ++f) {
     const auto t = detail::triangle_shape(mesh, mesh.faces[f]);
-    face_areas[f] = 0.5 * t.twice_area;
+    if constexpr (!kRecords) face_areas[f] = 0.5 * t.twice_area;
     const Vec3 n = t.degenerate ? Vec3::Zero() : Vec3(t.cross / t.twice_area);
     face_normals[f] = n;
     corner_areas[f] = detail::corner_areas(t, opt.mixed_areas);
+    if constexpr (kRecords) {
+      // The fits' face record (FitArrays::face_records): what they would
+      // round the doubles to.
+      float* r = records + detail::kFaceRecord * f;
+      for (int k = 0; k < 3; ++k) {
+        r[k] = static_cast<float>(n[k]);
+        r[3 + k] = static_cast<float>(corner_areas[f][k]);
+      }
+    }
     if (!weights) continue;
     const Vec3 w = detail::normal_corner_weights(t, opt.normal_weighting);
     weights[f] = {w[0], w[1], w[2]};
@@ -163,7 +174,8 @@ void compute_face_and_vertex(const TriangleMesh& mesh, const Topology& topo,
                              std::vector<double>& face_areas, std::vector<Vec3>& corner_areas,
                              std::vector<Vec3>* vertex_normals,
                              std::vector<std::uint8_t>* normal_valid,
-                             std::vector<double>* vertex_areas, detail::FaceFitScratch* scratch) {
+                             std::vector<double>* vertex_areas, detail::FaceFitScratch* scratch,
+                             bool records = false) {
   const std::size_t nf = mesh.faces.size();
   const std::size_t nv = mesh.positions.size();
   detail::ScratchArray<std::array<double, 3>> weights;
@@ -171,19 +183,34 @@ void compute_face_and_vertex(const TriangleMesh& mesh, const Topology& topo,
   // the host backing it): the arrays are filled concurrently, and the
   // vertex outputs while the face pass runs.
   tbb::parallel_invoke([&] { detail::assign_large(face_normals, nf, Vec3(Vec3::Zero())); },
-                       [&] { detail::assign_large(face_areas, nf, 0.0); },
+                       [&] {
+                         // (With records, the face areas are not kept: no one reads them.)
+                         if (!records) detail::assign_large(face_areas, nf, 0.0);
+                       },
                        [&] { detail::assign_large(corner_areas, nf, Vec3(Vec3::Zero())); },
                        [&] {
                          if (!vertex_normals) return;
-                         // The fits' CSR slot of each corner (kept for them).
-                         detail::fill_corner_slots(topo, *scratch);
+                         // The fits' CSR slot of each corner (kept for them; with
+                         // records, filled after the face arrays are freed).
+                         if (!records) detail::fill_corner_slots(topo, *scratch);
                          weights.resize(nf);
                          scratch->vertices.resize(nv);
+                         if (records) {
+                           // (+2: the fits' eight-float loads of the last record)
+                           scratch->face_records.resize(detail::kFaceRecord * nf + 2);
+                           scratch->face_records[detail::kFaceRecord * nf] = 0.0f;
+                           scratch->face_records[detail::kFaceRecord * nf + 1] = 0.0f;
+                         }
                        });
   auto face_pass = [&] {
     detail::parallel_chunks(nf, kFaceGrain, [&](std::size_t begin, std::size_t end) {
-      face_geometry_range(mesh, opt, face_normals.data(), face_areas.data(), corner_areas.data(),
-                          vertex_normals ? weights.data() : nullptr, begin, end);
+      if (records)
+        face_geometry_range<true>(mesh, opt, face_normals.data(), nullptr, corner_areas.data(),
+                                  weights.data(), scratch->face_records.data(), begin, end);
+      else
+        face_geometry_range<false>(mesh, opt, face_normals.data(), face_areas.data(),
+                                   corner_areas.data(), vertex_normals ? weights.data() : nullptr,
+                                   nullptr, begin, end);
     });
   };
   if (!vertex_normals) {
@@ -226,6 +253,14 @@ void compute_face_and_vertex(const TriangleMesh& mesh, const Topology& topo,
       detail::set_fit_vertex(scratch->vertices[v], unit, x, y, 0.0, 0.0);
     }
   });
+  if (records) {
+    // The fits read the records: the doubles and the weights go first, and
+    // the slots take their place.
+    weights.release();
+    std::vector<Vec3>().swap(face_normals);
+    std::vector<Vec3>().swap(corner_areas);
+    detail::fill_corner_slots(topo, *scratch);
+  }
 }
 
 }  // namespace
@@ -271,14 +306,22 @@ const std::vector<Vec3>& Surface::vertex_normals() const {
   std::call_once(c.vertex_once, [&] {
     // Recomputes the (cheap) face pass fused with the weights, unless the
     // face quantities already exist, in which case only the gather runs.
+    // When their release was asked for (and no caller holds them), they are
+    // not kept: the fits read float records of them (24 bytes per face
+    // instead of 56) and the doubles are freed here, before the fits.
+    bool release;
+    {
+      std::lock_guard lock(c.face_mutex);
+      release = c.face_release_pending && !c.face_public.load(std::memory_order_relaxed);
+    }
     std::vector<Vec3> fn, ca;
     std::vector<double> fa;
     isolated([&] {
       compute_face_and_vertex(mesh_, topo, options_, fn, fa, ca, &c.vertex_normals, &c.normal_valid,
-                              &c.vertex_areas, &c.fit_scratch);
+                              &c.vertex_areas, &c.fit_scratch, release);
     });
     std::lock_guard lock(c.face_mutex);
-    if (!c.face_held) {
+    if (!c.face_held && !release) {
       c.face_normals = std::move(fn);
       c.face_areas = std::move(fa);
       c.corner_areas = std::move(ca);

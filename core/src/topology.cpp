@@ -2,6 +2,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <array>
@@ -126,7 +127,8 @@ Topology::Topology(const TriangleMesh& mesh) {
   // in a scratch segment of two slots per incident face (left
   // uninitialised: the parallel pass touches it first), with, slot by slot,
   // how many faces share the edge to that neighbour.
-  vertex_face_opposite_.resize(vertex_faces_.size());
+  OppositeLists& opposite = opposite_->value;
+  opposite.resize(vertex_faces_.size());
   const std::size_t slots = 2 * vertex_faces_.size();
   // (+ kRankPad: the rank count below reads eight entries at a time; what it
   // reads past a list is masked out.)
@@ -170,7 +172,7 @@ Topology::Topology(const TriangleMesh& mesh) {
           const Face& f = mesh.faces[static_cast<std::size_t>(vertex_faces_[i])];
           const int c = vertex_face_corners_[i];
           const std::array<std::int32_t, 2> o{f[c == 2 ? 0 : c + 1], f[c == 0 ? 2 : c - 1]};
-          vertex_face_opposite_[i] = o;
+          opposite[i] = o;
           seen.entry(vertex_faces_[i], o, vi);
           insert(o[0]);
           insert(o[1]);
@@ -201,9 +203,10 @@ Topology::Topology(const TriangleMesh& mesh) {
     edge_face_base[v + 1] = edge_face_base[v] + sizes[v][2];
   }
   edges_.resize(vertex_edge_offsets_.back());
-  edge_face_offsets_.resize(edges_.size() + 1);
-  edge_face_offsets_.back() = edge_face_base.back();
-  edge_faces_.resize(edge_face_base.back());
+  EdgeFaceLists& edge_faces = edge_face_lists_->value;
+  edge_faces.offsets.resize(edges_.size() + 1);
+  edge_faces.offsets.back() = edge_face_base.back();
+  edge_faces.faces.resize(static_cast<std::size_t>(edge_face_base.back()));
   face_edges_.resize(nf);
   // Edge e = (a, b), a < b, is numbered vertex_edge_offsets_[a] + the rank
   // of b among a's higher neighbours, and its faces are those of a that hold
@@ -228,7 +231,7 @@ Topology::Topology(const TriangleMesh& mesh) {
         for (std::int32_t i = 0; i < upper; ++i) {
           const auto e = static_cast<std::size_t>(first_edge + i);
           edges_[e] = {vi, nb[lower + static_cast<std::size_t>(i)]};
-          edge_face_offsets_[e] = at;
+          edge_faces.offsets[e] = at;
           at += std::exchange(cursor[i], at);
         }
         FaceNeighbors<decltype(check)::value> seen;
@@ -238,13 +241,13 @@ Topology::Topology(const TriangleMesh& mesh) {
           } else if (w > vi) {
             const std::int32_t rank = count_below(nb + lower, upper, w);
             fe[k] = first_edge + rank;
-            if (seen.first_time(w)) edge_faces_[static_cast<std::size_t>(cursor[rank]++)] = f;
+            if (seen.first_time(w)) edge_faces.faces[static_cast<std::size_t>(cursor[rank]++)] = f;
           }
         };
         const auto end = static_cast<std::size_t>(vertex_face_offsets_[v + 1]);
         for (std::size_t j = begin; j < end; ++j) {
           const std::int32_t f = vertex_faces_[j];
-          const auto& o = vertex_face_opposite_[j];
+          const auto& o = opposite[j];
           seen.entry(f, o, vi);
           const int c = vertex_face_corners_[j];
           // The edges opposite the two other corners k touch v; their other
@@ -260,6 +263,82 @@ Topology::Topology(const TriangleMesh& mesh) {
     edge_pass(std::true_type{});
   else
     edge_pass(std::false_type{});
+  opposite_->ready.store(true, std::memory_order_release);
+  edge_face_lists_->ready.store(true, std::memory_order_release);
+}
+
+void Topology::release_derived_parts() {
+  opposite_ = std::make_shared<LazyPart<OppositeLists>>();
+  edge_face_lists_ = std::make_shared<LazyPart<EdgeFaceLists>>();
+}
+
+namespace {
+
+/// The other end of edge e from vertex v, or v itself where the face's two
+/// corners are one vertex (face edge -1).
+inline std::int32_t other_end(const std::array<std::int32_t, 2>* edges, std::int32_t e,
+                              std::int32_t v) {
+  if (e < 0) return v;
+  const auto& ab = edges[static_cast<std::size_t>(e)];
+  return ab[0] == v ? ab[1] : ab[0];
+}
+
+}  // namespace
+
+// The corners after v in face f at corner c: f[(c+1)%3] is the other end of
+// the edge joining corners c and c+1 (the face edge opposite corner
+// (c+2)%3), f[(c+2)%3] that of the edge joining c+2 and c (opposite
+// (c+1)%3); a face edge of -1 joins two corners that are one vertex, v.
+// The constructor's lists, bit for bit (also on degenerate faces).
+void Topology::build_opposite(LazyPart<OppositeLists>& p) const {
+  std::call_once(p.once, [&] {
+    const std::size_t nv = vertex_count();
+    OppositeLists& o = p.value;
+    o.resize(vertex_faces_.size());
+    const auto* const edges = edges_.data();
+    tbb::this_task_arena::isolate([&] {
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, kGrain), [&](const auto& r) {
+        for (std::size_t v = r.begin(); v < r.end(); ++v) {
+          const auto vi = static_cast<std::int32_t>(v);
+          for (auto i = static_cast<std::size_t>(vertex_face_offsets_[v]),
+                    end = static_cast<std::size_t>(vertex_face_offsets_[v + 1]);
+               i < end; ++i) {
+            const auto& fe = face_edges_[static_cast<std::size_t>(vertex_faces_[i])];
+            const int c = vertex_face_corners_[i];
+            o[i] = {other_end(edges, fe[c == 0 ? 2 : c - 1], vi),
+                    other_end(edges, fe[c == 2 ? 0 : c + 1], vi)};
+          }
+        }
+      });
+    });
+    p.ready.store(true, std::memory_order_release);
+  });
+}
+
+// Each edge's faces in increasing face order, from the face edges (a face
+// whose two face edges are one edge, a degenerate face, counts once), as
+// the constructor's edge pass lists them.
+void Topology::build_edge_faces(LazyPart<EdgeFaceLists>& p) const {
+  std::call_once(p.once, [&] {
+    const std::size_t ne = edge_count(), nf = face_count();
+    EdgeFaceLists& l = p.value;
+    l.offsets.assign(ne + 1, 0);
+    const auto once = [](const std::array<std::int32_t, 3>& fe, int k) {
+      return fe[k] >= 0 && (k < 1 || fe[k] != fe[0]) && (k < 2 || fe[k] != fe[1]);
+    };
+    for (std::size_t f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k)
+        if (once(face_edges_[f], k)) ++l.offsets[static_cast<std::size_t>(face_edges_[f][k]) + 1];
+    for (std::size_t e = 0; e < ne; ++e) l.offsets[e + 1] += l.offsets[e];
+    l.faces.resize(static_cast<std::size_t>(l.offsets[ne]));
+    std::vector<std::int32_t> cursor(l.offsets.begin(), l.offsets.end() - 1);
+    for (std::size_t f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k)
+        if (once(face_edges_[f], k))
+          l.faces[static_cast<std::size_t>(cursor[static_cast<std::size_t>(face_edges_[f][k])]++)] =
+              static_cast<std::int32_t>(f);
+    p.ready.store(true, std::memory_order_release);
+  });
 }
 
 // Each vertex's neighbours in increasing order, from the edges (a, b), a <
@@ -313,11 +392,23 @@ void Topology::reverse_face(std::size_t f, const Face& corners) {
                      ") with three distinct vertices in this topology");
   auto& fe = face_edges_[f];
   std::swap(fe[1], fe[2]);  // (b, a) was opposite corner 2, (a, c) opposite corner 1
+  // The opposite corners: swapped in place when held by this topology
+  // alone; a copy's that are held are copied first; lists not held are
+  // rebuilt from the new face edges when asked for (a copy's are its own).
+  const bool held = opposite_->ready.load(std::memory_order_acquire);
+  if (opposite_.use_count() > 1) {
+    auto own = std::make_shared<LazyPart<OppositeLists>>();
+    if (held) {
+      own->value = opposite_->value;
+      own->ready.store(true, std::memory_order_release);
+    }
+    opposite_ = std::move(own);
+  }
   for (int c = 0; c < 3; ++c) {
     // Corner 1 becomes corner 2 and 2 becomes 1; the two other corners
     // after v change places for every corner.
     vertex_face_corners_[entry[c]] = static_cast<std::uint8_t>((3 - c) % 3);
-    std::swap(vertex_face_opposite_[entry[c]][0], vertex_face_opposite_[entry[c]][1]);
+    if (held) std::swap(opposite_->value[entry[c]][0], opposite_->value[entry[c]][1]);
   }
 }
 

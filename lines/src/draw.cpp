@@ -126,25 +126,27 @@ LineDrawing draw_lines(const Surface& surface, const Camera& camera,
   // One drawing, so nothing is kept for a next view, and the three phases'
   // working memory is not alive at once (docs/PERFORMANCE.md, peak memory):
   // the extractor (line precompute, view fields, about half the peak on
-  // igea) is freed once the segments are extracted, and the soups once
-  // chained; only then is the depth buffer rendered (its raster scratch,
-  // projected corners and binned triangles, ~3x the buffer, in the memory
-  // they left), so neither the buffer nor the scratch adds to the
+  // igea) is freed once the segments are extracted; only then is the depth
+  // buffer rendered (its raster scratch, projected corners and binned
+  // triangles, ~3x the buffer, in the memory it left), and the soups are
+  // freed once chained, so neither the buffer nor the scratch adds to the
   // extraction's peak.
   validate(options);
-  // Built first, so that bad options are reported before anything is
-  // computed, as LineDrawer does (its precompute is filled on extraction).
-  auto extractor = std::make_unique<LineExtractor>(surface, options.lines);
-  extractor->set_one_shot(true);  // its per-view inputs freed as each pass is through
-  // The face normals and areas that the Surface computed for the curvature
-  // fits are freed once the derivatives exist, unless a family of this
-  // drawing reads them (creases, mesh-edge contours, and the gradient
-  // operator of PELs and Laplacian lines), which would compute them again.
+  // The face normals and areas that the Surface computes for the curvature
+  // fits are not kept (asked before the extractor computes the curvature:
+  // the fits then read float copies, and the doubles are freed before
+  // them), unless a family of this drawing reads them (creases, mesh-edge
+  // contours, and the gradient operator of PELs and Laplacian lines),
+  // which would compute them again.
   const auto& fam = options.lines.families;
   const auto has = [&](LineFamily f) { return std::find(fam.begin(), fam.end(), f) != fam.end(); };
   if (!has(LineFamily::crease) && !has(LineFamily::pel) && !has(LineFamily::laplacian) &&
       !(has(LineFamily::contour) && options.lines.contour.mesh_edges))
     surface.release_face_quantities();
+  // Built first, so that bad options are reported before anything is
+  // computed, as LineDrawer does (its precompute is filled on extraction).
+  auto extractor = std::make_unique<LineExtractor>(surface, options.lines);
+  extractor->set_one_shot(true);  // its per-view inputs freed as each pass is through
   // The families whose view fields read the curvature derivatives: these
   // are computed now, so that the curvature fits' scratch (~45 bytes per
   // corner) and the face quantities are freed before the depth raster and
@@ -159,13 +161,17 @@ LineDrawing draw_lines(const Surface& surface, const Camera& camera,
   const double feature_size = extractor->feature_size();
   std::vector<SegmentSoup> soups = extractor->extract(camera);
   extractor.reset();
-  LineDrawing drawing = chain_soups(std::move(soups), feature_size, camera, options);
+  // The depth raster before chaining: its buffer and scratch (corners,
+  // binned triangles: ~15 MB on igea) go in the large holes the view fields
+  // left, which the chained lines' many small blocks would break up (after
+  // chaining the raster grew the heap by ~5 MB; docs/PERFORMANCE.md).
   DepthBuffer depth;
   if (options.visibility) {
     validate_camera(camera);  // (the extraction did; not when it has no family)
     render_depth(surface.mesh(), camera, depth);
     depth.scratch = detail::RasterScratchSlot();
   }
+  LineDrawing drawing = chain_soups(std::move(soups), feature_size, camera, options);
   smooth_and_hide(drawing, surface, camera, options, options.visibility ? &depth : nullptr);
   return drawing;
 }

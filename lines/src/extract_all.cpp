@@ -170,12 +170,38 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
       tbb::this_task_arena::max_concurrency() == 1 ||
       tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism) == 1;
   const bool pipelined = three && one_thread;
+  // One-shot: the apparent ridges' own fields (the kernel's records, t1,
+  // t1 in world space, q1, D_t1 q1: ~130 bytes per vertex, read by no other
+  // family: the fused scan that lists the kernel's faces is through before
+  // the kernel starts) are freed once the kernel is through, so that the
+  // families still running (the raw ridges and valleys on one thread) reuse
+  // their memory.
+  auto apparent_done = [&] {
+    if (!one_shot_) return;
+    std::vector<ApparentVertex>().swap(fields_.apparent_vertex);
+    std::vector<Vec3>().swap(fields_.t1_world);
+    std::vector<Vec2>().swap(fields_.t1);
+    std::vector<double>().swap(fields_.q1);
+    std::vector<double>().swap(fields_.dt1q1);
+  };
   // One-shot: the tangent ring is freed once D_t1 q1 is complete; when
-  // pipelined, once both the kernel (which drives it) and run_all are.
+  // pipelined, once both the kernel (which drives it) and run_all are (and
+  // then the apparent fields).
   std::atomic<int> ring_readers{0};
   auto ring_done = [&] {
-    if (one_shot_ && (!pipelined || ring_readers.fetch_add(1) == 1))
+    if (one_shot_ && (!pipelined || ring_readers.fetch_add(1) == 1)) {
       precompute_->release_tangent_ring();
+      if (pipelined) apparent_done();
+    }
+  };
+  // One-shot: the raw lines (LinePrecompute::release_raw_lines) once the
+  // families that read them are through.
+  const int raw_families = static_cast<int>(std::count_if(fam.begin(), fam.end(), [](LineFamily f) {
+    return f == LineFamily::ridge || f == LineFamily::valley || f == LineFamily::demarcating;
+  }));
+  std::atomic<int> raw_through{0};
+  auto raw_done = [&] {
+    if (one_shot_ && raw_through.fetch_add(1) + 1 == raw_families) precompute_->release_raw_lines();
   };
   std::optional<detail::Dt1q1Blocks> dt1q1;
   detail::ChunkReady ready;
@@ -206,7 +232,10 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
     out[apparent_k] = detail::extract_apparent_ridges(*surface_, fields_, fs, options_.apparent,
                                                       listed ? apparent_faces_.get() : nullptr,
                                                       pipelined ? &ready : nullptr);
-    if (pipelined) ring_done();
+    if (pipelined)
+      ring_done();
+    else
+      apparent_done();  // (D_t1 q1 was complete before the kernel started)
   };
   auto run = [&](std::size_t k) {
     const LineFamily f = options_.families[k];
@@ -240,9 +269,11 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
         break;
       case LineFamily::ridge:
         out[k] = extract_ridges(*precompute_, fields_, fs, options_.ridge);
+        raw_done();
         break;
       case LineFamily::valley:
         out[k] = extract_valleys(*precompute_, fields_, fs, options_.valley);
+        raw_done();
         break;
       case LineFamily::apparent:
         if (pipelined) {
@@ -257,6 +288,7 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
           if (arrived.fetch_add(1) == 1) apparent_kernel();
         } else {
           out[k] = extract_apparent_ridges(*surface_, fields_, fs, options_.apparent);
+          apparent_done();
         }
         break;
       case LineFamily::pel:
@@ -267,6 +299,7 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
         break;
       case LineFamily::demarcating:
         out[k] = extract_demarcating_curves(*precompute_, fields_, fs, options_.demarcating);
+        raw_done();
         break;
     }
   };

@@ -3,10 +3,12 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <memory>
 #include <mutex>
+#include <span>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -34,8 +36,18 @@ void call_once_isolated(std::once_flag& flag, Fn&& fn) {
 }  // namespace
 
 struct LinePrecompute::Cache {
-  std::once_flag k1_once, ridge_once, demarcating_once, gradient_once, laplacian_once, ring_once;
-  std::once_flag ridge_keys_once, demarcating_keys_once;
+  std::once_flag gradient_once, laplacian_once, ring_once;
+  // The raw lines and their inputs, in one part that release_raw_lines()
+  // replaces with a fresh one (never while another thread reads it): its
+  // once flags then build them again on the next use.
+  struct Raw {
+    std::once_flag k1_once, ridge_once, demarcating_once, ridge_keys_once, demarcating_keys_once;
+    std::vector<double> abs_k1;
+    std::vector<LineSegment> ridges, valleys, demarcating;
+    std::vector<RawKey> ridge_keys, valley_keys, demarcating_keys;
+  };
+  std::unique_ptr<Raw> raw = std::make_unique<Raw>();
+  std::atomic<bool> raw_released{false};
   // The per-view passes' inputs can be released (release_view_inputs) and
   // are then rebuilt on the next use: a flag under a mutex, not a once_flag.
   std::mutex tangent_ring_mutex, blocks_mutex;
@@ -45,10 +57,7 @@ struct LinePrecompute::Cache {
   // With a streamed ring (only its layout in tangent_ring): each corner's
   // rank in its vertex's fan (RingBuilder::layout).
   std::unique_ptr<std::uint8_t[]> ring_order;
-  std::vector<RawKey> ridge_keys, valley_keys, demarcating_keys;
   CornerRing ring;
-  std::vector<double> abs_k1;
-  std::vector<LineSegment> ridges, valleys, demarcating;
   GradientOperator gradient;
   std::vector<Vec3> normal_laplacian;
   std::mutex above_mutex;
@@ -60,12 +69,12 @@ LinePrecompute::LinePrecompute(const Surface& surface)
 LinePrecompute::~LinePrecompute() = default;
 
 const std::vector<double>& LinePrecompute::abs_k1() const {
-  call_once_isolated(cache_->k1_once, [&] {
+  call_once_isolated(cache_->raw->k1_once, [&] {
     const auto& curv = surface_->curvature();
-    cache_->abs_k1.resize(curv.k1.size());
-    for (std::size_t i = 0; i < curv.k1.size(); ++i) cache_->abs_k1[i] = std::abs(curv.k1[i]);
+    cache_->raw->abs_k1.resize(curv.k1.size());
+    for (std::size_t i = 0; i < curv.k1.size(); ++i) cache_->raw->abs_k1[i] = std::abs(curv.k1[i]);
   });
-  return cache_->abs_k1;
+  return cache_->raw->abs_k1;
 }
 
 const LinePrecompute::CornerRing& LinePrecompute::corner_ring() const {
@@ -149,11 +158,49 @@ namespace {
 // of each vertex, which depend on nothing else.
 class RingBuilder {
  public:
+  /// Room for one vertex's opposite corners when read from the faces (a
+  /// fixed array for up to 64 faces, not initialised; more in `large`).
+  struct Opposite {
+    std::array<std::array<std::int32_t, 2>, 64> small;
+    std::vector<std::array<std::int32_t, 2>> large;
+  };
+
+  /// With `from_faces`, each vertex's opposite corners are read from the
+  /// mesh's faces (the same values as Topology::vertex_face_opposite, which
+  /// is then not built: 8 bytes per corner less, for the one-shot streamed
+  /// ring), else from the topology; by default from the topology only when
+  /// it holds them.
   explicit RingBuilder(const Surface& surface)
+      : RingBuilder(surface, !surface.topology().has_vertex_face_opposite()) {}
+  RingBuilder(const Surface& surface, bool from_faces)
       : topo_(surface.topology()),
         pos_(surface.positions()),
         curv_(surface.curvature()),
-        face_base_(surface.vertex_count() ? topo_.vertex_faces(0).data() : nullptr) {}
+        faces_(from_faces ? &surface.faces() : nullptr),
+        face_base_(surface.vertex_count() ? topo_.vertex_faces(0).data() : nullptr),
+        opposite_base_(!from_faces && surface.vertex_count() ? topo_.vertex_face_opposite(0).data()
+                                                             : nullptr) {}
+
+  // Vertex i's opposite corners, in `scratch` when read from the faces.
+  std::span<const std::array<std::int32_t, 2>> opposite(std::size_t i, Opposite& scratch) const {
+    const auto fs = topo_.vertex_faces(i);
+    // (The topology's, read in place like vertex_faces.)
+    if (!faces_) return {opposite_base_ + (fs.data() - face_base_), fs.size()};
+    const std::uint8_t* const cs = topo_.vertex_face_corners(i).data();
+    const std::size_t k = fs.size();
+    std::array<std::int32_t, 2>* out = scratch.small.data();
+    if (k > scratch.small.size()) {
+      scratch.large.resize(k);
+      out = scratch.large.data();
+    }
+    const Face* const faces = faces_->data();
+    for (std::size_t j = 0; j < k; ++j) {
+      const Face& f = faces[static_cast<std::size_t>(fs[j])];
+      const int c = cs[j];
+      out[j] = {f[c == 2 ? 0 : c + 1], f[c == 0 ? 2 : c - 1]};
+    }
+    return {out, k};
+  }
 
   // Topology::vertex_face_opposite read in place (CSR like vertex_faces:
   // the corner offset of vertex i is its vertex_faces(i) position).
@@ -199,8 +246,9 @@ class RingBuilder {
         chunks,
         [&](std::size_t c) {
           std::int32_t entries = 0;
+          Opposite scratch;
           for (std::size_t i = c * kChunk, e = std::min(nv, i + kChunk); i < e; ++i) {
-            const auto o = topo_.vertex_face_opposite(i);
+            const auto o = opposite(i, scratch);
             const auto k = static_cast<std::int32_t>(o.size());
             std::uint8_t* const rank = order.get() + corner_at(i);
             bool fan = fan_order(o.data(), k, rank);
@@ -235,8 +283,9 @@ class RingBuilder {
   // offset[i] and, for a fan, its faces' ranks in order[corner_at(i)...])
   // at vertex, rank, x, y [0, n).
   void entries(std::size_t i, bool fan, std::size_t m, const std::uint8_t* order,
-               std::int32_t* vertex, std::uint8_t* rank_out, float* x, float* y) const {
-    const auto o = topo_.vertex_face_opposite(i);
+               std::int32_t* vertex, std::uint8_t* rank_out, float* x, float* y,
+               Opposite& scratch) const {
+    const auto o = opposite(i, scratch);
     const auto k = static_cast<std::int32_t>(o.size());
     if (fan) {
       // n_0 .. n_{k-1} in fan order, then n_0 again (the last face's
@@ -280,7 +329,9 @@ class RingBuilder {
   const Topology& topo_;
   const std::vector<Vec3>& pos_;
   const PrincipalCurvatures& curv_;
+  const std::vector<Face>* faces_;
   const std::int32_t* face_base_;
+  const std::array<std::int32_t, 2>* opposite_base_;
 };
 
 // Sizes t's entry arrays for `total` entries and writes their kPad entries
@@ -307,17 +358,26 @@ const LinePrecompute::TangentRing& LinePrecompute::tangent_ring() const {
   // Isolated: a thread waiting inside takes no outer task that could ask
   // for the ring again (the mutex is held).
   tbb::this_task_arena::isolate([&] {
+    // (From the topology's opposite corners unless they were released:
+    // then from the faces, rather than building them.)
     const RingBuilder build(*surface_);
     TangentRing& t = cache_->tangent_ring;
     const std::unique_ptr<std::uint8_t[]> order = build.layout(t);
     cache_->ring_order.reset();
     const std::size_t nv = surface_->vertex_count();
     size_ring_entries(t, static_cast<std::size_t>(t.offset[nv]));
-    detail::parallel_range(nv, [&](std::size_t i) {
-      const auto n = static_cast<std::size_t>(t.offset[i]);
-      build.entries(i, t.fan[i], static_cast<std::size_t>(t.offset[i + 1]) - n, order.get(),
-                    t.vertex.data() + n, t.rank.data() + n, t.x.data() + n, t.y.data() + n);
-    });
+    // (Each vertex's entries depend on nothing else: any partition; the
+    // scratch once per range.)
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 2048),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        RingBuilder::Opposite scratch;
+                        for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                          const auto n = static_cast<std::size_t>(t.offset[i]);
+                          build.entries(i, t.fan[i], static_cast<std::size_t>(t.offset[i + 1]) - n,
+                                        order.get(), t.vertex.data() + n, t.rank.data() + n,
+                                        t.x.data() + n, t.y.data() + n, scratch);
+                        }
+                      });
   });
   cache_->tangent_ring_ready = true;
   return cache_->tangent_ring;
@@ -347,11 +407,12 @@ void LinePrecompute::tangent_ring_block(std::size_t v0, std::size_t v1, TangentR
     return;
   }
   const RingBuilder build(*surface_);
+  RingBuilder::Opposite scratch;
   for (std::size_t i = v0; i < v1; ++i) {
     const auto n = static_cast<std::size_t>(t.offset[i]) - first;
     build.entries(i, t.fan[i], static_cast<std::size_t>(t.offset[i + 1] - t.offset[i]),
                   cache_->ring_order.get(), out.vertex.data() + n, out.rank.data() + n,
-                  out.x.data() + n, out.y.data() + n);
+                  out.x.data() + n, out.y.data() + n, scratch);
   }
 }
 
@@ -417,6 +478,18 @@ void LinePrecompute::release_vertex_blocks() const {
   std::lock_guard lock(cache_->blocks_mutex);
   cache_->blocks = VertexBlocks{};
   cache_->blocks_ready = false;
+}
+
+void LinePrecompute::release_raw_lines() const {
+  Cache& c = *cache_;
+  c.raw = std::make_unique<Cache::Raw>();
+  c.raw_released.store(true, std::memory_order_release);
+  std::lock_guard lock(c.above_mutex);
+  for (auto& a : c.above) a.reset();
+}
+
+bool LinePrecompute::raw_lines_released() const {
+  return cache_->raw_released.load(std::memory_order_acquire);
 }
 
 void LinePrecompute::release_tangent_ring() const {
@@ -520,16 +593,16 @@ class TangentRotation {
 }  // namespace
 
 const std::vector<LineSegment>& LinePrecompute::raw_ridges() const {
-  call_once_isolated(cache_->ridge_once, [&] {
+  call_once_isolated(cache_->raw->ridge_once, [&] {
     const auto& k1 = abs_k1();
-    compute_ridges_and_valleys(*surface_, k1, cache_->ridges, cache_->valleys);
+    compute_ridges_and_valleys(*surface_, k1, cache_->raw->ridges, cache_->raw->valleys);
   });
-  return cache_->ridges;
+  return cache_->raw->ridges;
 }
 
 const std::vector<LineSegment>& LinePrecompute::raw_valleys() const {
   (void)raw_ridges();
-  return cache_->valleys;
+  return cache_->raw->valleys;
 }
 
 namespace {
@@ -548,22 +621,23 @@ std::vector<LinePrecompute::RawKey> raw_keys(const Surface& s,
 }  // namespace
 
 const std::vector<LinePrecompute::RawKey>& LinePrecompute::raw_ridge_keys() const {
-  call_once_isolated(cache_->ridge_keys_once, [&] {
-    cache_->ridge_keys = raw_keys(*surface_, raw_ridges());
-    cache_->valley_keys = raw_keys(*surface_, raw_valleys());
+  call_once_isolated(cache_->raw->ridge_keys_once, [&] {
+    cache_->raw->ridge_keys = raw_keys(*surface_, raw_ridges());
+    cache_->raw->valley_keys = raw_keys(*surface_, raw_valleys());
   });
-  return cache_->ridge_keys;
+  return cache_->raw->ridge_keys;
 }
 
 const std::vector<LinePrecompute::RawKey>& LinePrecompute::raw_valley_keys() const {
   (void)raw_ridge_keys();
-  return cache_->valley_keys;
+  return cache_->raw->valley_keys;
 }
 
 const std::vector<LinePrecompute::RawKey>& LinePrecompute::raw_demarcating_keys() const {
-  call_once_isolated(cache_->demarcating_keys_once,
-                     [&] { cache_->demarcating_keys = raw_keys(*surface_, raw_demarcating()); });
-  return cache_->demarcating_keys;
+  call_once_isolated(cache_->raw->demarcating_keys_once, [&] {
+    cache_->raw->demarcating_keys = raw_keys(*surface_, raw_demarcating());
+  });
+  return cache_->raw->demarcating_keys;
 }
 
 std::shared_ptr<const LinePrecompute::RawAbove> LinePrecompute::raw_above(LineFamily family,
@@ -641,7 +715,7 @@ std::shared_ptr<const LinePrecompute::RawAbove> LinePrecompute::raw_above(LineFa
 }
 
 const std::vector<LineSegment>& LinePrecompute::raw_demarcating() const {
-  call_once_isolated(cache_->demarcating_once, [&] {
+  call_once_isolated(cache_->raw->demarcating_once, [&] {
     // Direction of maximal normal-curvature variation g = argmax C(u,u,u)
     // (Kolomenkin et al. 2008), by sampling 72 angles with parabolic
     // refinement; the scalar is the normal curvature along g.
@@ -681,7 +755,7 @@ const std::vector<LineSegment>& LinePrecompute::raw_demarcating() const {
     // Face filter (Kolomenkin et al., as SynDraw): directions of g must agree
     // within 45 degrees at the three corners. Strength: interpolated C(g,g,g).
     const double cos45 = std::sqrt(0.5);
-    auto& out = cache_->demarcating;
+    auto& out = cache_->raw->demarcating;
     out.reserve(raw.size());
     const SegmentGeometry geo(s);
     for (auto& seg : raw) {
@@ -697,7 +771,7 @@ const std::vector<LineSegment>& LinePrecompute::raw_demarcating() const {
       out.push_back(seg);
     }
   });
-  return cache_->demarcating;
+  return cache_->raw->demarcating;
 }
 
 const GradientOperator& LinePrecompute::gradient_operator() const {

@@ -597,6 +597,46 @@ TEST(Determinism, ReleasedFaceQuantitiesComeBackTheSame) {
   }
 }
 
+// With the release asked for before the vertex normals (the one-shot
+// draw_lines), the Surface does not keep the double face quantities: the
+// fits read float records of them (FitArrays::face_records) and the face
+// areas are not computed. The curvature and derivatives are the same bits
+// as a Surface that keeps them, with the AVX2 and the portable fits, at one
+// and two threads, on a mesh with degenerate faces (zero normals) and a
+// partial last block of eight faces; the face quantities asked for
+// afterwards come back the same.
+TEST(Determinism, FitsFromFloatFaceRecordsGiveTheSameBits) {
+  TriangleMesh m = test::make_torus(16, 4.5, 37, 19, 0.3);
+  const auto n = static_cast<std::int32_t>(m.positions.size());
+  m.positions.push_back(m.positions[0]);  // a zero-area face, and a repeated corner
+  m.faces.push_back({0, 1, n});
+  m.faces.push_back({2, 2, 3});
+  Surface ref(m);
+  ref.precompute();
+  const auto expected = bytes_of(ref);
+  const std::vector<Vec3> normals = ref.face_normals();
+  const std::vector<double> areas = ref.face_areas();
+  const bool had_avx2 = detail::curvature_avx2_enabled().load();
+  for (const bool wide : {false, true}) {
+    if (wide && !had_avx2) continue;
+    detail::curvature_avx2_enabled() = wide;
+    for (const int threads : {1, 2}) {
+      const tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
+                                      static_cast<std::size_t>(threads));
+      Surface s(m);
+      s.release_face_quantities();
+      s.precompute();
+      EXPECT_EQ(bytes_of(s), expected) << (wide ? "AVX2" : "portable") << " " << threads;
+      EXPECT_EQ(s.face_normals().size(), normals.size());
+      EXPECT_EQ(
+          std::memcmp(s.face_normals().data(), normals.data(), normals.size() * sizeof(normals[0])),
+          0);
+      EXPECT_EQ(s.face_areas(), areas);
+    }
+  }
+  detail::curvature_avx2_enabled() = had_avx2;
+}
+
 // ---------------------------------------------------------------- misc
 
 // The mesh check of every Surface: a fast pass over all coordinates and

@@ -136,6 +136,18 @@ void expect_reference_topology(const TriangleMesh& m) {
     }
 }
 
+/// Eight threads reading `t` and `copy` (alternately) at once, each summing
+/// what `sum` gives for its topology: every sum the same.
+template <class Sum>
+void expect_same_concurrent_sums(const Topology& t, const Topology& copy, const Sum& sum) {
+  std::vector<std::size_t> sums(8, 0);
+  std::vector<std::thread> threads;
+  for (std::size_t k = 0; k < sums.size(); ++k)
+    threads.emplace_back([&, k] { sums[k] = sum(k % 2 ? copy : t); });
+  for (auto& th : threads) th.join();
+  for (std::size_t k = 1; k < sums.size(); ++k) EXPECT_EQ(sums[k], sums[0]);
+}
+
 }  // namespace
 
 TEST(TopologyReal, OpenNonManifoldMeshMatchesAReferenceBuild) {
@@ -173,16 +185,12 @@ TEST(TopologyReal, LazyNeighborsConcurrentFirstUse) {
   for (int round = 0; round < 4; ++round) {
     const Topology t(m);
     const Topology copy = t;
-    std::vector<std::size_t> sums(8, 0);
-    std::vector<std::thread> threads;
-    for (std::size_t k = 0; k < sums.size(); ++k)
-      threads.emplace_back([&, k] {
-        const Topology& mine = k % 2 ? copy : t;
-        for (std::size_t v = 0; v < m.positions.size(); ++v)
-          for (const auto w : mine.vertex_neighbors(v)) sums[k] += static_cast<std::size_t>(w) + v;
-      });
-    for (auto& th : threads) th.join();
-    for (std::size_t k = 1; k < sums.size(); ++k) EXPECT_EQ(sums[k], sums[0]);
+    expect_same_concurrent_sums(t, copy, [&](const Topology& mine) {
+      std::size_t sum = 0;
+      for (std::size_t v = 0; v < m.positions.size(); ++v)
+        for (const auto w : mine.vertex_neighbors(v)) sum += static_cast<std::size_t>(w) + v;
+      return sum;
+    });
     EXPECT_TRUE(t.has_vertex_neighbors());
     EXPECT_TRUE(copy.has_vertex_neighbors());
     expect_reference_neighbors(copy, ref);
@@ -193,4 +201,99 @@ TEST(TopologyReal, LazyNeighborsConcurrentFirstUse) {
   tbb::parallel_for(std::size_t{0}, m.positions.size(),
                     [&](std::size_t v) { degree[v] = t.vertex_neighbors(v).size(); });
   for (std::size_t v = 0; v < degree.size(); ++v) EXPECT_EQ(degree[v], ref.neighbors[v].size());
+}
+
+namespace {
+
+/// The opposite corners of every corner entry, from the faces, and each
+/// edge's faces, of an eager topology `eager`, against `lazy` (whose parts
+/// were released), entry by entry.
+void expect_rebuilt_parts(const TriangleMesh& m, const Topology& eager, const Topology& lazy) {
+  for (std::size_t v = 0; v < m.positions.size(); ++v) {
+    const auto fs = eager.vertex_faces(v);
+    const auto cs = eager.vertex_face_corners(v);
+    const auto oe = eager.vertex_face_opposite(v);
+    const auto ol = lazy.vertex_face_opposite(v);
+    ASSERT_EQ(oe.size(), fs.size());
+    ASSERT_EQ(ol.size(), fs.size());
+    for (std::size_t j = 0; j < fs.size(); ++j) {
+      const Face& f = m.faces[static_cast<std::size_t>(fs[j])];
+      const std::array<std::int32_t, 2> want{f[(cs[j] + 1) % 3], f[(cs[j] + 2) % 3]};
+      ASSERT_EQ(oe[j], want) << v << " " << j;
+      ASSERT_EQ(ol[j], want) << v << " " << j;
+    }
+  }
+  for (std::size_t e = 0; e < eager.edge_count(); ++e) {
+    const auto a = eager.edge_faces(e), b = lazy.edge_faces(e);
+    ASSERT_EQ(std::vector<std::int32_t>(a.begin(), a.end()),
+              std::vector<std::int32_t>(b.begin(), b.end()))
+        << e;
+  }
+}
+
+}  // namespace
+
+// release_derived_parts frees the opposite corners and the edges' faces;
+// the accessors then rebuild them from the face edges, the same lists as
+// the constructor's (closed igea; the open, non-manifold aneurysm with
+// degenerate faces of each kind), at one and two threads. A copy made
+// before the release keeps its own.
+TEST(TopologyReal, ReleasedPartsRebuiltBitForBit) {
+  const TriangleMesh igea =
+      io::read_mesh(test::bundled_data() / "meshes/classic/c3d_igea.ply").mesh;
+  for (const TriangleMesh& m : {igea, irregular_aneurysm(true), irregular_aneurysm(false)})
+    for (const int threads : {1, 2}) {
+      const tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
+                                      static_cast<std::size_t>(threads));
+      const Topology eager(m);
+      EXPECT_TRUE(eager.has_vertex_face_opposite());
+      EXPECT_TRUE(eager.has_edge_faces());
+      Topology lazy = eager;
+      lazy.release_derived_parts();
+      EXPECT_FALSE(lazy.has_vertex_face_opposite());
+      EXPECT_FALSE(lazy.has_edge_faces());
+      EXPECT_TRUE(eager.has_vertex_face_opposite());
+      // Other accessors do not build them.
+      (void)lazy.vertex_faces(0);
+      (void)lazy.face_edge(0, 0);
+      (void)lazy.find_edge(m.faces[0][0], m.faces[0][1]);
+      EXPECT_FALSE(lazy.has_vertex_face_opposite());
+      EXPECT_FALSE(lazy.has_edge_faces());
+      expect_rebuilt_parts(m, eager, lazy);
+      EXPECT_TRUE(lazy.has_vertex_face_opposite());
+      EXPECT_TRUE(lazy.has_edge_faces());
+    }
+}
+
+// Many threads (and TBB tasks) asking at once for the released parts of a
+// topology and of a copy of it (which shares them) get the same lists.
+TEST(TopologyReal, ReleasedPartsConcurrentFirstUse) {
+  const TriangleMesh m = irregular_aneurysm(true);
+  const Topology eager(m);
+  for (int round = 0; round < 4; ++round) {
+    Topology t = eager;
+    t.release_derived_parts();
+    const Topology copy = t;
+    expect_same_concurrent_sums(t, copy, [&](const Topology& mine) {
+      std::size_t sum = 0;
+      for (std::size_t v = 0; v < m.positions.size(); ++v)
+        for (const auto& o : mine.vertex_face_opposite(v))
+          sum += static_cast<std::size_t>(o[0]) * 3 + static_cast<std::size_t>(o[1]) + v;
+      for (std::size_t e = 0; e < mine.edge_count(); ++e)
+        for (const auto f : mine.edge_faces(e)) sum += static_cast<std::size_t>(f) ^ e;
+      return sum;
+    });
+    EXPECT_TRUE(copy.has_vertex_face_opposite());
+    EXPECT_TRUE(t.has_edge_faces());
+    expect_rebuilt_parts(m, eager, copy);
+  }
+  Topology t = eager;
+  t.release_derived_parts();
+  std::vector<std::size_t> count(m.positions.size());
+  tbb::parallel_for(std::size_t{0}, m.positions.size(), [&](std::size_t v) {
+    count[v] = t.vertex_face_opposite(v).size() + (v < t.edge_count() ? t.edge_faces(v).size() : 0);
+  });
+  for (std::size_t v = 0; v < count.size(); ++v)
+    EXPECT_EQ(count[v], eager.vertex_faces(v).size() +
+                            (v < eager.edge_count() ? eager.edge_faces(v).size() : 0));
 }

@@ -353,8 +353,9 @@ bool same_records(const SegmentSoup& a, const SegmentSoup& b) {
   return true;
 }
 
-// A one-shot extractor frees the vertex blocks and the tangent ring during
-// extract() (draw_lines' lower peak memory): the segments are those of a
+// A one-shot extractor frees the vertex blocks, the tangent ring, the
+// apparent ridges' fields and the raw lines during extract() (draw_lines'
+// lower peak memory): the segments are those of a
 // kept extractor, at one thread (the pipelined D_t1 q1 path) and two, and a
 // second view rebuilds what was freed.
 TEST(LineExtractor, OneShotGivesTheSameSegments) {
@@ -389,6 +390,38 @@ TEST(LineExtractor, OneShotGivesTheSameSegments) {
   ASSERT_EQ(again.size(), blocks.size());
   EXPECT_EQ(std::memcmp(again.data(), blocks.data(), blocks.size() * sizeof(blocks[0])), 0);
   EXPECT_EQ(pre.tangent_ring().x, ring);
+  // The raw lines (freed by a one-shot extraction once its ridges, valleys
+  // and demarcating curves are through): built again, the same bits; a
+  // list held from raw_above() stays valid.
+  SegmentSoup ridges, valleys, demarcating;
+  ridges.segments = pre.raw_ridges();
+  valleys.segments = pre.raw_valleys();
+  demarcating.segments = pre.raw_demarcating();
+  const std::vector<double> k1 = pre.abs_k1();
+  const auto above = pre.raw_above(LineFamily::ridge, 0.1);
+  const auto above_copy = above->segments;
+  EXPECT_GT(ridges.segments.size(), 100u);
+  EXPECT_GT(above_copy.size(), 10u);
+  EXPECT_FALSE(pre.raw_lines_released());
+  pre.release_raw_lines();
+  EXPECT_TRUE(pre.raw_lines_released());
+  SegmentSoup again_above;
+  again_above.segments = above->segments;
+  SegmentSoup held_above;
+  held_above.segments = above_copy;
+  EXPECT_TRUE(same_records(held_above, again_above));
+  SegmentSoup r2, v2, d2;
+  r2.segments = pre.raw_ridges();
+  v2.segments = pre.raw_valleys();
+  d2.segments = pre.raw_demarcating();
+  EXPECT_TRUE(same_records(ridges, r2));
+  EXPECT_TRUE(same_records(valleys, v2));
+  EXPECT_TRUE(same_records(demarcating, d2));
+  EXPECT_EQ(pre.abs_k1(), k1);
+  SegmentSoup rebuilt_above;
+  rebuilt_above.segments = pre.raw_above(LineFamily::ridge, 0.1)->segments;
+  EXPECT_TRUE(same_records(held_above, rebuilt_above));
+  EXPECT_EQ(pre.raw_ridge_keys().size(), ridges.segments.size());
 }
 
 TEST(Kernel, NeighbouringFacesShareBitIdenticalEdgePoints) {

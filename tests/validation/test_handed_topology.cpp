@@ -303,6 +303,60 @@ TEST(HandedTopology, ReverseFaceEqualsARebuild) {
   expect_same_topology(turned, Topology(mesh));
 }
 
+// reverse_face on a topology whose opposite corners were released (rebuilt
+// afterwards from the new face edges), on one that holds them while a copy
+// shares them (the copy keeps the old corners), and on such a copy.
+TEST(HandedTopology, ReverseFaceWithReleasedOrSharedParts) {
+  TriangleMesh mesh = bundled("anatomy/vessels/sofa_aneurysm3D_1.off");
+  const TriangleMesh before = mesh;
+  const Topology original(mesh);
+  Topology released = original;
+  released.release_derived_parts();
+  Topology shared = released;  // shares the released (not yet rebuilt) parts
+  Topology held = original;    // shares the constructor's parts with `original`
+  for (std::size_t f = 0; f < mesh.faces.size(); f += 5) {
+    released.reverse_face(f, mesh.faces[f]);
+    held.reverse_face(f, mesh.faces[f]);
+    std::swap(mesh.faces[f][1], mesh.faces[f][2]);
+  }
+  EXPECT_FALSE(released.has_vertex_face_opposite());
+  EXPECT_TRUE(held.has_vertex_face_opposite());
+  const Topology rebuilt(mesh);
+  expect_same_topology(released, rebuilt);
+  expect_same_topology(held, rebuilt);
+  // The copies that shared the parts keep the topology of the mesh before.
+  expect_same_topology(shared, Topology(before));
+  expect_same_topology(original, Topology(before));
+}
+
+// Given a topology without the derived parts (as `fabrica lines` hands it
+// over), the one-shot drawing of the reference families never builds them
+// (they would be 8 + 4 bytes per corner for the rest of the run: its ring
+// reads the faces); the lines are those of a Surface whose topology holds
+// them (the drawer path's ring reads them).
+TEST(HandedTopology, SurfaceTopologyWithoutDerivedParts) {
+  TriangleMesh mesh = bundled("classic/c3d_stanford-bunny.obj");
+  Topology released(mesh);
+  released.release_derived_parts();  // as `fabrica lines` hands it over
+  const Surface surface(mesh, std::move(released));
+  EXPECT_FALSE(surface.topology().has_vertex_face_opposite());
+  EXPECT_FALSE(surface.topology().has_edge_faces());
+  const Camera camera = test::camera_towards(surface, Vec3(0.3, 0.2, 1.0));
+  DrawLinesOptions options;
+  options.lines.families = reference_families();
+  const LineDrawing one_shot = draw_lines(surface, camera, options);
+  EXPECT_GT(one_shot.segment_count(), 100u);
+  EXPECT_FALSE(surface.topology().has_vertex_face_opposite());
+  EXPECT_FALSE(surface.topology().has_edge_faces());
+  // With the parts built first, a drawer's lines: the same.
+  const Surface other(mesh);
+  EXPECT_TRUE(other.topology().has_vertex_face_opposite());
+  EXPECT_TRUE(other.topology().has_edge_faces());
+  LineDrawer drawer(other, options);
+  const LineDrawing drawn = drawer.draw(camera);
+  expect_same_lines(one_shot, drawn);
+}
+
 TEST(HandedTopology, RealMeshesThatPreparationTurns) {
   // A closed piece turned outward, open pieces turned outward (capped
   // volume), a few faces of open pieces.

@@ -77,10 +77,11 @@ class Topology {
   }
   /// The two other corners (i1, i2) of each face of vertex_faces(v), same
   /// order, in the face's corner order after v: i1 = f[(c+1)%3],
-  /// i2 = f[(c+2)%3] where c is v's corner.
+  /// i2 = f[(c+2)%3] where c is v's corner. (After release_derived_parts,
+  /// rebuilt from the face edges on the first call, once, thread-safe.)
   std::span<const std::array<std::int32_t, 2>> vertex_face_opposite(std::size_t v) const {
-    return {vertex_face_opposite_.data() + vertex_face_offsets_[v],
-            vertex_face_opposite_.data() + vertex_face_offsets_[v + 1]};
+    const auto& o = opposite_lists();
+    return {o.data() + vertex_face_offsets_[v], o.data() + vertex_face_offsets_[v + 1]};
   }
   /// Vertices joined to v by an edge, increasing index. (Built from the
   /// edges on the first call of this, vertex_edge or upper_neighbors on
@@ -134,10 +135,11 @@ class Topology {
   /// lexicographic order of that pair.
   const std::array<std::int32_t, 2>& edge(std::size_t e) const { return edges_[e]; }
   /// Faces using edge e, increasing face index: 1 = boundary, 2 = interior,
-  /// more = non-manifold edge.
+  /// more = non-manifold edge. (After release_derived_parts, rebuilt from
+  /// the face edges on the first call, once, thread-safe.)
   std::span<const std::int32_t> edge_faces(std::size_t e) const {
-    return {edge_faces_.data() + edge_face_offsets_[e],
-            edge_faces_.data() + edge_face_offsets_[e + 1]};
+    const EdgeFaceLists& l = edge_face_lists();
+    return {l.faces.data() + l.offsets[e], l.faces.data() + l.offsets[e + 1]};
   }
   /// The edge of face f opposite corner k, i.e. joining corners (k+1)%3 and (k+2)%3.
   std::int32_t face_edge(std::size_t f, int k) const { return face_edges_[f][k]; }
@@ -153,6 +155,24 @@ class Topology {
   bool is_boundary_vertex(std::size_t v) const { return boundary_vertex_[v] != 0; }
   /// A vertex referenced by no face.
   bool is_isolated_vertex(std::size_t v) const { return vertex_faces(v).empty(); }
+
+  /// Frees the parts that are derived from the face edges and edges:
+  /// vertex_face_opposite (8 bytes per corner) and edge_faces (4 bytes per
+  /// corner and per edge). Each is rebuilt, bit for bit, on the first call
+  /// of its accessor afterwards (once, thread-safe; copies made before keep
+  /// theirs). For a topology whose readers mostly never ask for them (a
+  /// Surface's: the curvature fits and the one-shot line extraction read
+  /// neither), so that they do not hold memory through every later phase.
+  /// Not to be called while another thread reads this topology.
+  void release_derived_parts();
+  /// Whether vertex_face_opposite's and edge_faces' lists are held (tests,
+  /// memory probes).
+  bool has_vertex_face_opposite() const {
+    return opposite_ && opposite_->ready.load(std::memory_order_acquire);
+  }
+  bool has_edge_faces() const {
+    return edge_face_lists_ && edge_face_lists_->ready.load(std::memory_order_acquire);
+  }
 
   /// Follows face f turned over from `corners` (a, b, c) to (a, c, b), as
   /// io::repair_mesh orients faces (corner 0 keeps its vertex): afterwards
@@ -194,17 +214,44 @@ class Topology {
   }
   void build_neighbor_lists(LazyNeighbors& n) const;
 
+  /// A part built by the constructor, or after release_derived_parts on
+  /// first use (`ready` is the fast path's check); shared by copies until
+  /// one of them changes it (reverse_face).
+  template <class T>
+  struct LazyPart {
+    std::once_flag once;
+    std::atomic<bool> ready{false};
+    T value;
+  };
+  using OppositeLists = detail::FilledVector<std::array<std::int32_t, 2>>;
+  struct EdgeFaceLists {
+    detail::FilledVector<std::int32_t> offsets;  ///< edge_count() + 1
+    detail::FilledVector<std::int32_t> faces;
+  };
+  const OppositeLists& opposite_lists() const {
+    LazyPart<OppositeLists>& p = *opposite_;
+    if (!p.ready.load(std::memory_order_acquire)) build_opposite(p);
+    return p.value;
+  }
+  const EdgeFaceLists& edge_face_lists() const {
+    LazyPart<EdgeFaceLists>& p = *edge_face_lists_;
+    if (!p.ready.load(std::memory_order_acquire)) build_edge_faces(p);
+    return p.value;
+  }
+  void build_opposite(LazyPart<OppositeLists>& p) const;
+  void build_edge_faces(LazyPart<EdgeFaceLists>& p) const;
+
   // Arrays that the constructor fills completely are not zeroed first.
   std::vector<std::int32_t> vertex_face_offsets_;
   detail::FilledVector<std::int32_t> vertex_faces_;
   detail::FilledVector<std::uint8_t> vertex_face_corners_;
-  detail::FilledVector<std::array<std::int32_t, 2>> vertex_face_opposite_;
+  std::shared_ptr<LazyPart<OppositeLists>> opposite_ = std::make_shared<LazyPart<OppositeLists>>();
   std::shared_ptr<LazyNeighbors> neighbors_ = std::make_shared<LazyNeighbors>();
   // First edge of each vertex (edges numbered by lower vertex), size nv + 1.
   std::vector<std::int32_t> vertex_edge_offsets_;
   detail::FilledVector<std::array<std::int32_t, 2>> edges_;
-  detail::FilledVector<std::int32_t> edge_face_offsets_;
-  detail::FilledVector<std::int32_t> edge_faces_;
+  std::shared_ptr<LazyPart<EdgeFaceLists>> edge_face_lists_ =
+      std::make_shared<LazyPart<EdgeFaceLists>>();
   detail::FilledVector<std::array<std::int32_t, 3>> face_edges_;
   detail::FilledVector<std::uint8_t> boundary_vertex_;
 };

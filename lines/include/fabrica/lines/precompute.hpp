@@ -155,6 +155,17 @@ class LinePrecompute {
   /// reference obtained before the release must not be used after it.
   void release_vertex_blocks() const;
   void release_tangent_ring() const;
+  /// Frees the raw lines (raw_ridges(), raw_valleys(), raw_demarcating(),
+  /// their keys, abs_k1() and the raw_above() lists: ~110 bytes per raw
+  /// segment and 8 per vertex), as the one-shot extraction does once its
+  /// ridge, valley and demarcating families are through. A later call of
+  /// any of those accessors builds them again (the same bits); a reference
+  /// obtained before the release must not be used after it (a list held
+  /// from raw_above() stays valid). Not to be called while another thread
+  /// reads them.
+  void release_raw_lines() const;
+  /// Whether release_raw_lines() was called (tests, memory probes).
+  bool raw_lines_released() const;
 
  private:
   struct Cache;
