@@ -38,11 +38,10 @@ std::vector<io::LabelInfo> label_table_beside(const std::filesystem::path& path)
   return {};
 }
 
-/// `mesh` prepared for lines (io::prepare_for_lines) as a Surface, handed the
-/// topology the preparation built (fabrica::to_surface) instead of building
-/// it again.
 }  // namespace
 
+// Handed the topology the preparation built (fabrica::to_surface) instead of
+// building it again.
 std::shared_ptr<Surface> prepared_surface(TriangleMesh mesh) {
   PreparedMesh prepared;
   prepared.mesh = std::move(mesh);

@@ -45,9 +45,9 @@ struct LoadedStructure {
 
 /// Coarse levels stop at this many faces (moving_levels).
 constexpr std::size_t kMovingLevelMinFaces = 8000;
-/// Each level has about this fraction of the faces of the one before (its
-/// edges about sqrt(2) times as long): the level a moving camera picks has
-/// edges of kMovingEdgePx / sqrt(2) to kMovingEdgePx pixels.
+/// Each level has about 1 / kMovingLevelFactor of the faces of the one
+/// before (its edges about sqrt(2) times as long): the level a moving camera
+/// picks has edges of kMovingEdgePx / sqrt(2) to kMovingEdgePx pixels.
 constexpr std::size_t kMovingLevelFactor = 2;
 
 /// A mesh made ready for lines as a loaded one is (io::prepare_for_lines:

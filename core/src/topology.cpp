@@ -171,7 +171,7 @@ Topology::Topology(const TriangleMesh& mesh) {
         for (std::size_t i = begin; i < end; ++i) {
           const Face& f = mesh.faces[static_cast<std::size_t>(vertex_faces_[i])];
           const int c = vertex_face_corners_[i];
-          const std::array<std::int32_t, 2> o{f[c == 2 ? 0 : c + 1], f[c == 0 ? 2 : c - 1]};
+          const std::array<std::int32_t, 2> o = corners_after(f, c);
           opposite[i] = o;
           seen.entry(vertex_faces_[i], o, vi);
           insert(o[0]);

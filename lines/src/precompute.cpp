@@ -197,7 +197,7 @@ class RingBuilder {
     for (std::size_t j = 0; j < k; ++j) {
       const Face& f = faces[static_cast<std::size_t>(fs[j])];
       const int c = cs[j];
-      out[j] = {f[c == 2 ? 0 : c + 1], f[c == 0 ? 2 : c - 1]};
+      out[j] = Topology::corners_after(f, c);
     }
     return {out, k};
   }

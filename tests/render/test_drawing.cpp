@@ -139,10 +139,11 @@ TEST(RenderDrawing, ToonShadingHasTheRequestedBands) {
 }
 
 // Tight line quads (RenderOptions::tight_line_quads, the viewer while the
-// camera moves): a straight run, tapered or not, gives the same pixels to a
-// level (the quads end where the anti-aliased edge's coverage is zero);
-// a polygonal circle (sharp joins every 10 degrees) differs in very few
-// pixels, and the ink across the line is the same width.
+// camera moves): an untapered straight run gives the same pixels to a level
+// (the quads end where the anti-aliased edge's coverage is zero); tapered
+// (the quad's width changes along it) and on a polygonal circle (sharp
+// joins every 10 degrees; a closed line is never tapered) very few pixels
+// differ, and the ink across the lines is the same.
 TEST(RenderDrawing, TightLineQuadsDrawTheSameLines) {
   fr::Scene scene = sphere_with_lines(fr::Shading::none, 12.0);  // 3 px at 256
   auto& ls = scene.structures[0].style.lines;
@@ -156,6 +157,14 @@ TEST(RenderDrawing, TightLineQuadsDrawTheSameLines) {
   const fr::Image tight_straight = renderer().render(scene, camera, tight);
   EXPECT_LE(fr::compare_images(loose_straight, tight_straight, 1).max_abs, 1);
   EXPECT_NEAR(ink_across(tight_straight, 128), 6.0, 0.3);  // two lines of 3 px
+  ls.taper = 0.3;
+  const fr::Image loose_tapered = renderer().render(scene, camera);
+  const fr::Image tight_tapered = renderer().render(scene, camera, tight);
+  const fr::ImageDifference t = fr::compare_images(loose_tapered, tight_tapered, 16);
+  EXPECT_LE(t.fraction_over, 0.002) << t.max_abs;
+  for (int x : {60, 128})  // near an end (thinner: x from 46 to 210) and in the middle
+    EXPECT_NEAR(ink_across(tight_tapered, x), ink_across(loose_tapered, x), 0.1) << x;
+  ls.taper = 0.0;
   fabrica::Polyline circle;
   circle.family = fabrica::LineFamily::ridge;
   circle.closed = true;
@@ -165,7 +174,6 @@ TEST(RenderDrawing, TightLineQuadsDrawTheSameLines) {
     circle.vertices.push_back(v);
   }
   lines = {circle};
-  ls.taper = 0.2;
   const fr::Image loose = renderer().render(scene, camera);
   const fr::Image tight_circle = renderer().render(scene, camera, tight);
   const fr::ImageDifference d = fr::compare_images(loose, tight_circle, 16);

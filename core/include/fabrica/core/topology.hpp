@@ -79,6 +79,11 @@ class Topology {
   /// order, in the face's corner order after v: i1 = f[(c+1)%3],
   /// i2 = f[(c+2)%3] where c is v's corner. (After release_derived_parts,
   /// rebuilt from the face edges on the first call, once, thread-safe.)
+  /// The two corners after corner c of face f, in its corner order:
+  /// {f[(c+1)%3], f[(c+2)%3]} (one entry of vertex_face_opposite).
+  static std::array<std::int32_t, 2> corners_after(const Face& f, int c) {
+    return {f[c == 2 ? 0 : c + 1], f[c == 0 ? 2 : c - 1]};
+  }
   std::span<const std::array<std::int32_t, 2>> vertex_face_opposite(std::size_t v) const {
     const auto& o = opposite_lists();
     return {o.data() + vertex_face_offsets_[v], o.data() + vertex_face_offsets_[v + 1]};
