@@ -80,6 +80,14 @@ Surface::Surface(TriangleMesh mesh, SurfaceOptions options)
   check_mesh_indices_and_values(mesh_, "surface mesh");
 }
 
+void Surface::release_topology_edges() const {
+  (void)topology();
+  // The edge-length statistics first (hidden-line removal reads the
+  // median): from the edges, which they would otherwise rebuild.
+  (void)median_edge_length();
+  cache_->topology.release_edges();
+}
+
 namespace {
 
 // The cheap checks that a handed topology was built for `mesh`: the counts,

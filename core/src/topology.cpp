@@ -202,9 +202,10 @@ Topology::Topology(const TriangleMesh& mesh) {
     vertex_edge_offsets_[v + 1] = vertex_edge_offsets_[v] + sizes[v][1];
     edge_face_base[v + 1] = edge_face_base[v] + sizes[v][2];
   }
-  edges_.resize(vertex_edge_offsets_.back());
+  EdgeList& edges = edges_->value;
+  edges.resize(static_cast<std::size_t>(vertex_edge_offsets_.back()));
   EdgeFaceLists& edge_faces = edge_face_lists_->value;
-  edge_faces.offsets.resize(edges_.size() + 1);
+  edge_faces.offsets.resize(edges.size() + 1);
   edge_faces.offsets.back() = edge_face_base.back();
   edge_faces.faces.resize(static_cast<std::size_t>(edge_face_base.back()));
   face_edges_.resize(nf);
@@ -230,7 +231,7 @@ Topology::Topology(const TriangleMesh& mesh) {
         std::int32_t at = edge_face_base[v];
         for (std::int32_t i = 0; i < upper; ++i) {
           const auto e = static_cast<std::size_t>(first_edge + i);
-          edges_[e] = {vi, nb[lower + static_cast<std::size_t>(i)]};
+          edges[e] = {vi, nb[lower + static_cast<std::size_t>(i)]};
           edge_faces.offsets[e] = at;
           at += std::exchange(cursor[i], at);
         }
@@ -263,6 +264,7 @@ Topology::Topology(const TriangleMesh& mesh) {
     edge_pass(std::true_type{});
   else
     edge_pass(std::false_type{});
+  edges_->ready.store(true, std::memory_order_release);
   opposite_->ready.store(true, std::memory_order_release);
   edge_face_lists_->ready.store(true, std::memory_order_release);
 }
@@ -270,6 +272,44 @@ Topology::Topology(const TriangleMesh& mesh) {
 void Topology::release_derived_parts() {
   opposite_ = std::make_shared<LazyPart<OppositeLists>>();
   edge_face_lists_ = std::make_shared<LazyPart<EdgeFaceLists>>();
+}
+
+void Topology::release_edges() {
+  edges_ = std::make_shared<LazyPart<EdgeList>>();
+}
+
+// Edge e joins two corners of each of its faces: each vertex w, at corner c
+// of face f, is an end of f's two edges at that corner (opposite corners
+// c + 1 and c + 2; -1 where the two corners are one vertex). Edges are
+// numbered by their lower vertex, so e is w's own (w its lower end) when it
+// lies in w's range of edge numbers, and w is its higher end otherwise: each
+// half of each pair is written by one vertex only (every edge has a face,
+// which lists both its ends), with the constructor's values.
+void Topology::build_edges(LazyPart<EdgeList>& p) const {
+  std::call_once(p.once, [&] {
+    const std::size_t nv = vertex_count();
+    EdgeList& edges = p.value;
+    edges.resize(edge_count());
+    tbb::this_task_arena::isolate([&] {
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, kGrain), [&](const auto& r) {
+        for (std::size_t v = r.begin(); v < r.end(); ++v) {
+          const auto w = static_cast<std::int32_t>(v);
+          const std::int32_t own = vertex_edge_offsets_[v], own_end = vertex_edge_offsets_[v + 1];
+          for (auto i = static_cast<std::size_t>(vertex_face_offsets_[v]),
+                    end = static_cast<std::size_t>(vertex_face_offsets_[v + 1]);
+               i < end; ++i) {
+            const auto& fe = face_edges_[static_cast<std::size_t>(vertex_faces_[i])];
+            const int c = vertex_face_corners_[i];
+            for (const std::int32_t e : {fe[c == 2 ? 0 : c + 1], fe[c == 0 ? 2 : c - 1]}) {
+              if (e < 0) continue;
+              edges[static_cast<std::size_t>(e)][e >= own && e < own_end ? 0 : 1] = w;
+            }
+          }
+        }
+      });
+    });
+    p.ready.store(true, std::memory_order_release);
+  });
 }
 
 namespace {
@@ -295,7 +335,7 @@ void Topology::build_opposite(LazyPart<OppositeLists>& p) const {
     const std::size_t nv = vertex_count();
     OppositeLists& o = p.value;
     o.resize(vertex_faces_.size());
-    const auto* const edges = edges_.data();
+    const auto* const edges = edge_list().data();
     tbb::this_task_arena::isolate([&] {
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, kGrain), [&](const auto& r) {
         for (std::size_t v = r.begin(); v < r.end(); ++v) {
@@ -353,12 +393,13 @@ void Topology::build_neighbor_lists(LazyNeighbors& n) const {
     NeighborLists& l = n.lists;
     l.offsets.assign(nv + 1, 0);
     // Degrees: v's higher neighbours are its edges; the lower ones counted.
-    for (const auto& e : edges_) ++l.offsets[static_cast<std::size_t>(e[1]) + 1];
+    const EdgeList& edges = edge_list();
+    for (const auto& e : edges) ++l.offsets[static_cast<std::size_t>(e[1]) + 1];
     for (std::size_t v = 0; v < nv; ++v)
       l.offsets[v + 1] += l.offsets[v] + (vertex_edge_offsets_[v + 1] - vertex_edge_offsets_[v]);
     l.neighbors.resize(static_cast<std::size_t>(nv ? l.offsets[nv] : 0));
     std::vector<std::int32_t> cursor(l.offsets.begin(), l.offsets.end() - (nv ? 1 : 0));
-    for (const auto& e : edges_) {
+    for (const auto& e : edges) {
       const auto a = static_cast<std::size_t>(e[0]), b = static_cast<std::size_t>(e[1]);
       l.neighbors[static_cast<std::size_t>(cursor[a]++)] = e[1];
       l.neighbors[static_cast<std::size_t>(cursor[b]++)] = e[0];

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "fabrica/core/error.hpp"
+#include "fabrica/core/heap.hpp"
 
 namespace fabrica {
 
@@ -86,16 +87,34 @@ namespace {
 // Chaining of one view's segment soups; the soups (the view's largest
 // arrays: ~150 B a segment) are freed once chained, before smoothing and the
 // depth raster allocate theirs, so the two do not add up in the peak memory.
+// One at a time (`one_by_one`, one drawing): each soup chained (a parallel
+// loop) and freed before the next, so that no two soups' chaining scratch
+// is alive at once and the chained lines take the memory of the soups
+// before them; the same lines (chain_segments(soups) chains each soup on
+// its own and concatenates the results in soup order).
 LineDrawing chain_soups(std::vector<SegmentSoup>&& soups, double feature_size, const Camera& camera,
-                        const DrawLinesOptions& options) {
-  const std::vector<SegmentSoup> view = std::move(soups);
+                        const DrawLinesOptions& options, bool one_by_one = false) {
+  std::vector<SegmentSoup> view = std::move(soups);
   LineDrawing drawing;
   drawing.feature_size = feature_size;
   for (const auto& s : view) drawing.segments.emplace_back(s.family, s.segments.size());
   ChainOptions chain;
   chain.camera = camera;
   chain.min_length_px = options.min_length_px;
-  drawing.lines = chain_segments(view, chain);
+  if (!one_by_one) {
+    drawing.lines = chain_segments(view, chain);
+    return drawing;
+  }
+  std::vector<std::vector<Polyline>> parts(view.size());
+  std::size_t total = 0;
+  for (std::size_t i = 0; i < view.size(); ++i) {
+    parts[i] = chain_segments(view[i], chain);
+    total += parts[i].size();
+    std::vector<LineSegment>().swap(view[i].segments);
+  }
+  drawing.lines.polylines.reserve(total);
+  for (auto& part : parts)
+    for (auto& pl : part) drawing.lines.polylines.push_back(std::move(pl));
   return drawing;
 }
 
@@ -161,6 +180,12 @@ LineDrawing draw_lines(const Surface& surface, const Camera& camera,
   const double feature_size = extractor->feature_size();
   std::vector<SegmentSoup> soups = extractor->extract(camera);
   extractor.reset();
+  // The soups as long as their segments (their chunked growth left ~40 %
+  // unused on igea), then the freed pages of the view fields and the
+  // extraction's scratch back to the system: the raster below would reuse
+  // only part of them.
+  for (auto& soup : soups) soup.segments.shrink_to_fit();
+  return_free_heap_pages();
   // The depth raster before chaining: its buffer and scratch (corners,
   // binned triangles: ~15 MB on igea) go in the large holes the view fields
   // left, which the chained lines' many small blocks would break up (after
@@ -170,8 +195,9 @@ LineDrawing draw_lines(const Surface& surface, const Camera& camera,
     validate_camera(camera);  // (the extraction did; not when it has no family)
     render_depth(surface.mesh(), camera, depth);
     depth.scratch = detail::RasterScratchSlot();
+    return_free_heap_pages();  // (its scratch)
   }
-  LineDrawing drawing = chain_soups(std::move(soups), feature_size, camera, options);
+  LineDrawing drawing = chain_soups(std::move(soups), feature_size, camera, options, true);
   smooth_and_hide(drawing, surface, camera, options, options.visibility ? &depth : nullptr);
   return drawing;
 }

@@ -164,7 +164,9 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
   // order ran the kernel beside D_t1 q1 on the other core and was ~3 %
   // slower: both passes are memory-heavy.)
   const auto apparent_at = std::find(fam.begin(), fam.end(), LineFamily::apparent);
-  const bool three = fused && apparent_at != fam.end();
+  // (Not in one-shot mode: there the apparent ridges run first, before the
+  // scan's soups exist, and their kernel finds its faces itself.)
+  const bool three = fused && apparent_at != fam.end() && !one_shot_;
   const auto apparent_k = static_cast<std::size_t>(apparent_at - fam.begin());
   const bool one_thread =
       tbb::this_task_arena::max_concurrency() == 1 ||
@@ -183,6 +185,31 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
     std::vector<Vec2>().swap(fields_.t1);
     std::vector<double>().swap(fields_.q1);
     std::vector<double>().swap(fields_.dt1q1);
+  };
+  // One-shot: with D_t1 q1 complete, the kernel reads only the packed
+  // records and the sign bytes when its threshold is the fields' cull
+  // threshold (the packed path of detail::extract_apparent_ridges, the same
+  // expression): q1, D_t1 q1, t1 and t1 in world space (~48 bytes per
+  // vertex) are freed before it allocates its segments.
+  const std::size_t nv = surface_->vertex_count();
+  const bool packed_kernel =
+      has(LineFamily::apparent) && fields_.apparent_vertex.size() == nv &&
+      fields_.signs.size() == nv && fields_.apparent_cull_threshold &&
+      *fields_.apparent_cull_threshold == options_.apparent.threshold / (fs * fs);
+  auto apparent_inputs_done = [&] {
+    if (!one_shot_ || !packed_kernel) return;
+    std::vector<Vec3>().swap(fields_.t1_world);
+    std::vector<Vec2>().swap(fields_.t1);
+    std::vector<double>().swap(fields_.q1);
+    std::vector<double>().swap(fields_.dt1q1);
+  };
+  // One-shot: the contour and suggestive-contour fields kr and sc_num once
+  // the fused scan is through, when no later family reads them (highlights
+  // do; the families run one after another in one-shot mode).
+  auto scan_done = [&] {
+    if (!one_shot_ || has(LineFamily::highlight)) return;
+    std::vector<double>().swap(fields_.kr);
+    std::vector<double>().swap(fields_.sc_num);
   };
   // One-shot: the tangent ring is freed once D_t1 q1 is complete; when
   // pipelined, once both the kernel (which drives it) and run_all are (and
@@ -244,6 +271,7 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
         const bool l = detail::extract_contours_and_suggestive(
             *surface_, fields_, options_.contour, fs, options_.suggestive, out[fused_contour],
             out[fused_suggestive], three ? apparent_faces_.get() : nullptr);
+        scan_done();
         if (three) {
           listed = l;
           if (pipelined || arrived.fetch_add(1) == 1) apparent_kernel();
@@ -284,6 +312,7 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
         detail::update_dt1q1(fields_, *surface_, fields_.apparent_cull_threshold.has_value(),
                              precompute_.get(), false, one_shot_);
         ring_done();
+        apparent_inputs_done();
         if (three) {
           if (arrived.fetch_add(1) == 1) apparent_kernel();
         } else {
@@ -303,10 +332,29 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
         break;
     }
   };
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.size(), 1),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t k = r.begin(); k != r.end(); ++k) run(k);
-                    });
+  if (one_shot_) {
+    // One view, least memory: the families one after another (each a
+    // parallel loop on all threads), so that no two families' working sets
+    // and outputs are alive beside the full view fields: first the apparent
+    // ridges (D_t1 q1, then its inputs are freed, then the kernel, then the
+    // records), then the fused scan (kr and sc_num are freed after it),
+    // then the rest in the given order (the raw ridges and valleys are
+    // computed in the memory the apparent fields left). The outputs are the
+    // concurrent schedule's, bit for bit (each family writes its own slot
+    // from the same fields; the kernel's faces found by itself are the ones
+    // the scan would list).
+    std::vector<std::size_t> order;
+    if (apparent_at != fam.end()) order.push_back(apparent_k);
+    if (fused) order.push_back(fused_contour);
+    for (std::size_t k = 0; k < out.size(); ++k)
+      if (std::find(order.begin(), order.end(), k) == order.end()) order.push_back(k);
+    for (const std::size_t k : order) run(k);
+  } else {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.size(), 1),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        for (std::size_t k = r.begin(); k != r.end(); ++k) run(k);
+                      });
+  }
   for (auto& soup : out) soup.surface = surface_;  // the ends refer to this mesh
   return out;
 }

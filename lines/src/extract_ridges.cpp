@@ -94,8 +94,6 @@ SegmentSoup extract_apparent_ridges(const Surface& surface, const ViewFields& fi
   if (!(feature_size > 0.0)) throw InputError("feature size must be positive");
   require_non_negative(options.threshold, LineFamily::apparent, "threshold");
   const std::size_t nv = surface.vertex_count();
-  if (fields.q1.size() != nv || fields.dt1q1.size() != nv || fields.t1_world.size() != nv)
-    throw Error(ErrorKind::internal, "apparent ridges: view fields lack q1/t1/Dt1q1");
   SegmentSoup soup;
   soup.family = LineFamily::apparent;
   soup.surface = &surface;
@@ -113,6 +111,11 @@ SegmentSoup extract_apparent_ridges(const Surface& surface, const ViewFields& fi
                 "apparent ridges: the view fields were computed for a higher threshold");
   const bool bits = fields.signs.size() == nv && cull_t && *cull_t == o.threshold;
   const bool packed = fields.apparent_vertex.size() == nv;
+  // The packed path reads only the records and the sign bytes (the one-shot
+  // extraction frees q1, t1 and D_t1 q1 before it).
+  if (!(bits && packed) &&
+      (fields.q1.size() != nv || fields.dt1q1.size() != nv || fields.t1_world.size() != nv))
+    throw Error(ErrorKind::internal, "apparent ridges: view fields lack q1/t1/Dt1q1");
   detail::vector_zero_crossings(surface, fields.dt1q1, fields.t1_world, fields.q1, o,
                                 bits ? fields.signs.data() : nullptr, kQ1Above, soup.segments,
                                 packed ? fields.apparent_vertex.data() : nullptr,

@@ -11,7 +11,7 @@ namespace fabrica {
 
 namespace {
 
-void write_header(std::ostringstream& out, const Camera& camera, const char* extra_ns) {
+void write_header(std::ostream& out, const Camera& camera, const char* extra_ns) {
   char buf[320];
   out << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
   std::snprintf(buf, sizeof buf,
@@ -25,7 +25,7 @@ void write_header(std::ostringstream& out, const Camera& camera, const char* ext
 /// unless the style draws them solid. A
 /// piece's own opacity (< 1) is multiplied by `group_opacity`, the opacity
 /// it would otherwise inherit from its group.
-void write_path(std::ostringstream& out, const StrokePiece& p, HiddenLines hidden, double dash_on,
+void write_path(std::ostream& out, const StrokePiece& p, HiddenLines hidden, double dash_on,
                 double dash_off, double group_opacity = 1.0) {
   char buf[256];
   out << "<path";
@@ -97,9 +97,12 @@ std::string layer_id(const std::string& name, std::set<std::string>& used) {
 
 }  // namespace
 
-std::string svg_string(const LineSet& lines, const Camera& camera, const LineStyle& style) {
-  const auto pieces = stroke_pieces(lines, camera, style);
-  std::ostringstream out;
+namespace {
+
+// The SVG of stroke pieces, written to `out` (a string, or the file itself:
+// a drawing's SVG, several MB, is then never held in memory whole).
+void write_svg_pieces(std::ostream& out, const std::vector<StrokePiece>& pieces,
+                      const Camera& camera, const LineStyle& style) {
   char buf[256];
   write_header(out, camera, "");
   out << "<!-- fabrica lines: one group per line family; transparent background -->\n";
@@ -117,13 +120,22 @@ std::string svg_string(const LineSet& lines, const Camera& camera, const LineSty
     out << "</g>\n";
   }
   out << "</svg>\n";
+}
+
+}  // namespace
+
+std::string svg_string(const LineSet& lines, const Camera& camera, const LineStyle& style) {
+  std::ostringstream out;
+  write_svg_pieces(out, stroke_pieces(lines, camera, style), camera, style);
   return out.str();
 }
 
 void write_svg(const std::filesystem::path& path, const LineSet& lines, const Camera& camera,
                const LineStyle& style) {
-  const std::string text = svg_string(lines, camera, style);
-  write_file_atomically(path, [&](std::ostream& out) { out << text; });
+  // (The pieces first: an error there leaves no file, as before.)
+  const auto pieces = stroke_pieces(lines, camera, style);
+  write_file_atomically(path,
+                        [&](std::ostream& out) { write_svg_pieces(out, pieces, camera, style); });
 }
 
 namespace {

@@ -109,6 +109,12 @@ class Surface {
   const SurfaceOptions& options() const { return options_; }
 
   const Topology& topology() const;
+  /// Frees the topology's edge pairs (Topology::release_edges: rebuilt on
+  /// the first call that reads them), for a Surface drawn once whose
+  /// readers do not ask for them (`fabrica lines`); the edge-length
+  /// statistics are computed first. Not to be called while another thread
+  /// reads this Surface.
+  void release_topology_edges() const;
 
   /// Unit face normals (zero for degenerate faces) and face areas.
   const std::vector<Vec3>& face_normals() const;

@@ -63,7 +63,9 @@ class Topology {
     return vertex_face_offsets_.empty() ? 0 : vertex_face_offsets_.size() - 1;
   }
   std::size_t face_count() const { return face_edges_.size(); }
-  std::size_t edge_count() const { return edges_.size(); }
+  std::size_t edge_count() const {
+    return vertex_edge_offsets_.empty() ? 0 : static_cast<std::size_t>(vertex_edge_offsets_.back());
+  }
 
   /// Faces incident to vertex v, increasing face index.
   std::span<const std::int32_t> vertex_faces(std::size_t v) const {
@@ -116,7 +118,7 @@ class Topology {
     const std::int32_t hi = a < b ? b : a;
     const std::int32_t r = upper_rank(lo, hi);
     const std::int32_t e = vertex_edge_offsets_[lo] + r;
-    if (e == vertex_edge_offsets_[lo + 1] || edges_[static_cast<std::size_t>(e)][1] != hi)
+    if (e == vertex_edge_offsets_[lo + 1] || edge_list()[static_cast<std::size_t>(e)][1] != hi)
       return -1;
     return e;
   }
@@ -137,8 +139,9 @@ class Topology {
   }
 
   /// Undirected edge e as (lower vertex, higher vertex). Edges are numbered in
-  /// lexicographic order of that pair.
-  const std::array<std::int32_t, 2>& edge(std::size_t e) const { return edges_[e]; }
+  /// lexicographic order of that pair. (After release_edges, rebuilt from
+  /// the vertex faces and face edges on the first call, once, thread-safe.)
+  const std::array<std::int32_t, 2>& edge(std::size_t e) const { return edge_list()[e]; }
   /// Faces using edge e, increasing face index: 1 = boundary, 2 = interior,
   /// more = non-manifold edge. (After release_derived_parts, rebuilt from
   /// the face edges on the first call, once, thread-safe.)
@@ -170,6 +173,18 @@ class Topology {
   /// neither), so that they do not hold memory through every later phase.
   /// Not to be called while another thread reads this topology.
   void release_derived_parts();
+  /// Frees the edges' vertex pairs (8 bytes per edge; edge_count() and the
+  /// face edges stay), which edge(), find_edge(), vertex_edge(), the
+  /// neighbour lists and the derived parts read: derived from the vertex
+  /// faces, their corners and the face edges, they are rebuilt, bit for
+  /// bit, on the first call of such an accessor afterwards (once,
+  /// thread-safe; copies made before keep theirs). For a topology whose
+  /// readers never ask for them (the one-shot line drawing of `fabrica
+  /// lines`: its zero crossings read the face edges only). Not to be called
+  /// while another thread reads this topology.
+  void release_edges();
+  /// Whether edge()'s pairs are held (tests, memory probes).
+  bool has_edges() const { return edges_ && edges_->ready.load(std::memory_order_acquire); }
   /// Whether vertex_face_opposite's and edge_faces' lists are held (tests,
   /// memory probes).
   bool has_vertex_face_opposite() const {
@@ -193,10 +208,11 @@ class Topology {
   /// count over the second ends of v's edges).
   std::int32_t upper_rank(std::size_t v, std::int32_t b) const {
     std::int32_t r = 0;
+    const auto* const edges = edge_list().data();
     for (auto e = static_cast<std::size_t>(vertex_edge_offsets_[v]),
               end = static_cast<std::size_t>(vertex_edge_offsets_[v + 1]);
          e < end; ++e)
-      r += edges_[e][1] < b;
+      r += edges[e][1] < b;
     return r;
   }
 
@@ -243,6 +259,13 @@ class Topology {
     if (!p.ready.load(std::memory_order_acquire)) build_edge_faces(p);
     return p.value;
   }
+  using EdgeList = detail::FilledVector<std::array<std::int32_t, 2>>;
+  const EdgeList& edge_list() const {
+    LazyPart<EdgeList>& p = *edges_;
+    if (!p.ready.load(std::memory_order_acquire)) build_edges(p);
+    return p.value;
+  }
+  void build_edges(LazyPart<EdgeList>& p) const;
   void build_opposite(LazyPart<OppositeLists>& p) const;
   void build_edge_faces(LazyPart<EdgeFaceLists>& p) const;
 
@@ -254,7 +277,7 @@ class Topology {
   std::shared_ptr<LazyNeighbors> neighbors_ = std::make_shared<LazyNeighbors>();
   // First edge of each vertex (edges numbered by lower vertex), size nv + 1.
   std::vector<std::int32_t> vertex_edge_offsets_;
-  detail::FilledVector<std::array<std::int32_t, 2>> edges_;
+  std::shared_ptr<LazyPart<EdgeList>> edges_ = std::make_shared<LazyPart<EdgeList>>();
   std::shared_ptr<LazyPart<EdgeFaceLists>> edge_face_lists_ =
       std::make_shared<LazyPart<EdgeFaceLists>>();
   detail::FilledVector<std::array<std::int32_t, 3>> face_edges_;

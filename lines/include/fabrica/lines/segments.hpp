@@ -16,6 +16,8 @@
 // [0,1] (docs/algorithms.md §0 step 4): 1 = fully drawn.
 #pragma once
 
+#include <algorithm>
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -107,7 +109,16 @@ inline void SegmentGeometry::locate(const LineSegment& s, int i, SurfacePoint& a
     case EndKind::edge: {
       // 1 - t at the edge's lower vertex, t at its higher one (t wins
       // where both are the same corner), 0 at the third corner.
-      const auto& ev = topo_->edge(static_cast<std::size_t>(e.element));
+      // The edge's ends (lower vertex first, as Topology::edge has them)
+      // from the face, whose edge opposite corner k it is: no read of the
+      // topology's edge list, which a one-shot drawing frees
+      // (Surface::release_topology_edges).
+      const std::int32_t* const fe = topo_->face_edge_row(static_cast<std::size_t>(s.face));
+      const int k = fe[0] == e.element ? 0 : fe[1] == e.element ? 1 : 2;
+      const std::int32_t a = f[k == 2 ? 0 : k + 1], c = f[k == 0 ? 2 : k - 1];
+      const std::array<std::int32_t, 2> ev =
+          fe[k] == e.element ? std::array<std::int32_t, 2>{std::min(a, c), std::max(a, c)}
+                             : topo_->edge(static_cast<std::size_t>(e.element));
       const double t = e.t, u = 1.0 - t;
       for (int k = 0; k < 3; ++k) b[k] = f[k] == ev[1] ? t : f[k] == ev[0] ? u : 0.0;
       const Vec3 &p = pos_[ev[0]], &q = pos_[ev[1]];
