@@ -260,9 +260,12 @@ EdgeLengthStatistics edge_length_statistics(const TriangleMesh& mesh, const Topo
   const std::size_t ne = topology.edge_count();
   if (ne == 0) return st;
   std::vector<double> len(ne);
+  // The edges' pairs are one array (Topology::edge reads it after checking,
+  // per call, that it is held: released edges are rebuilt on first use).
+  const std::array<std::int32_t, 2>* const edges = &topology.edge(0);
   detail::parallel_chunks(ne, 8192, [&](std::size_t begin, std::size_t end) {
     for (std::size_t e = begin; e < end; ++e) {
-      const auto& ed = topology.edge(e);
+      const auto& ed = edges[e];
       len[e] = (mesh.positions[ed[0]] - mesh.positions[ed[1]]).norm();
     }
   });

@@ -265,6 +265,61 @@ TEST(TopologyReal, ReleasedPartsRebuiltBitForBit) {
     }
 }
 
+// release_edges frees the edges' vertex pairs; edge(), find_edge and the
+// parts read from them rebuild them from the vertex faces and face edges:
+// the constructor's pairs (closed igea; the open, non-manifold aneurysm with
+// degenerate faces of each kind, whose collapsed face edges are -1), at one
+// and two threads, alone or with the derived parts released too; the edge
+// count and face edges do not build them; a copy made before keeps its own.
+TEST(TopologyReal, ReleasedEdgesRebuiltBitForBit) {
+  const TriangleMesh igea =
+      io::read_mesh(test::bundled_data() / "meshes/classic/c3d_igea.ply").mesh;
+  for (const TriangleMesh& m : {igea, irregular_aneurysm(true), irregular_aneurysm(false)})
+    for (const int threads : {1, 2})
+      for (const bool derived_too : {false, true}) {
+        const tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
+                                        static_cast<std::size_t>(threads));
+        const Topology eager(m);
+        EXPECT_TRUE(eager.has_edges());
+        Topology lazy = eager;
+        lazy.release_edges();
+        if (derived_too) lazy.release_derived_parts();
+        EXPECT_FALSE(lazy.has_edges());
+        EXPECT_TRUE(eager.has_edges());
+        EXPECT_EQ(lazy.edge_count(), eager.edge_count());
+        (void)lazy.vertex_faces(0);
+        (void)lazy.face_edge(0, 0);
+        (void)lazy.vertex_edge_begin(0);
+        EXPECT_FALSE(lazy.has_edges());
+        if (derived_too) {
+          // The derived parts read the edges: they rebuild them first.
+          expect_rebuilt_parts(m, eager, lazy);
+          EXPECT_TRUE(lazy.has_edges());
+        }
+        for (std::size_t e = 0; e < eager.edge_count(); ++e)
+          ASSERT_EQ(lazy.edge(e), eager.edge(e)) << e;
+        EXPECT_TRUE(lazy.has_edges());
+        for (const Face& f : m.faces)
+          for (int k = 0; k < 3; ++k)
+            ASSERT_EQ(lazy.find_edge(f[k], f[(k + 1) % 3]), eager.find_edge(f[k], f[(k + 1) % 3]));
+      }
+  // Many threads asking at once, on a released topology and a copy sharing
+  // its (released) pairs.
+  const TriangleMesh m = irregular_aneurysm(true);
+  const Topology eager(m);
+  Topology t = eager;
+  t.release_edges();
+  const Topology copy = t;
+  expect_same_concurrent_sums(t, copy, [&](const Topology& mine) {
+    std::size_t sum = 0;
+    for (std::size_t e = 0; e < mine.edge_count(); ++e)
+      sum +=
+          static_cast<std::size_t>(mine.edge(e)[0]) * 7 + static_cast<std::size_t>(mine.edge(e)[1]);
+    return sum;
+  });
+  for (std::size_t e = 0; e < eager.edge_count(); ++e) ASSERT_EQ(copy.edge(e), eager.edge(e));
+}
+
 // Many threads (and TBB tasks) asking at once for the released parts of a
 // topology and of a copy of it (which shares them) get the same lists.
 TEST(TopologyReal, ReleasedPartsConcurrentFirstUse) {

@@ -5,6 +5,7 @@
 // Surface given it computes the same bits as one that builds its own
 // (geometry, curvature, every topology accessor, the lines of two views).
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <cstring>
 #include <optional>
@@ -348,6 +349,24 @@ TEST(HandedTopology, SurfaceTopologyWithoutDerivedParts) {
   EXPECT_GT(one_shot.segment_count(), 100u);
   EXPECT_FALSE(surface.topology().has_vertex_face_opposite());
   EXPECT_FALSE(surface.topology().has_edge_faces());
+  // Without the edges' vertex pairs either (as `fabrica lines` keeps the
+  // Surface): chaining finds an edge's ends from its face, hidden-line
+  // removal reads the edge-length statistics computed before the release;
+  // the same lines, at one and two threads, and the pairs never rebuilt.
+  const Surface bare(mesh, [&] {
+    Topology t(mesh);
+    t.release_derived_parts();
+    return t;
+  }());
+  bare.release_topology_edges();
+  EXPECT_FALSE(bare.topology().has_edges());
+  for (const int threads : {1, 2}) {
+    const tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
+                                    static_cast<std::size_t>(threads));
+    expect_same_lines(one_shot, draw_lines(bare, camera, options));
+  }
+  EXPECT_FALSE(bare.topology().has_edges());
+  EXPECT_FALSE(bare.topology().has_vertex_face_opposite());
   // With the parts built first, a drawer's lines: the same.
   const Surface other(mesh);
   EXPECT_TRUE(other.topology().has_vertex_face_opposite());
