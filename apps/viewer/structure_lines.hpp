@@ -54,8 +54,11 @@ std::size_t merge_collinear(LineSet& lines, const Camera& camera, double toleran
 
 /// While the camera moves an opaque structure is drawn from its coarsest
 /// level whose mean edge is at most this many pixels long at the mesh's
-/// centre (the full mesh when no level is that fine; moving_level).
-constexpr double kMovingEdgePx = 5.0;
+/// centre (the full mesh when no level is that fine; moving_level). A
+/// chord of 7 px strays 49 / (8 r) px from an outline of radius r px
+/// (0.03 px at r = 200): the outline stays smooth, and the chain of levels
+/// halving the faces puts the chosen one's edges between 4.9 and 7 px.
+constexpr double kMovingEdgePx = 7.0;
 
 /// The level an opaque structure is drawn with (and its lines extracted
 /// from) while the camera moves: the index of the coarsest of `levels`

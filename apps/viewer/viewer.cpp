@@ -30,9 +30,9 @@ double ms_since(Clock::time_point t) {
 }
 
 /// While the camera moves the lines are drawn with their near-collinear
-/// vertices merged (merge_collinear): within half a pixel of the lines as
+/// vertices merged (merge_collinear): within a pixel of the lines as
 /// extracted, strengths within 0.1; the still picture has every vertex.
-constexpr double kMovingMergePx = 0.5;
+constexpr double kMovingMergePx = 1.0;
 constexpr double kMovingMergeStrength = 0.1;
 
 Viewer* g_viewer = nullptr;  // for the GLFW drop callback

@@ -390,11 +390,13 @@ TEST(ViewerLines, MovingLevelFitsItsEdgesToThePixels) {
     c.eye = Vec3(0.0, 0.0, 400.0 / (px_per_mm * std::tan(20.0 * M_PI / 180.0)));
     return moving_level(full, levels, c);
   };
-  EXPECT_EQ(at_px_per_mm(20.0), 2);     // 0.16 mm: 3.2 px
-  EXPECT_EQ(at_px_per_mm(40.0), 1);     // 0.16 mm: 6.4 px; 0.04 mm: 1.6 px
-  EXPECT_EQ(at_px_per_mm(124.0), 1);    // 0.04 mm: 4.96 px
-  EXPECT_EQ(at_px_per_mm(126.0), 0);    // 0.04 mm: 5.04 px
-  EXPECT_EQ(at_px_per_mm(1000.0), -1);  // 0.01 mm: 10 px
+  ASSERT_EQ(fabrica::viewer::kMovingEdgePx, 7.0);  // the pixel figures below
+  EXPECT_EQ(at_px_per_mm(20.0), 2);                // 0.16 mm: 3.2 px
+  EXPECT_EQ(at_px_per_mm(43.5), 2);                // 0.16 mm: 6.96 px
+  EXPECT_EQ(at_px_per_mm(44.0), 1);                // 0.16 mm: 7.04 px; 0.04 mm: 1.76 px
+  EXPECT_EQ(at_px_per_mm(174.0), 1);               // 0.04 mm: 6.96 px
+  EXPECT_EQ(at_px_per_mm(176.0), 0);               // 0.04 mm: 7.04 px
+  EXPECT_EQ(at_px_per_mm(1000.0), -1);             // 0.01 mm: 10 px
   EXPECT_EQ(moving_level(full, {}, c), -1);
   c.eye = Vec3(0.0, 0.0, 0.5);  // inside the bounding sphere
   EXPECT_EQ(moving_level(full, levels, c), -1);
