@@ -66,8 +66,8 @@ void LinesWorker::run() {
           source.drawer = std::make_unique<LineDrawer>(*source.surface);
         }
         if (item.lod_mesh) result->lod[item.id] = item.lod_mesh;
-        LineSet& lines = result->lines[item.id] =
-            structure_lines(*source.drawer, item.style, item.thresholds, job->camera);
+        LineSet& lines = result->lines[item.id] = structure_lines(
+            *source.drawer, item.style, item.thresholds, job->camera, item.apparent_min_ndotv);
         if (job->merge_px > 0.0)
           result->merged += merge_collinear(lines, job->camera, job->merge_px, job->merge_strength);
         if (item.hatching)

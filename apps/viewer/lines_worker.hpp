@@ -12,6 +12,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -62,6 +63,8 @@ struct LinesJob {
     LineOptions thresholds;
     bool hatching = false;
     double hatching_width = 1.0;
+    /// ApparentOptions::min_ndotv of its lines (moving_apparent_min_ndotv).
+    std::optional<double> apparent_min_ndotv;
   };
   std::vector<Item> items;
   /// While the camera moves: the lines' near-collinear vertices merged in

@@ -134,9 +134,11 @@ std::size_t merge_collinear(LineSet& lines, const Camera& camera, double toleran
 }
 
 LineSet structure_lines(LineDrawer& drawer, const render::StructureStyle& style,
-                        const LineOptions& thresholds, const Camera& camera) {
-  const DrawLinesOptions options = render::structure_line_options(style, thresholds);
+                        const LineOptions& thresholds, const Camera& camera,
+                        std::optional<double> apparent_min_ndotv) {
+  DrawLinesOptions options = render::structure_line_options(style, thresholds);
   if (options.lines.families.empty()) return {};
+  options.lines.apparent.min_ndotv = apparent_min_ndotv;
   drawer.set_options(options);
   return drawer.draw(camera).lines;
 }
@@ -159,6 +161,20 @@ render::PolylineLayer structure_hatching(const Surface& surface, const Camera& c
     layer.polylines.push_back(std::move(points));
   }
   return layer;
+}
+
+std::optional<double> moving_apparent_min_ndotv(const render::RenderMesh& mesh, render::Role role,
+                                                const render::StructureStyle& style,
+                                                const Camera& camera) {
+  if (role != render::Role::focus || !(style.opacity >= 0.999) || !mesh.closed_outward ||
+      style.lines.hidden != render::HiddenLines::omit || !(mesh.radius > 0.0))
+    return std::nullopt;
+  // Every point of the sphere beyond the near plane (which clip_planes
+  // puts at the scene's sphere or the camera's own near distance) and, in
+  // perspective, the eye outside it.
+  const double front = (mesh.center - camera.eye).dot(camera.forward()) - mesh.radius;
+  if (!(front > std::max(camera.near_plane, 0.0))) return std::nullopt;
+  return kMovingApparentMinNdotv;
 }
 
 int moving_level(const render::RenderMesh& full, const std::vector<MovingLevel>& levels,

@@ -30,9 +30,9 @@ double ms_since(Clock::time_point t) {
 }
 
 /// While the camera moves the lines are drawn with their near-collinear
-/// vertices merged (merge_collinear): within half a pixel of the lines as
+/// vertices merged (merge_collinear): within a pixel of the lines as
 /// extracted, strengths within 0.1; the still picture has every vertex.
-constexpr double kMovingMergePx = 0.5;
+constexpr double kMovingMergePx = 1.0;
 constexpr double kMovingMergeStrength = 0.1;
 
 Viewer* g_viewer = nullptr;  // for the GLFW drop callback
@@ -428,8 +428,8 @@ std::uint64_t Viewer::post_lines(const Camera& camera, bool force, bool lod) {
     // curvature) are drawn coarse: ghosted ones from their level of detail
     // (their lines too), opaque ones from the level that fits the camera
     // (their lines from the full mesh unless coarse_lines_while_moving).
-    LinesJob::Item item{s.id,    s.lines,      nullptr,    nullptr,
-                        s.style, s.thresholds, s.hatching, s.hatching_width};
+    LinesJob::Item item{s.id,         s.lines,    nullptr,          nullptr,     s.style,
+                        s.thresholds, s.hatching, s.hatching_width, std::nullopt};
     if (lod && !s.style.hybrid_apparent_ridges) {
       if (s.style.opacity < 0.999) {
         if (s.lines_lod && s.mesh_lod) {
@@ -441,6 +441,9 @@ std::uint64_t Viewer::post_lines(const Camera& camera, bool force, bool lod) {
         item.lod_mesh = m.mesh;
         if (coarse_lines_while_moving_) item.lod = m.lines;
       }
+      // Not while its opacity fades after a role change (drawn see-through).
+      if (!fade_from_.count(s.id))
+        item.apparent_min_ndotv = moving_apparent_min_ndotv(*s.mesh, s.role, s.style, camera);
     }
     job.items.push_back(std::move(item));
   }

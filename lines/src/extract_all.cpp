@@ -81,8 +81,10 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
   req.apparent = has(LineFamily::apparent);
   // t1 and D_t1 q1 only where an apparent ridge can be drawn (the same
   // threshold expression as extract_apparent_ridges).
-  if (req.apparent)
+  if (req.apparent) {
     req.apparent_cull_threshold = options_.apparent.threshold / (feature_size_ * feature_size_);
+    req.apparent_min_ndotv = options_.apparent.min_ndotv;
+  }
   // The suggestive-contour test's rejection in the sign bytes (the same
   // shift as suggestive_setup).
   if (has(LineFamily::suggestive))

@@ -110,6 +110,13 @@ SegmentSoup extract_apparent_ridges(const Surface& surface, const ViewFields& fi
     throw Error(ErrorKind::internal,
                 "apparent ridges: the view fields were computed for a higher threshold");
   const bool bits = fields.signs.size() == nv && cull_t && *cull_t == o.threshold;
+  // A lower n·v limit lives in the kQ1Above bits (and D_t1 q1 is current
+  // only around them): the fields must have been computed with it, and the
+  // per-face test must be those bits.
+  if (options.min_ndotv != fields.apparent_min_ndotv || (options.min_ndotv && !bits))
+    throw InputError(
+        "apparent ridges: min_ndotv needs view fields computed with the same limit and threshold "
+        "(ViewFieldsRequest::apparent_min_ndotv, apparent_cull_threshold)");
   const bool packed = fields.apparent_vertex.size() == nv;
   // The packed path reads only the records and the sign bytes (the one-shot
   // extraction frees q1, t1 and D_t1 q1 before it).

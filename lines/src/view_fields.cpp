@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 
 #include "fabrica/core/error.hpp"
 #include "fabrica/lines/precompute.hpp"
@@ -72,6 +73,7 @@ struct VertexPassArgs {
   detail::ViewVector4 view;
   bool want_sc = false, want_app = false, cull = false, sc_bits = false;
   double cull_t = 0.0, sc_shift = 0.0;
+  double min_ndotv = -std::numeric_limits<double>::infinity();  ///< kQ1Above needs !(n·v < it)
   double *ndotv = nullptr, *kr = nullptr, *sc_num = nullptr, *q1 = nullptr;
   Vec2* t1 = nullptr;
   Vec3* t1_world = nullptr;
@@ -194,7 +196,10 @@ template <class Other>
       if (A.cull)
         sbits = _mm256_or_si256(
             sbits,
-            detail::mask_bits4(_mm256_cmp_pd(q1, _mm256_set1_pd(A.cull_t), _CMP_NLE_UQ), kQ1Above));
+            detail::mask_bits4(
+                _mm256_and_pd(_mm256_cmp_pd(q1, _mm256_set1_pd(A.cull_t), _CMP_NLE_UQ),
+                              _mm256_cmp_pd(ndotv, _mm256_set1_pd(A.min_ndotv), _CMP_NLT_UQ)),
+                kQ1Above));
       // t1: view_dependent_direction.
       const __m256d a0 = _mm256_sub_pd(m22, q1), a1 = _mm256_xor_pd(m12, neg0);
       const __m256d c0 = m12, c1 = _mm256_sub_pd(q1, m11);
@@ -250,6 +255,8 @@ void detail::update_view_fields(ViewFields& fields, const Surface& surface, cons
                                 const ViewFieldsRequest& request, const LinePrecompute* precompute,
                                 bool defer_dt1q1, bool same_surface, bool stream_vertex_blocks) {
   validate_camera(camera);
+  if (request.apparent_min_ndotv && std::isnan(*request.apparent_min_ndotv))
+    throw InputError("apparent ridges: min_ndotv must be a number (got NaN)");
   const std::size_t nv = surface.vertex_count();
   fields.camera = camera;
   const bool radial = request.radial || request.sc_test || request.apparent;
@@ -272,6 +279,8 @@ void detail::update_view_fields(ViewFields& fields, const Surface& surface, cons
   detail::resize_or_clear(fields.signs, radial, nv);
   fields.apparent_cull_threshold =
       request.apparent ? request.apparent_cull_threshold : std::optional<double>{};
+  fields.apparent_min_ndotv =
+      fields.apparent_cull_threshold ? request.apparent_min_ndotv : std::optional<double>{};
   fields.suggestive_test_shift =
       request.sc_test ? request.suggestive_test_shift : std::optional<double>{};
 
@@ -284,6 +293,12 @@ void detail::update_view_fields(ViewFields& fields, const Surface& surface, cons
     const bool want_app = request.apparent;
     const bool cull = want_app && request.apparent_cull_threshold.has_value();
     const double cull_t = cull ? *request.apparent_cull_threshold : 0.0;
+    const double min_ndotv =
+        fields.apparent_min_ndotv.value_or(-std::numeric_limits<double>::infinity());
+    // kQ1Above of a vertex with n·v `ndotv` and q1 `q1`.
+    auto q1_above = [&](double q1, double ndotv) {
+      return unsigned(cull && !(q1 <= cull_t) && !(ndotv < min_ndotv)) * kQ1Above;
+    };
     const bool sc_bits = want_sc && request.suggestive_test_shift.has_value();
     const double sc_shift = sc_bits ? *request.suggestive_test_shift : 0.0;
     // kScOffFront / kScOffBack of vertex i from its stored sc_num and n·v
@@ -311,8 +326,8 @@ void detail::update_view_fields(ViewFields& fields, const Surface& surface, cons
           fields.t1[i] = Vec2(1.0, 0.0);
           fields.t1_world[i] = Vec3::Zero();
         }
-        fields.signs[i] = static_cast<std::uint8_t>(
-            nbits | unsigned(cull && !(0.0 <= cull_t)) * kQ1Above | sc_test_bits(i, ndotv));
+        fields.signs[i] =
+            static_cast<std::uint8_t>(nbits | q1_above(0.0, ndotv) | sc_test_bits(i, ndotv));
         return false;
       }
       const double k1 = curv.k1[i], k2 = curv.k2[i];
@@ -341,7 +356,7 @@ void detail::update_view_fields(ViewFields& fields, const Surface& surface, cons
       }
       m = view_curvature_at(k1, k2, ndotv, u, w, u2, w2, csc2);
       fields.q1[i] = m.q1;
-      bits |= unsigned(cull && !(m.q1 <= cull_t)) * kQ1Above;
+      bits |= q1_above(m.q1, ndotv);
       fields.signs[i] = static_cast<std::uint8_t>(bits);
       return true;
     };
@@ -366,6 +381,7 @@ void detail::update_view_fields(ViewFields& fields, const Surface& surface, cons
       args.want_app = want_app;
       args.cull = cull;
       args.cull_t = cull_t;
+      args.min_ndotv = min_ndotv;
       args.sc_bits = sc_bits;
       args.sc_shift = sc_shift;
       args.ndotv = fields.ndotv.data();

@@ -19,9 +19,11 @@
 #include <string>
 
 #include "fabrica/core/camera.hpp"
+#include "fabrica/core/error.hpp"
 #include "fabrica/core/surface.hpp"
 #include "fabrica/io/mesh_io.hpp"
 #include "fabrica/io/repair.hpp"
+#include "fabrica/lines/draw.hpp"
 #include "fabrica/lines/extract.hpp"
 #include "lines_test_meshes.hpp"
 #include "simd_avx2.hpp"
@@ -110,9 +112,11 @@ std::pair<ViewFields, ViewFields> both_ways(const Surface& surface, const LinePr
 }
 
 void expect_same_vertex_pass(const Surface& surface, const LinePrecompute& pre,
-                             const Camera& camera, bool cull) {
+                             const Camera& camera, bool cull,
+                             std::optional<double> min_ndotv = std::nullopt) {
   ViewFieldsRequest req;
   req.apparent_cull_threshold = cull ? std::optional<double>(1.0e3) : std::nullopt;
+  req.apparent_min_ndotv = min_ndotv;
   // The suggestive-test bits in the sign bytes (compared with `signs`).
   req.suggestive_test_shift = cull ? std::optional<double>(0.05) : std::nullopt;
   const auto [simd, portable] = both_ways(surface, pre, camera, req);
@@ -210,6 +214,7 @@ TEST(LinesViewFields, SimdAndPortablePassesGiveTheSameBits) {
     const double t = 0.2 / surface.feature_size();
     expect_same_vertex_pass(surface, pre, c, true);
     expect_same_vertex_pass(surface, pre, c, false);
+    expect_same_vertex_pass(surface, pre, c, true, -0.2);
     expect_same_light_pass(surface, pre, c, std::nullopt, t);
     expect_same_light_pass(surface, pre, c, Vec3(1.0, 2.0, 0.5), t);
     c.projection = Projection::orthographic;
@@ -493,6 +498,113 @@ TEST(LinesViewFields, ExtractorRecordsKeepTheirPositions) {
       off_position += f.apparent_vertex[i].position != surface.positions()[i];
     EXPECT_EQ(off_position, 0u);
   }
+}
+
+// ApparentOptions::min_ndotv (the viewer's moving frames): the kQ1Above
+// bits are those without it less the vertices with n·v < m, every other
+// field and bit is the same, the other families' segments are the same bit
+// for bit, and the apparent ridges are exactly those without it on the
+// faces that keep a corner with the bit, bit for bit (D_t1 q1 is current
+// wherever such a face reads it). On an open and a closed mesh, two views.
+TEST(LinesViewFields, ApparentMinNdotvKeepsTheRidgesOfTheFacesItLists) {
+  for (const char* rel : {"meshes/classic/libigl_camelhead.off", "meshes/classic/c3d_cow.obj"}) {
+    SCOPED_TRACE(rel);
+    const Surface surface = load(rel, true);
+    LineOptions all;
+    all.families = reference_families();
+    LineOptions limited = all;
+    limited.apparent.min_ndotv = -0.2;
+    LineExtractor a(surface, all), b(surface, limited);
+    for (const Vec3& dir : {Vec3(0.2, -0.3, 1.0), Vec3(-1.0, 0.4, 0.1)}) {
+      const Camera c = camera_towards(surface, dir);
+      const std::vector<SegmentSoup> sa = a.extract(c), sb = b.extract(c);
+      const ViewFields &fa = a.fields(), &fb = b.fields();
+      ASSERT_EQ(fb.apparent_min_ndotv, std::optional<double>(-0.2));
+      EXPECT_EQ(differing_bits(fa.ndotv, fb.ndotv), 0u);
+      EXPECT_EQ(differing_bits(fa.q1, fb.q1), 0u);
+      std::size_t wrong = 0, dropped = 0;
+      for (std::size_t v = 0; v < surface.vertex_count(); ++v) {
+        const bool keep = !(fa.ndotv[v] < -0.2);
+        const unsigned want = keep ? fa.signs[v] : fa.signs[v] & ~unsigned(kQ1Above);
+        wrong += fb.signs[v] != want;
+        dropped += !keep && (fa.signs[v] & kQ1Above);
+      }
+      EXPECT_EQ(wrong, 0u);
+      EXPECT_GT(dropped, 0u) << "no vertex above the threshold turned away: the test tests nothing";
+      ASSERT_EQ(sa.size(), sb.size());
+      for (std::size_t k = 0; k < sa.size(); ++k) {
+        SCOPED_TRACE(family_name(sa[k].family));
+        if (sa[k].family != LineFamily::apparent) {
+          EXPECT_EQ(differing_segments(sa[k].segments, sb[k].segments), 0u);
+          continue;
+        }
+        std::vector<LineSegment> kept;
+        for (const LineSegment& seg : sa[k].segments) {
+          const Face& f = surface.faces()[static_cast<std::size_t>(seg.face)];
+          if ((fb.signs[f[0]] | fb.signs[f[1]] | fb.signs[f[2]]) & kQ1Above) kept.push_back(seg);
+        }
+        EXPECT_LT(kept.size(), sa[k].segments.size());
+        EXPECT_GT(kept.size(), 0u);
+        EXPECT_EQ(differing_segments(kept, sb[k].segments), 0u);
+      }
+    }
+  }
+}
+
+// What the limit is for: on a closed surface seen from outside, the
+// apparent ridges it drops are hidden. The visible apparent ridges of the
+// igea (CPU hidden-line removal at 1024², lines as a LineDrawer chains
+// them) keep their length with the limit, in three views; the hidden ones
+// lose a good part of theirs.
+TEST(LinesViewFields, ApparentMinNdotvDropsHiddenRidgesOnAClosedSurface) {
+  const Surface surface = load("meshes/classic/c3d_igea.ply", true);
+  DrawLinesOptions all;
+  all.lines.families = {LineFamily::apparent};
+  DrawLinesOptions limited = all;
+  limited.lines.apparent.min_ndotv = -0.2;
+  LineDrawer a(surface, all), b(surface, limited);
+  auto lengths = [](const LineSet& lines) {
+    double visible = 0.0, hidden = 0.0;
+    for (const Polyline& pl : lines.polylines) {
+      const std::size_t n = pl.vertices.size(), edges = pl.closed ? n : n - 1;
+      for (std::size_t i = 0; i < edges; ++i) {
+        const LineVertex &p = pl.vertices[i], &q = pl.vertices[(i + 1) % n];
+        ((p.visible && q.visible) ? visible : hidden) += (q.position - p.position).norm();
+      }
+    }
+    return std::pair{visible, hidden};
+  };
+  for (const Vec3& dir : {Vec3(0.0, 0.0, 1.0), Vec3(1.0, 0.2, 0.3), Vec3(-0.5, 0.8, 0.4)}) {
+    Camera c = camera_towards(surface, dir);
+    c.width = c.height = 1024;
+    const auto [va, ha] = lengths(a.draw(c).lines);
+    const auto [vb, hb] = lengths(b.draw(c).lines);
+    std::printf("visible %.5f -> %.5f mm, hidden %.5f -> %.5f mm\n", va, vb, ha, hb);
+    EXPECT_NEAR(vb, va, 0.005 * va);
+    EXPECT_LT(hb, 0.8 * ha);
+  }
+}
+
+// The limit lives in the view fields: extract_apparent_ridges refuses
+// options whose limit the fields were not computed with (they would read
+// D_t1 q1 where it is stale), and a NaN limit is an input error.
+TEST(LinesViewFields, ApparentMinNdotvNeedsFieldsComputedWithIt) {
+  const Surface surface = load("meshes/classic/libigl_camelhead.off", true);
+  const Camera c = camera_towards(surface, Vec3(0.2, -0.3, 1.0));
+  const double fs = surface.feature_size();
+  ApparentOptions o;
+  o.min_ndotv = -0.2;
+  ViewFieldsRequest req;
+  req.apparent_cull_threshold = o.threshold / (fs * fs);
+  const ViewFields without = compute_view_fields(surface, c, req);
+  EXPECT_THROW((void)extract_apparent_ridges(surface, without, fs, o), InputError);
+  req.apparent_min_ndotv = o.min_ndotv;
+  const ViewFields with = compute_view_fields(surface, c, req);
+  EXPECT_NO_THROW((void)extract_apparent_ridges(surface, with, fs, o));
+  ApparentOptions plain;
+  EXPECT_THROW((void)extract_apparent_ridges(surface, with, fs, plain), InputError);
+  req.apparent_min_ndotv = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW((void)compute_view_fields(surface, c, req), InputError);
 }
 
 // D_t1 q1 from the precomputed tangent ring (neighbour fans, and two

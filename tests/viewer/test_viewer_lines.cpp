@@ -390,15 +390,57 @@ TEST(ViewerLines, MovingLevelFitsItsEdgesToThePixels) {
     c.eye = Vec3(0.0, 0.0, 400.0 / (px_per_mm * std::tan(20.0 * M_PI / 180.0)));
     return moving_level(full, levels, c);
   };
-  EXPECT_EQ(at_px_per_mm(20.0), 2);     // 0.16 mm: 3.2 px
-  EXPECT_EQ(at_px_per_mm(40.0), 1);     // 0.16 mm: 6.4 px; 0.04 mm: 1.6 px
-  EXPECT_EQ(at_px_per_mm(124.0), 1);    // 0.04 mm: 4.96 px
-  EXPECT_EQ(at_px_per_mm(126.0), 0);    // 0.04 mm: 5.04 px
-  EXPECT_EQ(at_px_per_mm(1000.0), -1);  // 0.01 mm: 10 px
+  ASSERT_EQ(fabrica::viewer::kMovingEdgePx, 7.0);  // the pixel figures below
+  EXPECT_EQ(at_px_per_mm(20.0), 2);                // 0.16 mm: 3.2 px
+  EXPECT_EQ(at_px_per_mm(43.5), 2);                // 0.16 mm: 6.96 px
+  EXPECT_EQ(at_px_per_mm(44.0), 1);                // 0.16 mm: 7.04 px; 0.04 mm: 1.76 px
+  EXPECT_EQ(at_px_per_mm(174.0), 1);               // 0.04 mm: 6.96 px
+  EXPECT_EQ(at_px_per_mm(176.0), 0);               // 0.04 mm: 7.04 px
+  EXPECT_EQ(at_px_per_mm(1000.0), -1);             // 0.01 mm: 10 px
   EXPECT_EQ(moving_level(full, {}, c), -1);
   c.eye = Vec3(0.0, 0.0, 0.5);  // inside the bounding sphere
   EXPECT_EQ(moving_level(full, levels, c), -1);
   c.projection = Projection::orthographic;  // the height seen at the centre
   c.eye = Vec3(0.0, 0.0, 400.0 / (20.0 * std::tan(20.0 * M_PI / 180.0)));
   EXPECT_EQ(moving_level(full, levels, c), 2);
+}
+
+// While the camera moves, the apparent ridges of a structure that hides its
+// own back are looked for only on faces not turned far from the eye
+// (ApparentOptions::min_ndotv): an opaque focus whose mesh is closed and
+// outward, hidden lines omitted, its sphere wholly beyond the eye and the
+// near plane; any one of these missing, everywhere.
+TEST(ViewerLines, MovingApparentRidgesSkipTheBackOnlyWhereItIsHidden) {
+  using fabrica::viewer::kMovingApparentMinNdotv;
+  using fabrica::viewer::moving_apparent_min_ndotv;
+  render::RenderMesh mesh;
+  mesh.center = Vec3::Zero();
+  mesh.radius = 1.0;
+  mesh.closed_outward = true;
+  render::StructureStyle style;
+  style.opacity = 1.0;
+  const Camera c = test_camera();  // eye 10 mm away on +z
+  const std::optional<double> limit = kMovingApparentMinNdotv;
+  EXPECT_LT(kMovingApparentMinNdotv, 0.0);
+  EXPECT_EQ(moving_apparent_min_ndotv(mesh, render::Role::focus, style, c), limit);
+  EXPECT_EQ(moving_apparent_min_ndotv(mesh, render::Role::context, style, c), std::nullopt);
+  render::StructureStyle ghost = style;
+  ghost.opacity = 0.5;
+  EXPECT_EQ(moving_apparent_min_ndotv(mesh, render::Role::focus, ghost, c), std::nullopt);
+  for (const auto hidden : {render::HiddenLines::dashed, render::HiddenLines::show}) {
+    render::StructureStyle shown = style;
+    shown.lines.hidden = hidden;
+    EXPECT_EQ(moving_apparent_min_ndotv(mesh, render::Role::focus, shown, c), std::nullopt);
+  }
+  render::RenderMesh open = mesh;
+  open.closed_outward = false;
+  EXPECT_EQ(moving_apparent_min_ndotv(open, render::Role::focus, style, c), std::nullopt);
+  Camera inside = c;
+  inside.eye = Vec3(0.0, 0.0, 0.5);
+  EXPECT_EQ(moving_apparent_min_ndotv(mesh, render::Role::focus, style, inside), std::nullopt);
+  Camera near = c;
+  near.near_plane = 9.5;  // cuts the sphere (its front is 9 mm away)
+  EXPECT_EQ(moving_apparent_min_ndotv(mesh, render::Role::focus, style, near), std::nullopt);
+  near.near_plane = 8.5;
+  EXPECT_EQ(moving_apparent_min_ndotv(mesh, render::Role::focus, style, near), limit);
 }

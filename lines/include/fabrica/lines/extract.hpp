@@ -60,6 +60,14 @@ struct RidgeOptions {
 struct ApparentOptions {
   double threshold = 0.1;  ///< on rtsc's q1 (squared view-dependent curvature), times 1/s_f²
   bool maximum_test = true;
+  /// With a value m: apparent ridges are looked for only around vertices
+  /// where n·v >= m as well as q1 above the threshold (the extractor passes
+  /// it to the view fields, ViewFieldsRequest::apparent_min_ndotv). Meant
+  /// for a closed, opaque surface seen from outside with hidden lines
+  /// omitted: with m < 0 the faces skipped turn away from the eye and are
+  /// hidden behind the surface's front, so the visible lines stay and
+  /// their hidden part is not computed. nullopt (the default): everywhere.
+  std::optional<double> min_ndotv;
 };
 
 struct PhoticOptions {

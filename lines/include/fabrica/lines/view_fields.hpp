@@ -49,6 +49,13 @@ struct ViewFieldsRequest {
   /// threshold reads, and is 0 elsewhere; ViewFields::signs gets kQ1Above.
   /// q1, t1 and t1_world are always computed everywhere. nullopt: everywhere.
   std::optional<double> apparent_cull_threshold;
+  /// With a value m (and apparent_cull_threshold): kQ1Above, and so the
+  /// vertices dt1q1 is computed around and the faces the apparent-ridge
+  /// kernel reads, only where also n·v >= m (not where n·v < m). For a
+  /// closed opaque surface seen from outside whose hidden lines are
+  /// omitted, m < 0 skips work on faces that cannot be seen (the viewer's
+  /// moving frames, ApparentOptions::min_ndotv). nullopt: no such limit.
+  std::optional<double> apparent_min_ndotv;
   /// With a value s (the suggestive-contour test's shift in 1/mm², as the
   /// extractor uses: threshold / feature size²) and sc_test:
   /// ViewFields::signs gets kScOffFront and kScOffBack for the test
@@ -78,7 +85,9 @@ enum ViewSign : std::uint8_t {
   kNdotvNotBack = 4,   ///< !(n·v <= 0): not culled as back-facing
   kKrPositive = 8,     ///< K_r > 0
   kKrNegative = 16,    ///< K_r < 0
-  kQ1Above = 32,       ///< !(q1 <= apparent_cull_threshold) (only with a threshold)
+  /// !(q1 <= apparent_cull_threshold) (only with a threshold) and, with
+  /// apparent_min_ndotv m, !(n·v < m)
+  kQ1Above = 32,
   /// With a suggestive_test_shift s and N = sc_num - s · n·v (only then):
   kScOffFront = 64,  ///< N <= 0 and n·v >= 0
   kScOffBack = 128,  ///< N >= 0 and n·v <= 0
@@ -110,6 +119,7 @@ struct ViewFields {
   std::vector<ApparentVertex> apparent_vertex;
   std::vector<std::uint8_t> signs;                ///< ViewSign bits (with the radial group)
   std::optional<double> apparent_cull_threshold;  ///< as requested
+  std::optional<double> apparent_min_ndotv;       ///< as requested (with the threshold)
   std::optional<double> suggestive_test_shift;    ///< as requested (with sc_num)
   std::vector<double> light, light_laplacian;
   std::vector<Vec3> light_gradient;
