@@ -27,8 +27,9 @@ LineSet structure_lines(LineDrawer& drawer, const render::StructureStyle& style,
 /// While the camera moves, the apparent ridges of a structure that hides
 /// its own back are looked for only where n·v >= this
 /// (ApparentOptions::min_ndotv): faces turned further away lie behind its
-/// front, so their lines would be drawn only to fail the depth test. On
-/// the igea seen from the front, 39 % of the apparent ridges' vertices.
+/// front, so their lines would be drawn only to fail the depth test (on
+/// the igea seen from the front, 39 % of the merged apparent-ridge
+/// vertices lay on faces with n·v < -0.2).
 constexpr double kMovingApparentMinNdotv = -0.2;
 
 /// kMovingApparentMinNdotv where a structure hides its own back from

@@ -300,7 +300,7 @@ void Topology::build_edges(LazyPart<EdgeList>& p) const {
                i < end; ++i) {
             const auto& fe = face_edges_[static_cast<std::size_t>(vertex_faces_[i])];
             const int c = vertex_face_corners_[i];
-            for (const std::int32_t e : {fe[c == 2 ? 0 : c + 1], fe[c == 0 ? 2 : c - 1]}) {
+            for (const std::int32_t e : corners_after(fe, c)) {
               if (e < 0) continue;
               edges[static_cast<std::size_t>(e)][e >= own && e < own_end ? 0 : 1] = w;
             }

@@ -174,36 +174,27 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
       tbb::this_task_arena::max_concurrency() == 1 ||
       tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism) == 1;
   const bool pipelined = three && one_thread;
-  // One-shot: the apparent ridges' own fields (the kernel's records, t1,
-  // t1 in world space, q1, D_t1 q1: ~130 bytes per vertex, read by no other
-  // family: the fused scan that lists the kernel's faces is through before
-  // the kernel starts) are freed once the kernel is through, so that the
-  // families still running (the raw ridges and valleys on one thread) reuse
-  // their memory.
-  auto apparent_done = [&] {
-    if (!one_shot_) return;
-    std::vector<ApparentVertex>().swap(fields_.apparent_vertex);
+  // One-shot (the families one after another, below): the apparent
+  // ridges' own fields, read by no other family, are freed as soon as
+  // possible, so that the families after them reuse their memory. Their
+  // inputs (q1, D_t1 q1, t1, t1 in world space: ~48 bytes per vertex) once
+  // D_t1 q1 is complete, when the kernel then reads only the packed records
+  // and the sign bytes (detail::apparent_reads_records_only); the records
+  // (64 bytes per vertex) and whatever is left once the kernel is through.
+  auto free_apparent_inputs = [&] {
     std::vector<Vec3>().swap(fields_.t1_world);
     std::vector<Vec2>().swap(fields_.t1);
     std::vector<double>().swap(fields_.q1);
     std::vector<double>().swap(fields_.dt1q1);
   };
-  // One-shot: with D_t1 q1 complete, the kernel reads only the packed
-  // records and the sign bytes when its threshold is the fields' cull
-  // threshold (the packed path of detail::extract_apparent_ridges, the same
-  // expression): q1, D_t1 q1, t1 and t1 in world space (~48 bytes per
-  // vertex) are freed before it allocates its segments.
-  const std::size_t nv = surface_->vertex_count();
-  const bool packed_kernel =
-      has(LineFamily::apparent) && fields_.apparent_vertex.size() == nv &&
-      fields_.signs.size() == nv && fields_.apparent_cull_threshold &&
-      *fields_.apparent_cull_threshold == options_.apparent.threshold / (fs * fs);
   auto apparent_inputs_done = [&] {
-    if (!one_shot_ || !packed_kernel) return;
-    std::vector<Vec3>().swap(fields_.t1_world);
-    std::vector<Vec2>().swap(fields_.t1);
-    std::vector<double>().swap(fields_.q1);
-    std::vector<double>().swap(fields_.dt1q1);
+    if (one_shot_ && detail::apparent_reads_records_only(*surface_, fields_, fs, options_.apparent))
+      free_apparent_inputs();
+  };
+  auto apparent_done = [&] {
+    if (!one_shot_) return;
+    std::vector<ApparentVertex>().swap(fields_.apparent_vertex);
+    free_apparent_inputs();
   };
   // One-shot: the contour and suggestive-contour fields kr and sc_num once
   // the fused scan is through, when no later family reads them (highlights
@@ -213,15 +204,10 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
     std::vector<double>().swap(fields_.kr);
     std::vector<double>().swap(fields_.sc_num);
   };
-  // One-shot: the tangent ring is freed once D_t1 q1 is complete; when
-  // pipelined, once both the kernel (which drives it) and run_all are (and
-  // then the apparent fields).
-  std::atomic<int> ring_readers{0};
+  // One-shot: the tangent ring is freed once D_t1 q1 is complete (never
+  // pipelined: `three` is off in one-shot mode).
   auto ring_done = [&] {
-    if (one_shot_ && (!pipelined || ring_readers.fetch_add(1) == 1)) {
-      precompute_->release_tangent_ring();
-      if (pipelined) apparent_done();
-    }
+    if (one_shot_) precompute_->release_tangent_ring();
   };
   // One-shot: the raw lines (LinePrecompute::release_raw_lines) once the
   // families that read them are through.
@@ -236,7 +222,7 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
   detail::ChunkReady ready;
   if (pipelined) {
     dt1q1.emplace(fields_, *surface_, fields_.apparent_cull_threshold.has_value(), *precompute_,
-                  false, one_shot_);
+                  false, false);
     std::vector<std::int32_t>& top = apparent_faces_->top_vertex;
     if (top.empty()) {
       // Per chunk, the largest index among its faces' corners: a flat
@@ -261,10 +247,6 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
     out[apparent_k] = detail::extract_apparent_ridges(*surface_, fields_, fs, options_.apparent,
                                                       listed ? apparent_faces_.get() : nullptr,
                                                       pipelined ? &ready : nullptr);
-    if (pipelined)
-      ring_done();
-    else
-      apparent_done();  // (D_t1 q1 was complete before the kernel started)
   };
   auto run = [&](std::size_t k) {
     const LineFamily f = options_.families[k];
@@ -308,7 +290,6 @@ std::vector<SegmentSoup> LineExtractor::extract(const Camera& camera) {
       case LineFamily::apparent:
         if (pipelined) {
           dt1q1->run_all();  // what the kernel (in the scan's task) left
-          ring_done();
           break;
         }
         detail::update_dt1q1(fields_, *surface_, fields_.apparent_cull_threshold.has_value(),

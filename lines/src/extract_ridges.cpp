@@ -88,6 +88,29 @@ void require_non_negative(double value, LineFamily family, const char* what) {
                      " must be a finite number >= 0 (got " + std::to_string(value) + ")");
 }
 
+namespace {
+
+// Whether the fields' kQ1Above bits are the apparent-ridge kernel's
+// per-face test for `threshold` (1/mm², scaled): computed for that very
+// threshold.
+bool threshold_bits(const ViewFields& fields, std::size_t nv, double threshold) {
+  return fields.signs.size() == nv && fields.apparent_cull_threshold &&
+         *fields.apparent_cull_threshold == threshold;
+}
+
+double scaled_threshold(const ApparentOptions& options, double feature_size) {
+  return options.threshold / (feature_size * feature_size);
+}
+
+}  // namespace
+
+bool apparent_reads_records_only(const Surface& surface, const ViewFields& fields,
+                                 double feature_size, const ApparentOptions& options) {
+  const std::size_t nv = surface.vertex_count();
+  return fields.apparent_vertex.size() == nv &&
+         threshold_bits(fields, nv, scaled_threshold(options, feature_size));
+}
+
 SegmentSoup extract_apparent_ridges(const Surface& surface, const ViewFields& fields,
                                     double feature_size, const ApparentOptions& options,
                                     const FaceLists* listed, const ChunkReady* ready) {
@@ -99,7 +122,7 @@ SegmentSoup extract_apparent_ridges(const Surface& surface, const ViewFields& fi
   soup.surface = &surface;
   VectorCrossingOptions o;
   o.test = options.maximum_test ? ExtremumTest::perpendicular : ExtremumTest::none;
-  o.threshold = options.threshold / (feature_size * feature_size);
+  o.threshold = scaled_threshold(options, feature_size);
   // No back-face culling: contour-like apparent ridges come from barely
   // back-facing faces (§6.3).
   // Fields computed with a cull threshold hold D_t1 q1 only around the
@@ -109,7 +132,7 @@ SegmentSoup extract_apparent_ridges(const Surface& surface, const ViewFields& fi
   if (cull_t && !(o.threshold >= *cull_t))
     throw Error(ErrorKind::internal,
                 "apparent ridges: the view fields were computed for a higher threshold");
-  const bool bits = fields.signs.size() == nv && cull_t && *cull_t == o.threshold;
+  const bool bits = threshold_bits(fields, nv, o.threshold);
   // A lower n·v limit lives in the kQ1Above bits (and D_t1 q1 is current
   // only around them): the fields must have been computed with it, and the
   // per-face test must be those bits.
@@ -120,7 +143,7 @@ SegmentSoup extract_apparent_ridges(const Surface& surface, const ViewFields& fi
   const bool packed = fields.apparent_vertex.size() == nv;
   // The packed path reads only the records and the sign bytes (the one-shot
   // extraction frees q1, t1 and D_t1 q1 before it).
-  if (!(bits && packed) &&
+  if (!apparent_reads_records_only(surface, fields, feature_size, options) &&
       (fields.q1.size() != nv || fields.dt1q1.size() != nv || fields.t1_world.size() != nv))
     throw Error(ErrorKind::internal, "apparent ridges: view fields lack q1/t1/Dt1q1");
   detail::vector_zero_crossings(surface, fields.dt1q1, fields.t1_world, fields.q1, o,

@@ -129,6 +129,14 @@ bool extract_contours_and_suggestive(const Surface& surface, const ViewFields& f
                                      SegmentSoup& suggestive_contours,
                                      FaceLists* apparent = nullptr);
 
+/// Whether extract_apparent_ridges(surface, fields, feature_size, options)
+/// reads only the fields' packed records (apparent_vertex) and sign bytes:
+/// the fields were computed with this very threshold as their cull
+/// threshold and hold the records. q1, dt1q1, t1 and t1_world may then be
+/// freed before it (the one-shot extraction).
+bool apparent_reads_records_only(const Surface& surface, const ViewFields& fields,
+                                 double feature_size, const ApparentOptions& options);
+
 /// extract_apparent_ridges, with the candidate faces listed by
 /// extract_contours_and_suggestive for the same fields when `listed`, and
 /// `ready` (see ChunkReady) before the face chunks are read.

@@ -115,7 +115,7 @@ inline void SegmentGeometry::locate(const LineSegment& s, int i, SurfacePoint& a
       // (Surface::release_topology_edges).
       const std::int32_t* const fe = topo_->face_edge_row(static_cast<std::size_t>(s.face));
       const int k = fe[0] == e.element ? 0 : fe[1] == e.element ? 1 : 2;
-      const std::int32_t a = f[k == 2 ? 0 : k + 1], c = f[k == 0 ? 2 : k - 1];
+      const auto [a, c] = Topology::corners_after(f, k);
       const std::array<std::int32_t, 2> ev =
           fe[k] == e.element ? std::array<std::int32_t, 2>{std::min(a, c), std::max(a, c)}
                              : topo_->edge(static_cast<std::size_t>(e.element));
